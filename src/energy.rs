@@ -1,0 +1,85 @@
+//! The discrete energy balance (E.1) of model.md §6, computed from increments (decision 10):
+//!
+//! E^{n+1} − E^n = work − viscous − friction − constraint, with
+//! E = ½ vᵀMv + ½ uᵀKu + Σ ω_i P(d_i) (P includes the penalty energy for Problem P_ε).
+
+use crate::linalg::{self, SpMat};
+
+/// The cumulative energy terms after a step (the columns of history.csv).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct EnergyTerms {
+    pub kinetic: f64,
+    pub elastic: f64,
+    pub compliance: f64,
+    pub external_work: f64,
+    pub viscous_dissipation: f64,
+    pub friction_dissipation: f64,
+    pub constraint_dissipation: f64,
+    /// the defect of (E.1) on the last step
+    pub residual: f64,
+}
+
+/// The increments of one step.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepEnergy {
+    /// ½(w − v)ᵀM(w + v)
+    pub d_kinetic: f64,
+    /// ½(u' − u)ᵀK(u' + u)
+    pub d_elastic: f64,
+    /// Σ ω_i (P(d_i') − P(d_i))
+    pub d_compliance: f64,
+    /// (u' − u)ᵀ f^{n+½}
+    pub work: f64,
+    /// (u' − u)ᵀ C v̄
+    pub viscous: f64,
+    /// Σ ω_i S_i |Δu_τ,i| = k Σ ω_i S_i ‖v̄_i‖
+    pub friction: f64,
+    /// Σ ω_i λ_i (g − d_i^n)
+    pub constraint: f64,
+}
+
+impl StepEnergy {
+    /// (E.1) The per-step defect ΔE − work + viscous + friction + constraint; zero up to
+    /// solver tolerance for the midpoint scheme.
+    pub fn residual(&self) -> f64 {
+        self.d_kinetic + self.d_elastic + self.d_compliance - self.work + self.viscous + self.friction + self.constraint
+    }
+}
+
+/// ½ xᵀ A x.
+pub fn half_quad(a: &SpMat, x: &[f64]) -> f64 {
+    0.5 * linalg::quad(a, x, x)
+}
+
+/// ½ (x' − x)ᵀ A (x' + x), the increment of ½ xᵀAx without differencing large totals.
+pub fn increment(a: &SpMat, x: &[f64], x_new: &[f64]) -> f64 {
+    let dx: Vec<f64> = x_new.iter().zip(x).map(|(a, b)| a - b).collect();
+    let sx: Vec<f64> = x_new.iter().zip(x).map(|(a, b)| a + b).collect();
+    0.5 * linalg::quad(a, &dx, &sx)
+}
+
+impl EnergyTerms {
+    /// Add a step's increments to the totals.
+    pub fn advance(&self, s: &StepEnergy) -> EnergyTerms {
+        EnergyTerms {
+            kinetic: self.kinetic + s.d_kinetic,
+            elastic: self.elastic + s.d_elastic,
+            compliance: self.compliance + s.d_compliance,
+            external_work: self.external_work + s.work,
+            viscous_dissipation: self.viscous_dissipation + s.viscous,
+            friction_dissipation: self.friction_dissipation + s.friction,
+            constraint_dissipation: self.constraint_dissipation + s.constraint,
+            residual: s.residual(),
+        }
+    }
+
+    /// The scale against which residuals are judged: stored energy plus everything that
+    /// crossed the boundary so far.
+    pub fn scale(&self) -> f64 {
+        (self.kinetic + self.elastic + self.compliance).abs()
+            + self.external_work.abs()
+            + self.viscous_dissipation
+            + self.friction_dissipation
+            + self.constraint_dissipation
+    }
+}

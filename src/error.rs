@@ -1,0 +1,82 @@
+//! One error type for the whole library. Every message names what is wrong and where
+//! (a scene key path, a mesh entity, a time step) and, where there is one, the fix.
+
+use std::path::PathBuf;
+
+/// Why a run or a validation stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A scene value is wrong. `path` is the TOML key path, e.g. `contact.friction.decay`.
+    #[error("{path}: {message}")]
+    Scene { path: String, message: String },
+
+    /// The scene file is not valid TOML or does not match the schema.
+    #[error("{file}: {message}")]
+    SceneSyntax { file: String, message: String },
+
+    /// A mesh file or a mesh entity is wrong.
+    #[error("mesh {file}: {message}")]
+    Mesh { file: String, message: String },
+
+    /// An expression string does not parse or does not evaluate to a finite number.
+    #[error("{path}: {message}")]
+    Expression { path: String, message: String },
+
+    /// A sparse factorization failed (the step matrix is not positive definite).
+    #[error("linear algebra: {0}")]
+    LinearAlgebra(String),
+
+    /// The solver did not converge on a step; carries the step, the time and the residuals.
+    #[error("{0}")]
+    Solver(Box<SolverFailure>),
+
+    /// An output could not be produced (chart, JSON).
+    #[error("output: {0}")]
+    Output(String),
+
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// The full report of a failed step: what failed, where and the numbers.
+#[derive(Debug, Clone)]
+pub struct SolverFailure {
+    pub step: usize,
+    pub time: f64,
+    pub what: String,
+    pub residuals: String,
+    pub suggestion: String,
+}
+
+impl std::fmt::Display for SolverFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "step {} (t = {:.6e}): {}; {}. Suggestion: {}",
+            self.step, self.time, self.what, self.residuals, self.suggestion
+        )
+    }
+}
+
+impl Error {
+    pub fn scene(path: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Scene { path: path.into(), message: message.into() }
+    }
+    pub fn mesh(file: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Mesh { file: file.into(), message: message.into() }
+    }
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io { path: path.into(), source }
+    }
+    /// True for failures of the numerical method (exit code 2), false for bad input.
+    pub fn is_solver_failure(&self) -> bool {
+        matches!(self, Error::Solver(_) | Error::LinearAlgebra(_))
+    }
+}
+
+pub type Result<T> = std::result::Result<T, Error>;

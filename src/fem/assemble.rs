@@ -1,0 +1,141 @@
+//! Assembly of M, K, C on the P1 space (model.md §4.1) and the elimination of the clamped
+//! DOFs of Γ1 (P.3).
+
+use crate::error::Result;
+use crate::linalg::{self, SpMat};
+use crate::mesh::Mesh;
+use crate::model::material::Material;
+use crate::scene::MassKind;
+
+use super::element;
+
+/// Numbering of the free DOFs: (node k, component c) → map[2k + c] = Some(free index), or
+/// None on Γ̄1.
+#[derive(Debug, Clone)]
+pub struct Dofs {
+    pub map: Vec<Option<usize>>,
+    pub n_free: usize,
+    pub n_nodes: usize,
+}
+
+impl Dofs {
+    /// (P.3) u = 0 on Γ1: both components of every node on a clamped side are removed from
+    /// the unknowns; the remaining DOFs are numbered in node order.
+    pub fn new(n_nodes: usize, clamped: &[bool]) -> Dofs {
+        let mut map = vec![None; 2 * n_nodes];
+        let mut n_free = 0;
+        for k in 0..n_nodes {
+            if !clamped[k] {
+                map[2 * k] = Some(n_free);
+                map[2 * k + 1] = Some(n_free + 1);
+                n_free += 2;
+            }
+        }
+        Dofs { map, n_free, n_nodes }
+    }
+
+    /// Nodal vectors from a free-DOF vector (zero on Γ̄1).
+    pub fn expand(&self, x: &[f64]) -> Vec<[f64; 2]> {
+        (0..self.n_nodes)
+            .map(|k| {
+                let g = |c: usize| self.map[2 * k + c].map(|i| x[i]).unwrap_or(0.0);
+                [g(0), g(1)]
+            })
+            .collect()
+    }
+
+    /// Free-DOF vector from nodal values.
+    pub fn gather(&self, nodal: impl Fn(usize) -> [f64; 2]) -> Vec<f64> {
+        let mut x = vec![0.0; self.n_free];
+        for k in 0..self.n_nodes {
+            let v = nodal(k);
+            for c in 0..2 {
+                if let Some(i) = self.map[2 * k + c] {
+                    x[i] = v[c];
+                }
+            }
+        }
+        x
+    }
+}
+
+/// The matrices of the semi-discrete momentum balance M ü + C u̇ + K u = f on the free DOFs.
+pub struct Operators {
+    pub m: SpMat,
+    pub k: SpMat,
+    pub c: SpMat,
+    /// row-sum lumped nodal masses per free DOF (used by (C.k) whatever the mass choice)
+    pub m_lumped: Vec<f64>,
+}
+
+/// (P.2) Galerkin form of ρü = Div σ + f0 with σ from (P.1): assembles, on all 2N DOFs,
+/// M_ij = ∫ρ φ_j·φ_i (consistent, or row-lumped), K_ij = ∫ Bε(φ_j):ε(φ_i) and
+/// C_ij = ∫ Aε(φ_j):ε(φ_i). Returns (M, K, C).
+pub fn assemble_full(mesh: &Mesh, mat: &Material, mass: MassKind) -> Result<(SpMat, SpMat, SpMat)> {
+    let n = 2 * mesh.nodes.len();
+    let (db, da) = (mat.elasticity(), mat.viscosity());
+    let cap = 36 * mesh.triangles.len();
+    let (mut tm, mut tk, mut tc) = (Vec::with_capacity(cap), Vec::with_capacity(cap), Vec::with_capacity(cap));
+    for tri in &mesh.triangles {
+        let x = [mesh.nodes[tri[0]], mesh.nodes[tri[1]], mesh.nodes[tri[2]]];
+        let (_, area) = element::gradients(x);
+        let ke = element::operator_matrix(x, &db);
+        let ce = element::operator_matrix(x, &da);
+        let me = match mass {
+            MassKind::Consistent => element::consistent_mass(area, mat.rho),
+            MassKind::Lumped => element::lumped_mass(area, mat.rho),
+        };
+        for a in 0..6 {
+            let ga = 2 * tri[a / 2] + a % 2;
+            for b in 0..6 {
+                let gb = 2 * tri[b / 2] + b % 2;
+                tk.push((ga, gb, ke[(a, b)]));
+                if mat.has_viscosity() {
+                    tc.push((ga, gb, ce[(a, b)]));
+                }
+                if me[(a, b)] != 0.0 {
+                    tm.push((ga, gb, me[(a, b)]));
+                }
+            }
+        }
+    }
+    Ok((linalg::from_triplets(n, n, &tm)?, linalg::from_triplets(n, n, &tk)?, linalg::from_triplets(n, n, &tc)?))
+}
+
+/// The submatrix on free DOFs.
+pub fn restrict(a: &SpMat, dofs: &Dofs) -> Result<SpMat> {
+    let trip: Vec<(usize, usize, f64)> = linalg::triplets(a)
+        .into_iter()
+        .filter_map(|(i, j, v)| Some((dofs.map[i]?, dofs.map[j]?, v)))
+        .collect();
+    linalg::from_triplets(dofs.n_free, dofs.n_free, &trip)
+}
+
+impl Operators {
+    pub fn new(mesh: &Mesh, mat: &Material, mass: MassKind, dofs: &Dofs) -> Result<Operators> {
+        let (m, k, c) = assemble_full(mesh, mat, mass)?;
+        Ok(Operators {
+            m: restrict(&m, dofs)?,
+            k: restrict(&k, dofs)?,
+            c: restrict(&c, dofs)?,
+            m_lumped: lumped_masses(mesh, mat, dofs),
+        })
+    }
+}
+
+/// Row-sum lumped mass per free DOF: Σ over adjacent triangles of ρ|T|/3.
+pub fn lumped_masses(mesh: &Mesh, mat: &Material, dofs: &Dofs) -> Vec<f64> {
+    let mut d = vec![0.0; dofs.n_free];
+    for tri in &mesh.triangles {
+        let x = [mesh.nodes[tri[0]], mesh.nodes[tri[1]], mesh.nodes[tri[2]]];
+        let (_, area) = element::gradients(x);
+        for &v in tri {
+            for c in 0..2 {
+                if let Some(i) = dofs.map[2 * v + c] {
+                    d[i] += mat.rho * area / 3.0;
+                }
+            }
+        }
+    }
+    d
+}

@@ -1,0 +1,126 @@
+//! Thin wrappers over faer: sparse matrices from triplets, products, the sparse Cholesky
+//! factor that the time loop reuses, and a dense LU for the small contact systems.
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Mat, Side};
+
+use crate::error::{Error, Result};
+
+/// Compressed sparse column matrix of f64.
+pub type SpMat = SparseColMat<usize, f64>;
+
+/// Build an n × m matrix from (row, col, value) triplets; duplicates are summed.
+pub fn from_triplets(n: usize, m: usize, trip: &[(usize, usize, f64)]) -> Result<SpMat> {
+    let t: Vec<Triplet<usize, usize, f64>> = trip.iter().map(|&(i, j, v)| Triplet::new(i, j, v)).collect();
+    SparseColMat::try_new_from_triplets(n, m, &t).map_err(|e| Error::LinearAlgebra(format!("assembly failed: {e:?}")))
+}
+
+/// All stored entries (row, col, value).
+pub fn triplets(a: &SpMat) -> Vec<(usize, usize, f64)> {
+    let r = a.as_ref();
+    let (cp, ri, v) = (r.symbolic().col_ptr(), r.symbolic().row_idx(), r.val());
+    let mut out = Vec::with_capacity(v.len());
+    for j in 0..a.ncols() {
+        for p in cp[j]..cp[j + 1] {
+            out.push((ri[p], j, v[p]));
+        }
+    }
+    out
+}
+
+/// y += alpha A x.
+pub fn mul_add(a: &SpMat, x: &[f64], alpha: f64, y: &mut [f64]) {
+    let r = a.as_ref();
+    let (cp, ri, v) = (r.symbolic().col_ptr(), r.symbolic().row_idx(), r.val());
+    for j in 0..a.ncols() {
+        let xj = alpha * x[j];
+        if xj == 0.0 {
+            continue;
+        }
+        for p in cp[j]..cp[j + 1] {
+            y[ri[p]] += v[p] * xj;
+        }
+    }
+}
+
+/// A x.
+pub fn mul(a: &SpMat, x: &[f64]) -> Vec<f64> {
+    let mut y = vec![0.0; a.nrows()];
+    mul_add(a, x, 1.0, &mut y);
+    y
+}
+
+/// xᵀ A y.
+pub fn quad(a: &SpMat, x: &[f64], y: &[f64]) -> f64 {
+    let ay = mul(a, y);
+    dot(x, &ay)
+}
+
+pub fn dot(x: &[f64], y: &[f64]) -> f64 {
+    x.iter().zip(y).map(|(a, b)| a * b).sum()
+}
+
+pub fn norm_inf(x: &[f64]) -> f64 {
+    x.iter().fold(0.0, |m, v| m.max(v.abs()))
+}
+
+/// Σ_k c_k A_k for matrices of equal shape.
+pub fn combine(terms: &[(f64, &SpMat)]) -> Result<SpMat> {
+    let (n, m) = (terms[0].1.nrows(), terms[0].1.ncols());
+    let mut trip = Vec::new();
+    for (c, a) in terms {
+        if *c != 0.0 {
+            trip.extend(triplets(a).into_iter().map(|(i, j, v)| (i, j, c * v)));
+        }
+    }
+    from_triplets(n, m, &trip)
+}
+
+/// Sparse Cholesky factor L Lᵀ of a symmetric positive definite matrix, computed once.
+pub struct Cholesky {
+    llt: Llt<usize, f64>,
+    n: usize,
+}
+
+impl Cholesky {
+    /// Factor `a` (only its lower triangle is read).
+    pub fn new(a: &SpMat, what: &str) -> Result<Cholesky> {
+        let sym = SymbolicLlt::try_new(a.symbolic(), Side::Lower)
+            .map_err(|e| Error::LinearAlgebra(format!("symbolic Cholesky of {what} failed: {e:?}")))?;
+        let llt = Llt::try_new_with_symbolic(sym, a.as_ref(), Side::Lower).map_err(|e| {
+            Error::LinearAlgebra(format!(
+                "Cholesky factorization of {what} failed ({e:?}): the matrix is not positive definite \
+                 (check density > 0, the material constants and that the body is held or has mass)"
+            ))
+        })?;
+        Ok(Cholesky { llt, n: a.nrows() })
+    }
+
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// b ← A⁻¹ b.
+    pub fn solve_in_place(&self, b: &mut [f64]) {
+        let col = faer::ColMut::from_slice_mut(b);
+        self.llt.solve_in_place(col.as_mat_mut());
+    }
+
+    /// B ← A⁻¹ B for a dense block of right-hand sides.
+    pub fn solve_mat_in_place(&self, b: &mut Mat<f64>) {
+        self.llt.solve_in_place(b.as_mut());
+    }
+}
+
+/// Solve the dense system J x = r by LU with partial pivoting; None if J is singular or the
+/// result is not finite.
+pub fn dense_solve(j: &Mat<f64>, r: &[f64]) -> Option<Vec<f64>> {
+    let n = r.len();
+    let lu = j.partial_piv_lu();
+    let rhs = Mat::<f64>::from_fn(n, 1, |i, _| r[i]);
+    let x = lu.solve(&rhs);
+    let out: Vec<f64> = (0..n).map(|i| x[(i, 0)]).collect();
+    out.iter().all(|v| v.is_finite()).then_some(out)
+}

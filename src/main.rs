@@ -1,0 +1,93 @@
+//! The dyncontact command line (SCENES.md): `run`, `check`. Thin: it calls the library.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use dyncontact::output::ModelInfo;
+use dyncontact::problem::Problem;
+use dyncontact::run::{run, RunOptions};
+use dyncontact::scene::Scene;
+use dyncontact::Error;
+
+#[derive(Parser)]
+#[command(name = "dyncontact", version, about = "Dynamic viscoelastic contact with normal compliance, finite penetration and slip-rate-dependent friction")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene (default: the embedded academic scene) and write its outputs.
+    Run {
+        /// scene file (TOML); omitted: the embedded default scene `academic`
+        scene: Option<PathBuf>,
+        /// output folder (default: out/<scene name>)
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Validate a scene and print the model it switches on, without solving.
+    Check {
+        /// scene file (TOML)
+        scene: PathBuf,
+    },
+}
+
+fn load(scene: Option<&Path>) -> Result<(Scene, PathBuf), Error> {
+    match scene {
+        None => Ok((Scene::default_scene(), PathBuf::from("."))),
+        Some(p) => {
+            let s = Scene::from_file(p)?;
+            let dir = p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+            Ok((s, dir))
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Run { scene, out } => load(scene.as_deref()).and_then(|(s, dir)| {
+            let out = out.clone().unwrap_or_else(|| PathBuf::from("out").join(&s.name));
+            let problem = Problem::new(s, &dir)?;
+            let progress = std::io::stdout().is_terminal();
+            let summary = run(&problem, &RunOptions { out: out.clone(), progress })?;
+            println!(
+                "{}: {} steps in {:.2} s, max |(E.1) residual| = {:.3e} ({:.3e} relative), Newton iterations {}, fixed-point iterations {}",
+                summary.scene,
+                summary.steps_completed,
+                summary.wall_time_s,
+                summary.max_abs_energy_residual,
+                summary.max_relative_energy_residual,
+                summary.newton_iterations_total,
+                summary.fixed_point_iterations_total
+            );
+            for w in &summary.warnings {
+                println!("warning: {w}");
+            }
+            println!("outputs in {}", out.display());
+            Ok(())
+        }),
+        Command::Check { scene } => load(Some(scene)).and_then(|(s, dir)| {
+            let problem = Problem::new(s, &dir)?;
+            let info = ModelInfo::of(&problem);
+            println!("scene {} is valid", problem.scene.name);
+            for l in info.lines() {
+                println!("  {l}");
+            }
+            if let Some(w) = info.ck_warning() {
+                println!("warning: {w}");
+            }
+            Ok(())
+        }),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            if e.is_solver_failure() { ExitCode::from(2) } else { ExitCode::from(1) }
+        }
+    }
+}

@@ -1,0 +1,335 @@
+//! Reader for Gmsh ASCII meshes, format 2.2 and 4.1: 3-node triangles (type 2) make the
+//! domain, 2-node lines (type 1) in physical curves make the named sides, points (type 15)
+//! are ignored. Why hand-written: see the README's design notes (the maintained crate reads
+//! 4.1 only).
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use super::{Mesh, Side};
+use crate::error::{Error, Result};
+
+/// Read a `.msh` file.
+pub fn read(path: &Path) -> Result<Mesh> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse(&text, &path.display().to_string())
+}
+
+struct Cursor<'a> {
+    lines: Vec<(usize, &'a str)>,
+    pos: usize,
+    file: &'a str,
+}
+
+impl<'a> Cursor<'a> {
+    fn err(&self, msg: impl std::fmt::Display) -> Error {
+        let line = self.lines.get(self.pos.saturating_sub(1)).map(|l| l.0).unwrap_or(0);
+        Error::mesh(self.file, format!("line {line}: {msg}"))
+    }
+    fn next_line(&mut self) -> Result<&'a str> {
+        let l = self.lines.get(self.pos).ok_or_else(|| Error::mesh(self.file, "unexpected end of file"))?;
+        self.pos += 1;
+        Ok(l.1)
+    }
+    fn nums<T: std::str::FromStr>(&mut self, what: &str) -> Result<Vec<T>> {
+        let line = self.next_line()?;
+        line.split_whitespace()
+            .map(|w| w.parse::<T>().map_err(|_| self.err(format!("cannot read {what} from \"{w}\""))))
+            .collect()
+    }
+    fn expect(&mut self, tag: &str) -> Result<()> {
+        let l = self.next_line()?;
+        if l.trim() != tag {
+            return Err(self.err(format!("expected {tag}, found \"{}\"", l.trim())));
+        }
+        Ok(())
+    }
+}
+
+#[derive(Default)]
+struct Raw {
+    version: String,
+    names: HashMap<(i64, i64), String>,        // (dim, physical tag) -> name
+    entity_phys: HashMap<(i64, i64), Vec<i64>>, // (dim, entity tag) -> physical tags (4.1)
+    nodes: HashMap<i64, [f64; 2]>,
+    node_order: Vec<i64>,
+    triangles: Vec<(i64, [i64; 3])>,          // element tag, node tags
+    lines: Vec<(Vec<i64>, [i64; 2])>,         // physical tags, node tags
+}
+
+/// Parse the text of a `.msh` file; `file` names it in messages.
+pub fn parse(text: &str, file: &str) -> Result<Mesh> {
+    let lines: Vec<(usize, &str)> =
+        text.lines().enumerate().map(|(i, l)| (i + 1, l)).filter(|(_, l)| !l.trim().is_empty()).collect();
+    let mut c = Cursor { lines, pos: 0, file };
+    let mut raw = Raw::default();
+    while c.pos < c.lines.len() {
+        let head = c.next_line()?.trim().to_string();
+        match head.as_str() {
+            "$MeshFormat" => {
+                let f = c.next_line()?;
+                let mut it = f.split_whitespace();
+                raw.version = it.next().unwrap_or("").to_string();
+                if it.next() != Some("0") {
+                    return Err(c.err("binary .msh files are not supported; save as ASCII (Gmsh: File > Export, uncheck binary)"));
+                }
+                if !(raw.version.starts_with("2.") || raw.version.starts_with("4.1")) {
+                    return Err(c.err(format!("format version {} is not supported; save as 4.1 or 2.2 ASCII", raw.version)));
+                }
+                c.expect("$EndMeshFormat")?;
+            }
+            "$PhysicalNames" => {
+                let n: Vec<i64> = c.nums("the number of physical names")?;
+                for _ in 0..n.first().copied().unwrap_or(0) {
+                    let l = c.next_line()?;
+                    let mut it = l.splitn(3, char::is_whitespace);
+                    let dim: i64 = it.next().and_then(|w| w.parse().ok()).ok_or_else(|| c.err("bad physical name line"))?;
+                    let tag: i64 = it.next().and_then(|w| w.trim().parse().ok()).ok_or_else(|| c.err("bad physical name line"))?;
+                    let name = it.next().unwrap_or("").trim().trim_matches('"').to_string();
+                    raw.names.insert((dim, tag), name);
+                }
+                c.expect("$EndPhysicalNames")?;
+            }
+            "$Entities" => read_entities(&mut c, &mut raw)?,
+            "$Nodes" => {
+                if raw.version.starts_with('4') {
+                    read_nodes_41(&mut c, &mut raw)?
+                } else {
+                    read_nodes_22(&mut c, &mut raw)?
+                }
+            }
+            "$Elements" => {
+                if raw.version.starts_with('4') {
+                    read_elements_41(&mut c, &mut raw)?
+                } else {
+                    read_elements_22(&mut c, &mut raw)?
+                }
+            }
+            s if s.starts_with('$') => {
+                // skip unknown sections ($Periodic, $NodeData, ...)
+                let end = format!("$End{}", &s[1..]);
+                loop {
+                    if c.next_line()?.trim() == end {
+                        break;
+                    }
+                }
+            }
+            other => return Err(c.err(format!("unexpected line \"{other}\" outside a section"))),
+        }
+    }
+    if raw.version.is_empty() {
+        return Err(Error::mesh(file, "no $MeshFormat section: is this a Gmsh .msh file?"));
+    }
+    build(raw, file)
+}
+
+fn read_entities(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
+    let counts: Vec<usize> = c.nums("entity counts")?;
+    if counts.len() < 4 {
+        return Err(c.err("the $Entities header needs 4 counts"));
+    }
+    for (dim, &n) in counts.iter().enumerate().take(4) {
+        for _ in 0..n {
+            let w: Vec<f64> = c.nums("an entity")?;
+            let tag = *w.first().ok_or_else(|| c.err("empty entity line"))? as i64;
+            // points: tag x y z nphys phys...; others: tag minx miny minz maxx maxy maxz nphys phys...
+            let at = if dim == 0 { 4 } else { 7 };
+            let np = *w.get(at).ok_or_else(|| c.err("entity line too short"))? as usize;
+            let phys: Vec<i64> = w.get(at + 1..at + 1 + np).ok_or_else(|| c.err("entity line too short"))?.iter().map(|v| *v as i64).collect();
+            raw.entity_phys.insert((dim as i64, tag), phys);
+        }
+    }
+    c.expect("$EndEntities")
+}
+
+fn read_nodes_22(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
+    let n: Vec<usize> = c.nums("the node count")?;
+    for _ in 0..n.first().copied().unwrap_or(0) {
+        let w: Vec<f64> = c.nums("a node")?;
+        if w.len() < 3 {
+            return Err(c.err("a node line needs: tag x y [z]"));
+        }
+        insert_node(c, raw, w[0] as i64, [w[1], w[2]])?;
+    }
+    c.expect("$EndNodes")
+}
+
+fn insert_node(c: &Cursor, raw: &mut Raw, tag: i64, x: [f64; 2]) -> Result<()> {
+    if !(x[0].is_finite() && x[1].is_finite()) {
+        return Err(c.err(format!("node {tag} has non-finite coordinates")));
+    }
+    if raw.nodes.insert(tag, x).is_some() {
+        return Err(c.err(format!("node tag {tag} appears twice")));
+    }
+    raw.node_order.push(tag);
+    Ok(())
+}
+
+fn read_nodes_41(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
+    let h: Vec<usize> = c.nums("the $Nodes header")?;
+    let blocks = *h.first().ok_or_else(|| c.err("empty $Nodes header"))?;
+    for _ in 0..blocks {
+        let b: Vec<i64> = c.nums("a node block header")?;
+        if b.len() < 4 {
+            return Err(c.err("a node block header needs: dim tag parametric count"));
+        }
+        let (parametric, count) = (b[2], b[3] as usize);
+        let mut tags = Vec::with_capacity(count);
+        for _ in 0..count {
+            let t: Vec<i64> = c.nums("a node tag")?;
+            tags.push(*t.first().ok_or_else(|| c.err("missing node tag"))?);
+        }
+        for tag in tags {
+            let w: Vec<f64> = c.nums("node coordinates")?;
+            if w.len() < 3 || (parametric == 0 && w.len() != 3) && w.len() < 3 {
+                return Err(c.err("node coordinates need x y z"));
+            }
+            insert_node(c, raw, tag, [w[0], w[1]])?;
+        }
+    }
+    c.expect("$EndNodes")
+}
+
+fn push_element(c: &Cursor, raw: &mut Raw, tag: i64, etype: i64, phys: Vec<i64>, nodes: &[i64]) -> Result<()> {
+    let need = match etype {
+        1 => 2,
+        2 => 3,
+        15 => 1,
+        3 => return Err(c.err(format!("element {tag} is a quadrangle; dyncontact needs triangles (P1): mesh with triangles only"))),
+        8 | 9 => return Err(c.err(format!("element {tag} is second order (type {etype}); dyncontact uses P1: set Mesh.ElementOrder = 1"))),
+        4..=7 => return Err(c.err(format!("element {tag} is a 3-D element (type {etype}); dyncontact is 2-D"))),
+        _ => return Err(c.err(format!("element {tag} has type {etype}, which is not supported (only lines 1, triangles 2, points 15)"))),
+    };
+    if nodes.len() < need {
+        return Err(c.err(format!("element {tag} lists {} nodes, type {etype} needs {need}", nodes.len())));
+    }
+    match etype {
+        1 => raw.lines.push((phys, [nodes[0], nodes[1]])),
+        2 => raw.triangles.push((tag, [nodes[0], nodes[1], nodes[2]])),
+        _ => {}
+    }
+    Ok(())
+}
+
+fn read_elements_22(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
+    let n: Vec<usize> = c.nums("the element count")?;
+    for _ in 0..n.first().copied().unwrap_or(0) {
+        let w: Vec<i64> = c.nums("an element")?;
+        if w.len() < 3 {
+            return Err(c.err("an element line needs: tag type ntags tags... nodes..."));
+        }
+        let (tag, etype, ntags) = (w[0], w[1], w[2] as usize);
+        let phys = w.get(3).copied().filter(|_| ntags > 0).map(|p| vec![p]).unwrap_or_default();
+        let nodes = w.get(3 + ntags..).unwrap_or(&[]);
+        push_element(c, raw, tag, etype, phys, nodes)?;
+    }
+    c.expect("$EndElements")
+}
+
+fn read_elements_41(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
+    let h: Vec<usize> = c.nums("the $Elements header")?;
+    let blocks = *h.first().ok_or_else(|| c.err("empty $Elements header"))?;
+    for _ in 0..blocks {
+        let b: Vec<i64> = c.nums("an element block header")?;
+        if b.len() < 4 {
+            return Err(c.err("an element block header needs: dim tag type count"));
+        }
+        let (dim, etag, etype, count) = (b[0], b[1], b[2], b[3] as usize);
+        let phys = raw.entity_phys.get(&(dim, etag)).cloned().unwrap_or_default();
+        for _ in 0..count {
+            let w: Vec<i64> = c.nums("an element")?;
+            let tag = *w.first().ok_or_else(|| c.err("empty element line"))?;
+            push_element(c, raw, tag, etype, phys.clone(), &w[1..])?;
+        }
+    }
+    c.expect("$EndElements")
+}
+
+fn build(raw: Raw, file: &str) -> Result<Mesh> {
+    if raw.triangles.is_empty() {
+        return Err(Error::mesh(file, "contains no triangles (element type 2); mesh the surface with triangles"));
+    }
+    // number nodes in file order; check that elements refer to known nodes
+    let mut index: HashMap<i64, usize> = HashMap::new();
+    let mut nodes = Vec::with_capacity(raw.node_order.len());
+    for tag in &raw.node_order {
+        index.insert(*tag, nodes.len());
+        nodes.push(raw.nodes[tag]);
+    }
+    let lookup = |t: i64, what: &str| {
+        index.get(&t).copied().ok_or_else(|| Error::mesh(file, format!("{what} refers to node {t}, which is not in $Nodes")))
+    };
+    let mut triangles = Vec::with_capacity(raw.triangles.len());
+    let mut tags = Vec::with_capacity(raw.triangles.len());
+    for (tag, t) in &raw.triangles {
+        let what = format!("triangle {tag}");
+        triangles.push([lookup(t[0], &what)?, lookup(t[1], &what)?, lookup(t[2], &what)?]);
+        tags.push(*tag);
+    }
+    // sides: one per physical curve (dim 1), named by $PhysicalNames or by the tag
+    let mut sides: Vec<Side> = Vec::new();
+    for (phys, [a, b]) in &raw.lines {
+        let (a, b) = (lookup(*a, "a line element")?, lookup(*b, "a line element")?);
+        for p in phys {
+            let name = raw.names.get(&(1, *p)).cloned().unwrap_or_else(|| p.to_string());
+            match sides.iter_mut().find(|s| s.name == name) {
+                Some(s) => s.edges.push([a, b]),
+                None => sides.push(Side { name, edges: vec![[a, b]] }),
+            }
+        }
+    }
+    let mut mesh = Mesh { nodes, triangles, sides, source: file.to_string() };
+    // orientation: all clockwise (surface normal -z) is flipped; a mix means a folded mesh
+    let signs: Vec<f64> = (0..mesh.triangles.len()).map(|t| mesh.signed_area(t)).collect();
+    let scale = 1e-14 * mesh.bbox_diameter().powi(2);
+    if let Some(t) = signs.iter().position(|a| a.abs() <= scale) {
+        return Err(Error::mesh(file, format!("triangle {} has zero area (degenerate); remove or fix it", tags[t])));
+    }
+    let negative = signs.iter().filter(|a| **a < 0.0).count();
+    if negative == signs.len() {
+        for t in mesh.triangles.iter_mut() {
+            t.swap(1, 2);
+        }
+    } else if negative > 0 {
+        let t = signs.iter().position(|a| *a < 0.0).unwrap_or(0);
+        return Err(Error::mesh(
+            file,
+            format!(
+                "triangle {} is inverted: {negative} of {} triangles are clockwise and the rest counterclockwise; \
+                 the mesh folds over itself or has inconsistent orientation — regenerate it",
+                tags[t],
+                signs.len()
+            ),
+        ));
+    }
+    // duplicate nodes: equal coordinates under different tags
+    let mut order: Vec<usize> = (0..mesh.nodes.len()).collect();
+    order.sort_by(|&i, &j| mesh.nodes[i][0].total_cmp(&mesh.nodes[j][0]).then(mesh.nodes[i][1].total_cmp(&mesh.nodes[j][1])));
+    let tol = 1e-12 * mesh.bbox_diameter();
+    for w in order.windows(2) {
+        let (p, q) = (mesh.nodes[w[0]], mesh.nodes[w[1]]);
+        if (p[0] - q[0]).abs() <= tol && (p[1] - q[1]).abs() <= tol {
+            return Err(Error::mesh(
+                file,
+                format!(
+                    "nodes {} and {} are duplicates (both at ({}, {})); merge them (Gmsh: Coherence)",
+                    raw.node_order[w[0]], raw.node_order[w[1]], p[0], p[1]
+                ),
+            ));
+        }
+    }
+    // unreferenced nodes
+    let mut used = vec![false; mesh.nodes.len()];
+    mesh.triangles.iter().flatten().for_each(|&v| used[v] = true);
+    if let Some(v) = used.iter().position(|u| !u) {
+        return Err(Error::mesh(
+            file,
+            format!(
+                "node {} is not a vertex of any triangle; remove unreferenced nodes (Gmsh: save only physical groups, or Mesh.SaveAll = 0)",
+                raw.node_order[v]
+            ),
+        ));
+    }
+    mesh.check()?;
+    Ok(mesh)
+}

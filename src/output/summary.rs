@@ -1,0 +1,192 @@
+//! summary.json: what the scene switched on, sizes, timings, iteration counts, the largest
+//! (E.1) residual, warnings and the final status.
+
+use serde::Serialize;
+
+use crate::fem::assemble::lumped_masses;
+use crate::model::laws::FrictionCoefficient;
+use crate::problem::Problem;
+use crate::scene::{Bound, Enforcement, FrictionBound};
+
+/// The model a scene switches on — printed by `dyncontact check`, stored in summary.json.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModelInfo {
+    pub plane: String,
+    pub material: String,
+    pub contact: String,
+    pub normal_law: String,
+    pub constraint: String,
+    pub friction: String,
+    pub friction_bound: String,
+    pub scheme: String,
+    pub inner_solver: String,
+    pub mass: String,
+    pub nodes: usize,
+    pub triangles: usize,
+    pub velocity_unknowns: usize,
+    pub contact_nodes: usize,
+    pub multipliers: usize,
+    pub friction_unknowns: usize,
+    pub steps: usize,
+    pub step: f64,
+    /// (C.k): the largest k for which the unfrozen step problem is convex, and where
+    pub ck_step_limit: Option<f64>,
+    pub ck_limiting_node: Option<usize>,
+}
+
+impl ModelInfo {
+    pub fn of(p: &Problem) -> ModelInfo {
+        let s = &p.scene;
+        let m = &s.material;
+        let material = if m.viscosity.theta > 0.0 || m.viscosity.zeta > 0.0 {
+            format!("Kelvin–Voigt: E = {}, ν = {}, ρ = {}, θ = {}, ζ = {}", m.young, m.poisson, m.density, m.viscosity.theta, m.viscosity.zeta)
+        } else {
+            format!("elastic (no viscosity): E = {}, ν = {}, ρ = {}", m.young, m.poisson, m.density)
+        };
+        let mut info = ModelInfo {
+            plane: format!("{:?}", s.domain.plane).to_lowercase(),
+            material,
+            contact: "none (no contact side): one linear solve per step".into(),
+            normal_law: "-".into(),
+            constraint: "-".into(),
+            friction: "-".into(),
+            friction_bound: "-".into(),
+            scheme: format!("{:?}", s.time.scheme),
+            inner_solver: format!("{:?}", s.solver.inner).to_lowercase(),
+            mass: format!("{:?}", s.solver.mass).to_lowercase(),
+            nodes: p.mesh.nodes.len(),
+            triangles: p.mesh.triangles.len(),
+            velocity_unknowns: p.dofs.n_free,
+            contact_nodes: 0,
+            multipliers: 0,
+            friction_unknowns: 0,
+            steps: p.steps,
+            step: p.k,
+            ck_step_limit: None,
+            ck_limiting_node: None,
+        };
+        let (Some(c), Some(cs)) = (&p.contact, &s.contact) else { return info };
+        info.contact = format!("on sides {}: {} contact nodes", s.boundary.contact.join(", "), c.n());
+        info.contact_nodes = c.n();
+        info.normal_law = if cs.compliance > 0.0 {
+            format!("normal compliance p(r) = {} r_+", cs.compliance)
+        } else {
+            "no compliance (p ≡ 0)".into()
+        };
+        info.constraint = match (bound_str(p), cs.enforcement) {
+            (None, _) => "none (g = inf): pure normal compliance, no multipliers".into(),
+            (Some(g), Enforcement::Exact) if cs.compliance == 0.0 && g == 0.0 => {
+                "Signorini (g = 0, p ≡ 0): exact, one multiplier λ per contact node".into()
+            }
+            (Some(g), Enforcement::Exact) => format!("u_ν ≤ g = {g}, exact (Problem P): one multiplier λ per contact node"),
+            (Some(g), Enforcement::Penalty) => {
+                format!("penalty (Problem P_ε): p_ε = p + (r − {g})_+/ε with ε = {}, no multipliers", cs.penalty.unwrap_or(0.0))
+            }
+        };
+        if c.constraint.is_some() {
+            info.multipliers = c.n();
+        }
+        info.friction = match &c.friction {
+            None => "none: frictionless, no fixed point".into(),
+            Some(FrictionCoefficient::Constant(mu)) => format!("constant μ = {mu}: one convex solve per step"),
+            Some(FrictionCoefficient::Exponential { a, b, alpha }) => {
+                format!("μ(r) = ({a} − {b}) e^(−{alpha} r) + {b}: fixed point on S (F.1)")
+            }
+            Some(FrictionCoefficient::Table(pts)) => format!("table with {} points: fixed point on S (F.1)", pts.len()),
+        };
+        if c.friction.is_some() {
+            info.friction_unknowns = c.n();
+            info.friction_bound = match (cs.friction_bound, bound_str(p)) {
+                (FrictionBound::Capped, Some(g)) => format!("μ(‖v̄‖) p(min(r_+, {g})) (capped)"),
+                _ => "μ(‖v̄‖) p(r) (uncapped)".into(),
+            };
+            let lumped = lumped_masses(&p.mesh, &p.material, &p.dofs);
+            if let Some((k, i)) = c.convex_step_limit(&lumped) {
+                info.ck_step_limit = Some(k);
+                info.ck_limiting_node = Some(c.nodes[i]);
+            }
+        }
+        info
+    }
+
+    /// Human-readable lines for `dyncontact check`.
+    pub fn lines(&self) -> Vec<String> {
+        let mut v = vec![
+            format!("plane          : {}", self.plane),
+            format!("material       : {}", self.material),
+            format!("contact        : {}", self.contact),
+            format!("normal law     : {}", self.normal_law),
+            format!("constraint     : {}", self.constraint),
+            format!("friction       : {}", self.friction),
+            format!("friction bound : {}", self.friction_bound),
+            format!("scheme         : {}, inner solver {}, {} mass", self.scheme, self.inner_solver, self.mass),
+            format!(
+                "sizes          : {} nodes, {} triangles, {} velocity unknowns, {} contact nodes, {} multipliers, {} friction unknowns",
+                self.nodes, self.triangles, self.velocity_unknowns, self.contact_nodes, self.multipliers, self.friction_unknowns
+            ),
+            format!("time           : {} steps of k = {}", self.steps, self.step),
+        ];
+        match self.ck_step_limit {
+            Some(k) => v.push(format!(
+                "(C.k)          : the unfrozen step problem is convex for k <= {k:.4e} (limited at node {})",
+                self.ck_limiting_node.unwrap_or(0)
+            )),
+            None => v.push("(C.k)          : no step-size condition (no velocity-dependent friction)".into()),
+        }
+        v
+    }
+
+    /// The (C.k) warning, if time.step exceeds the limit.
+    pub fn ck_warning(&self) -> Option<String> {
+        let k = self.ck_step_limit?;
+        (self.step > k).then(|| {
+            format!(
+                "time.step = {} exceeds the (C.k) limit {k:.4e} (node {}): the unfrozen step problem may be nonconvex; \
+                 F.1 may need more iterations or relaxation < 1",
+                self.step,
+                self.ck_limiting_node.unwrap_or(0)
+            )
+        })
+    }
+}
+
+fn bound_str(p: &Problem) -> Option<f64> {
+    let c = p.scene.contact.as_ref()?;
+    match p.scene.bound_of(c).ok()? {
+        Bound::Finite(g) => Some(g),
+        Bound::Infinite => None,
+    }
+}
+
+/// Wall-clock split of a run in seconds.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct Timing {
+    pub setup_s: f64,
+    pub free_solve_s: f64,
+    pub contact_solve_s: f64,
+    pub recovery_s: f64,
+    pub output_s: f64,
+    pub total_s: f64,
+}
+
+/// summary.json.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    pub scene: String,
+    pub description: String,
+    /// "completed" | "failed" | "interrupted"
+    pub status: String,
+    pub failure: Option<String>,
+    pub model: ModelInfo,
+    pub steps_completed: usize,
+    pub final_time: f64,
+    pub wall_time_s: f64,
+    pub timing: Timing,
+    pub newton_iterations_total: usize,
+    pub fixed_point_iterations_total: usize,
+    pub fixed_point_iterations_max: usize,
+    pub fixed_point_cap_hits: usize,
+    pub max_abs_energy_residual: f64,
+    pub max_relative_energy_residual: f64,
+    pub warnings: Vec<String>,
+}

@@ -1,0 +1,640 @@
+//! The scene file (SCENES.md): TOML schema, defaults, and validation with key-path messages.
+//!
+//! Parsing is two-stage: serde (with `deny_unknown_fields` and `serde_path_to_error`, so an
+//! unknown key or a wrong type names its path), then [`Scene::validate`], which checks the
+//! ranges physics requires and the combinations that make sense. Nothing here touches the
+//! mesh; side names are checked against the mesh in `crate::problem`.
+
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+use crate::model::expr::{Expr, VecExpr};
+
+/// The embedded default scene (`dyncontact run` with no SCENE).
+pub const DEFAULT_SCENE: &str = include_str!("../fixtures/scenes/academic.toml");
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    #[serde(default = "default_name")]
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    pub domain: Domain,
+    #[serde(default)]
+    pub boundary: Boundary,
+    pub material: Material,
+    #[serde(default)]
+    pub loads: Loads,
+    #[serde(default)]
+    pub initial: Initial,
+    pub contact: Option<Contact>,
+    pub time: Time,
+    #[serde(default)]
+    pub solver: Solver,
+    #[serde(default)]
+    pub output: Output,
+}
+
+fn default_name() -> String {
+    "scene".into()
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DomainKind {
+    Rectangle,
+    Gmsh,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Plane {
+    #[default]
+    Strain,
+    Stress,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Domain {
+    pub kind: DomainKind,
+    pub size: Option<[f64; 2]>,
+    pub cells: Option<[i64; 2]>,
+    pub file: Option<String>,
+    #[serde(default)]
+    pub plane: Plane,
+}
+
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Boundary {
+    #[serde(default)]
+    pub dirichlet: Vec<String>,
+    #[serde(default)]
+    pub contact: Vec<String>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Viscosity {
+    pub theta: f64,
+    pub zeta: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    pub density: f64,
+    pub young: f64,
+    pub poisson: f64,
+    #[serde(default)]
+    pub viscosity: Viscosity,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Traction {
+    pub side: String,
+    pub value: [String; 2],
+}
+
+fn zero_pair() -> [String; 2] {
+    ["0".into(), "0".into()]
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Loads {
+    #[serde(default = "zero_pair")]
+    pub body: [String; 2],
+    #[serde(default)]
+    pub traction: Vec<Traction>,
+}
+
+impl Default for Loads {
+    fn default() -> Self {
+        Loads { body: zero_pair(), traction: Vec::new() }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Initial {
+    #[serde(default = "zero_pair")]
+    pub displacement: [String; 2],
+    #[serde(default = "zero_pair")]
+    pub velocity: [String; 2],
+}
+
+impl Default for Initial {
+    fn default() -> Self {
+        Initial { displacement: zero_pair(), velocity: zero_pair() }
+    }
+}
+
+/// A number or a string (for `penetration_bound = "inf"` and `gap = 0.0`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub enum NumOrStr {
+    Num(f64),
+    Str(String),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Enforcement {
+    #[default]
+    Exact,
+    Penalty,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum FrictionBound {
+    #[default]
+    Capped,
+    Uncapped,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Contact {
+    pub gap: Option<NumOrStr>,
+    #[serde(default)]
+    pub compliance: f64,
+    pub penetration_bound: NumOrStr,
+    #[serde(default)]
+    pub enforcement: Enforcement,
+    pub penalty: Option<f64>,
+    #[serde(default)]
+    pub friction_bound: FrictionBound,
+    #[serde(default)]
+    pub friction: Friction,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum FrictionLaw {
+    #[default]
+    None,
+    Constant,
+    Exponential,
+    Table,
+}
+
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Friction {
+    #[serde(default)]
+    pub law: FrictionLaw,
+    #[serde(rename = "static")]
+    pub static_: Option<f64>,
+    pub kinetic: Option<f64>,
+    pub decay: Option<f64>,
+    pub coefficient: Option<f64>,
+    pub points: Option<Vec<[f64; 2]>>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum SchemeKind {
+    #[default]
+    Midpoint,
+    Trapezoid,
+    BackwardEuler,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Time {
+    pub end: f64,
+    pub step: f64,
+    #[serde(default)]
+    pub scheme: SchemeKind,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum InnerSolver {
+    #[default]
+    Newton,
+    Conic,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum MassKind {
+    #[default]
+    Lumped,
+    Consistent,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Solver {
+    #[serde(default)]
+    pub inner: InnerSolver,
+    #[serde(default)]
+    pub mass: MassKind,
+    #[serde(default = "d_newton_tol")]
+    pub newton_tolerance: f64,
+    #[serde(default = "d_fp_tol")]
+    pub fixed_point_tolerance: f64,
+    #[serde(default = "d_iters")]
+    pub max_newton_iterations: i64,
+    #[serde(default = "d_iters")]
+    pub max_fixed_point_iterations: i64,
+    #[serde(default = "d_one")]
+    pub relaxation: f64,
+}
+
+fn d_newton_tol() -> f64 {
+    1e-10
+}
+fn d_fp_tol() -> f64 {
+    1e-8
+}
+fn d_iters() -> i64 {
+    50
+}
+fn d_one() -> f64 {
+    1.0
+}
+
+impl Default for Solver {
+    fn default() -> Self {
+        Solver {
+            inner: InnerSolver::Newton,
+            mass: MassKind::Lumped,
+            newton_tolerance: d_newton_tol(),
+            fixed_point_tolerance: d_fp_tol(),
+            max_newton_iterations: d_iters(),
+            max_fixed_point_iterations: d_iters(),
+            relaxation: 1.0,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    #[serde(default = "d_every")]
+    pub every: i64,
+}
+
+fn d_every() -> i64 {
+    10
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Output { every: d_every() }
+    }
+}
+
+/// The penetration bound g: finite, or none ("inf", pure normal compliance).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Bound {
+    Finite(f64),
+    Infinite,
+}
+
+impl Scene {
+    /// Parse TOML text. `file` names the source in error messages.
+    pub fn from_toml(text: &str, file: &str) -> Result<Scene> {
+        let de = toml::de::Deserializer::parse(text).map_err(|e| Error::SceneSyntax {
+            file: file.to_string(),
+            message: one_paragraph(&e.to_string()),
+        })?;
+        let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = one_paragraph(&e.into_inner().to_string());
+            if path.is_empty() || path == "." {
+                Error::SceneSyntax { file: file.to_string(), message: inner }
+            } else {
+                Error::SceneSyntax { file: file.to_string(), message: format!("{path}: {inner}") }
+            }
+        })?;
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    /// Read and parse a scene file.
+    pub fn from_file(path: &std::path::Path) -> Result<Scene> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Scene::from_toml(&text, &path.display().to_string())
+    }
+
+    /// The embedded default scene.
+    pub fn default_scene() -> Scene {
+        // The embedded text is checked by a test; a failure here is a build defect, not user input.
+        Scene::from_toml(DEFAULT_SCENE, "<embedded academic scene>")
+            .expect("the embedded default scene is valid (tested)")
+    }
+
+    /// Number of time steps N = T/k.
+    pub fn steps(&self) -> usize {
+        (self.time.end / self.time.step).round() as usize
+    }
+
+    /// Check ranges and combinations; every error names its key path.
+    pub fn validate(&self) -> Result<()> {
+        let e = |p: &str, m: String| Err(Error::scene(p, m));
+        if self.name.trim().is_empty() || self.name.contains(['/', '\\']) || self.name == "." || self.name == ".." {
+            return e("name", format!("must be a non-empty folder name without slashes, got \"{}\"", self.name));
+        }
+        // domain
+        let d = &self.domain;
+        match d.kind {
+            DomainKind::Rectangle => {
+                let Some(size) = d.size else {
+                    return e("domain.size", "missing: a rectangle needs size = [Lx, Ly]".into());
+                };
+                for (i, s) in size.iter().enumerate() {
+                    if !(s.is_finite() && *s > 0.0) {
+                        return e(&format!("domain.size[{i}]"), format!("must be > 0, got {s}"));
+                    }
+                }
+                let Some(cells) = d.cells else {
+                    return e("domain.cells", "missing: a rectangle needs cells = [nx, ny]".into());
+                };
+                for (i, c) in cells.iter().enumerate() {
+                    if *c < 1 {
+                        return e(&format!("domain.cells[{i}]"), format!("must be >= 1, got {c}"));
+                    }
+                    if *c > 4096 {
+                        return e(&format!("domain.cells[{i}]"), format!("must be <= 4096, got {c}"));
+                    }
+                }
+                if d.file.is_some() {
+                    return e("domain.file", "only used with kind = \"gmsh\"; remove it or set kind = \"gmsh\"".into());
+                }
+            }
+            DomainKind::Gmsh => {
+                match &d.file {
+                    None => return e("domain.file", "missing: kind = \"gmsh\" needs file = \"path/to/mesh.msh\"".into()),
+                    Some(f) if f.trim().is_empty() => return e("domain.file", "is empty".into()),
+                    _ => {}
+                }
+                if d.size.is_some() {
+                    return e("domain.size", "only used with kind = \"rectangle\"; remove it".into());
+                }
+                if d.cells.is_some() {
+                    return e("domain.cells", "only used with kind = \"rectangle\"; remove it".into());
+                }
+            }
+        }
+        // boundary
+        for (i, s) in self.boundary.dirichlet.iter().enumerate() {
+            if self.boundary.contact.contains(s) {
+                return e(
+                    &format!("boundary.dirichlet[{i}]"),
+                    format!("side \"{s}\" is also a contact side; a side is either clamped (Γ1) or in contact (Γ3)"),
+                );
+            }
+        }
+        for (name, list) in [("dirichlet", &self.boundary.dirichlet), ("contact", &self.boundary.contact)] {
+            for (i, s) in list.iter().enumerate() {
+                if list[..i].contains(s) {
+                    return e(&format!("boundary.{name}[{i}]"), format!("side \"{s}\" is listed twice"));
+                }
+            }
+        }
+        // material
+        let m = &self.material;
+        if !(m.density.is_finite() && m.density > 0.0) {
+            return e("material.density", format!("must be > 0, got {}", m.density));
+        }
+        if !(m.young.is_finite() && m.young > 0.0) {
+            return e("material.young", format!("must be > 0, got {}", m.young));
+        }
+        if !(m.poisson.is_finite() && m.poisson > -1.0 && m.poisson < 0.5) {
+            return e("material.poisson", format!("must be in (-1, 0.5), got {}", m.poisson));
+        }
+        let v = m.viscosity;
+        if !(v.theta.is_finite() && v.theta >= 0.0) {
+            return e("material.viscosity.theta", format!("must be >= 0, got {}", v.theta));
+        }
+        if !(v.zeta.is_finite() && v.zeta >= 0.0) {
+            return e("material.viscosity.zeta", format!("must be >= 0, got {}", v.zeta));
+        }
+        if d.plane == Plane::Stress && (v.theta > 0.0 || v.zeta > 0.0) {
+            // decision 11: σ_zz = 0 is algebraic only when A = β B.
+            let (lam, mu) = crate::model::material::lame(m.young, m.poisson);
+            let proportional = (v.theta * mu - v.zeta * lam).abs() <= 1e-12 * (v.theta * mu).abs().max((v.zeta * lam).abs());
+            if !proportional {
+                return e(
+                    "material.viscosity",
+                    format!(
+                        "plane stress with viscosity needs A proportional to B (theta/zeta = lambda/mu = {:.6}), \
+                         got theta/zeta = {:.6}; otherwise ε_zz obeys an ODE that dyncontact does not model. \
+                         Use plane = \"strain\" or proportional viscosity",
+                        lam / mu,
+                        v.theta / v.zeta
+                    ),
+                );
+            }
+        }
+        // loads and initial data
+        VecExpr::parse(&self.loads.body, &["x", "y", "t"], "loads.body")?;
+        for (i, tr) in self.loads.traction.iter().enumerate() {
+            let p = format!("loads.traction[{i}]");
+            VecExpr::parse(&tr.value, &["x", "y", "t"], &format!("{p}.value"))?;
+            if self.boundary.dirichlet.contains(&tr.side) {
+                return e(&format!("{p}.side"), format!("\"{}\" is a Dirichlet side (Γ1); tractions act on Γ2 only", tr.side));
+            }
+            if self.boundary.contact.contains(&tr.side) {
+                return e(&format!("{p}.side"), format!("\"{}\" is a contact side (Γ3); tractions act on Γ2 only", tr.side));
+            }
+            if self.loads.traction[..i].iter().any(|o| o.side == tr.side) {
+                return e(&format!("{p}.side"), format!("\"{}\" already has a traction; give one per side", tr.side));
+            }
+        }
+        VecExpr::parse(&self.initial.displacement, &["x", "y"], "initial.displacement")?;
+        VecExpr::parse(&self.initial.velocity, &["x", "y"], "initial.velocity")?;
+        // contact
+        if !self.boundary.contact.is_empty() && self.contact.is_none() {
+            return e("contact", "missing section [contact]: boundary.contact names contact sides".into());
+        }
+        if let Some(c) = &self.contact {
+            self.validate_contact(c)?;
+        }
+        // time
+        let t = &self.time;
+        if !(t.end.is_finite() && t.end > 0.0) {
+            return e("time.end", format!("must be > 0, got {}", t.end));
+        }
+        if !(t.step.is_finite() && t.step > 0.0) {
+            return e("time.step", format!("must be > 0, got {}", t.step));
+        }
+        if t.step > t.end * (1.0 + 1e-12) {
+            return e("time.step", format!("must be <= time.end = {}, got {}", t.end, t.step));
+        }
+        let n = (t.end / t.step).round();
+        if (n * t.step - t.end).abs() > 1e-6 * t.step {
+            return e(
+                "time.step",
+                format!(
+                    "time.end / time.step = {:.6} is not a whole number of steps; choose step = end / N (e.g. {:.6e})",
+                    t.end / t.step,
+                    t.end / n.max(1.0)
+                ),
+            );
+        }
+        if n > 1e8 {
+            return e("time.step", format!("gives {n:.0} steps; at most 1e8 are allowed"));
+        }
+        // solver
+        let s = &self.solver;
+        for (key, val) in [("newton_tolerance", s.newton_tolerance), ("fixed_point_tolerance", s.fixed_point_tolerance)] {
+            if !(val.is_finite() && val > 0.0 && val < 1.0) {
+                return e(&format!("solver.{key}"), format!("must be in (0, 1), got {val}"));
+            }
+        }
+        for (key, val) in [("max_newton_iterations", s.max_newton_iterations), ("max_fixed_point_iterations", s.max_fixed_point_iterations)] {
+            if !(1..=100_000).contains(&val) {
+                return e(&format!("solver.{key}"), format!("must be in 1..=100000, got {val}"));
+            }
+        }
+        if !(s.relaxation.is_finite() && s.relaxation > 0.0 && s.relaxation <= 1.0) {
+            return e("solver.relaxation", format!("must be in (0, 1], got {}", s.relaxation));
+        }
+        if self.output.every < 1 {
+            return e("output.every", format!("must be >= 1, got {}", self.output.every));
+        }
+        Ok(())
+    }
+
+    fn validate_contact(&self, c: &Contact) -> Result<()> {
+        let e = |p: &str, m: String| Err(Error::scene(p, m));
+        if let Some(NumOrStr::Str(g)) = &c.gap {
+            Expr::parse(g, &["x", "y"], "contact.gap")?;
+        }
+        if let Some(NumOrStr::Num(g)) = &c.gap {
+            if !g.is_finite() {
+                return e("contact.gap", format!("must be finite, got {g}"));
+            }
+        }
+        if !(c.compliance.is_finite() && c.compliance >= 0.0) {
+            return e("contact.compliance", format!("must be >= 0, got {}", c.compliance));
+        }
+        let bound = self.bound_of(c)?;
+        match (c.enforcement, c.penalty) {
+            (Enforcement::Penalty, None) => {
+                return e("contact.penalty", "missing: enforcement = \"penalty\" needs penalty = ε > 0".into());
+            }
+            (Enforcement::Penalty, Some(eps)) if !(eps.is_finite() && eps > 0.0) => {
+                return e("contact.penalty", format!("must be > 0, got {eps}"));
+            }
+            (Enforcement::Exact, Some(_)) => {
+                return e("contact.penalty", "only used with enforcement = \"penalty\"; remove it or set enforcement = \"penalty\"".into());
+            }
+            _ => {}
+        }
+        if c.enforcement == Enforcement::Penalty && bound == Bound::Infinite {
+            return e("contact.enforcement", "\"penalty\" penalizes u_ν > g and needs a finite penetration_bound".into());
+        }
+        if bound == Bound::Infinite && c.compliance == 0.0 {
+            return e(
+                "contact.compliance",
+                "is 0 and penetration_bound is \"inf\": the foundation exerts no force; give compliance > 0 or a finite bound".into(),
+            );
+        }
+        let f = &c.friction;
+        let p = "contact.friction";
+        let forbid = |key: &str, present: bool| -> Result<()> {
+            if present {
+                Err(Error::scene(
+                    format!("{p}.{key}"),
+                    format!("not used by law = \"{}\"; remove it", format!("{:?}", f.law).to_lowercase()),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        let need = |key: &str, v: Option<f64>| -> Result<f64> {
+            match v {
+                None => Err(Error::scene(format!("{p}.{key}"), format!("missing: law = \"{}\" needs it", format!("{:?}", f.law).to_lowercase()))),
+                Some(x) if !(x.is_finite() && x >= 0.0) => Err(Error::scene(format!("{p}.{key}"), format!("must be >= 0, got {x}"))),
+                Some(x) => Ok(x),
+            }
+        };
+        match f.law {
+            FrictionLaw::None => {
+                forbid("static", f.static_.is_some())?;
+                forbid("kinetic", f.kinetic.is_some())?;
+                forbid("decay", f.decay.is_some())?;
+                forbid("coefficient", f.coefficient.is_some())?;
+                forbid("points", f.points.is_some())?;
+            }
+            FrictionLaw::Constant => {
+                need("coefficient", f.coefficient)?;
+                forbid("static", f.static_.is_some())?;
+                forbid("kinetic", f.kinetic.is_some())?;
+                forbid("decay", f.decay.is_some())?;
+                forbid("points", f.points.is_some())?;
+            }
+            FrictionLaw::Exponential => {
+                need("static", f.static_)?;
+                need("kinetic", f.kinetic)?;
+                need("decay", f.decay)?;
+                forbid("coefficient", f.coefficient.is_some())?;
+                forbid("points", f.points.is_some())?;
+            }
+            FrictionLaw::Table => {
+                forbid("static", f.static_.is_some())?;
+                forbid("kinetic", f.kinetic.is_some())?;
+                forbid("decay", f.decay.is_some())?;
+                forbid("coefficient", f.coefficient.is_some())?;
+                let Some(pts) = &f.points else {
+                    return e(&format!("{p}.points"), "missing: law = \"table\" needs points = [[r0, mu0], [r1, mu1], ...]".into());
+                };
+                if pts.is_empty() {
+                    return e(&format!("{p}.points"), "is empty; give at least one [slip rate, mu] pair".into());
+                }
+                if pts[0][0] != 0.0 {
+                    return e(&format!("{p}.points[0][0]"), format!("the first slip rate must be 0 (μ(0) is the static value), got {}", pts[0][0]));
+                }
+                for (i, [r, mu]) in pts.iter().enumerate() {
+                    if !(r.is_finite() && mu.is_finite()) {
+                        return e(&format!("{p}.points[{i}]"), "must be finite numbers".into());
+                    }
+                    if *mu < 0.0 {
+                        return e(&format!("{p}.points[{i}][1]"), format!("μ must be >= 0, got {mu}"));
+                    }
+                    if i > 0 && *r <= pts[i - 1][0] {
+                        return e(
+                            &format!("{p}.points[{i}][0]"),
+                            format!("slip rates must increase strictly, got {} after {}", r, pts[i - 1][0]),
+                        );
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The penetration bound of a contact section.
+    pub fn bound_of(&self, c: &Contact) -> Result<Bound> {
+        match &c.penetration_bound {
+            NumOrStr::Num(g) if g.is_finite() && *g >= 0.0 => Ok(Bound::Finite(*g)),
+            NumOrStr::Num(g) if *g == f64::INFINITY => Ok(Bound::Infinite),
+            NumOrStr::Num(g) => Err(Error::scene("contact.penetration_bound", format!("must be >= 0 or \"inf\", got {g}"))),
+            NumOrStr::Str(s) if s.trim() == "inf" => Ok(Bound::Infinite),
+            NumOrStr::Str(s) => Err(Error::scene(
+                "contact.penetration_bound",
+                format!("must be a number >= 0 or the string \"inf\", got \"{s}\""),
+            )),
+        }
+    }
+
+    /// True when the scene has contact sides and a contact section.
+    pub fn has_contact(&self) -> bool {
+        !self.boundary.contact.is_empty() && self.contact.is_some()
+    }
+}
+
+fn one_paragraph(s: &str) -> String {
+    s.lines().map(str::trim_end).filter(|l| !l.trim().is_empty()).collect::<Vec<_>>().join(" | ")
+}

@@ -1,0 +1,113 @@
+//! Time schemes (model.md §4.2, decision 3): the midpoint rule in velocity form (S.1–S.2, the
+//! default), the trapezoidal variant (identical without contact; end-point-averaged contact
+//! forces) and backward Euler in velocity (first order, the baseline).
+//!
+//! The matrix of the velocity unknown w = v^{n+1} is constant for a fixed k, so it is
+//! factored once per run (the fast path of ARCHITECTURE.md).
+
+use crate::error::Result;
+use crate::fem::Operators;
+use crate::linalg::{self, Cholesky, SpMat};
+use crate::model::laws::NormalForceRule;
+use crate::scene::SchemeKind;
+
+/// How the contact quantities of one step depend on the unknown contact velocity y = H w:
+/// d^{n+1} = d^n + c_d + a_d y_ν and v̄ = c_v + a_v y_τ, where c_d, c_v come from v^n.
+#[derive(Debug, Clone, Copy)]
+pub struct ContactRule {
+    /// d^{n+1} = d^n + a_d (y_ν + b_d v_ν^n)
+    pub a_d: f64,
+    pub b_d: f64,
+    /// v̄ = a_v (y_τ + b_v v_τ^n): the slip rate the friction law sees
+    pub a_v: f64,
+    pub b_v: f64,
+    /// the normal force of the step
+    pub force: NormalForceRule,
+    /// û = d^n + p_d v_ν^n: the (known) point where p_τ is evaluated
+    pub p_d: f64,
+}
+
+/// The factored step matrix and the pieces of the right-hand side.
+pub struct StepOperator {
+    pub kind: SchemeKind,
+    pub k: f64,
+    /// A_k, factored once
+    a: Cholesky,
+    /// R with b^n = R v^n − K u^n + f
+    r: SpMat,
+    kmat: SpMat,
+}
+
+impl StepOperator {
+    /// (S.2) The constant step matrix A_k = M/k + C/2 + (k/4) K of the midpoint rule
+    /// (A = M/k + C + k K for backward Euler), factored once by sparse Cholesky.
+    pub fn new(ops: &Operators, kind: SchemeKind, k: f64) -> Result<StepOperator> {
+        let (a, r) = match kind {
+            SchemeKind::Midpoint | SchemeKind::Trapezoid => (
+                linalg::combine(&[(1.0 / k, &ops.m), (0.5, &ops.c), (0.25 * k, &ops.k)])?,
+                linalg::combine(&[(1.0 / k, &ops.m), (-0.5, &ops.c), (-0.25 * k, &ops.k)])?,
+            ),
+            SchemeKind::BackwardEuler => (
+                linalg::combine(&[(1.0 / k, &ops.m), (1.0, &ops.c), (k, &ops.k)])?,
+                linalg::combine(&[(1.0 / k, &ops.m)])?,
+            ),
+        };
+        Ok(StepOperator { kind, k, a: Cholesky::new(&a, "the step matrix A_k")?, r, kmat: ops.k.clone() })
+    }
+
+    /// The time at which the load is sampled: f^{n+½} = f(t_n + k/2) (decision 7), or
+    /// f(t_{n+1}) for backward Euler.
+    pub fn load_time(&self, t_n: f64) -> f64 {
+        match self.kind {
+            SchemeKind::BackwardEuler => t_n + self.k,
+            _ => t_n + 0.5 * self.k,
+        }
+    }
+
+    /// (S.2) without contact forces: b^n = (M/k − C/2 − kK/4) v^n − K u^n + f^{n+½}
+    /// (backward Euler: M v^n/k − K u^n + f^{n+1}), so that A_k w = b^n − Hᵀ r.
+    pub fn rhs(&self, u: &[f64], v: &[f64], f: &[f64]) -> Vec<f64> {
+        let mut b = f.to_vec();
+        linalg::mul_add(&self.r, v, 1.0, &mut b);
+        linalg::mul_add(&self.kmat, u, -1.0, &mut b);
+        b
+    }
+
+    /// x ← A_k⁻¹ x.
+    pub fn solve_in_place(&self, x: &mut [f64]) {
+        self.a.solve_in_place(x);
+    }
+
+    pub fn factor(&self) -> &Cholesky {
+        &self.a
+    }
+
+    /// (S.1) u^{n+1} = u^n + k v^{n+½} with v^{n+½} = (v^n + v^{n+1})/2
+    /// (backward Euler: u^{n+1} = u^n + k v^{n+1}).
+    pub fn displacement(&self, u: &[f64], v: &[f64], w: &[f64]) -> Vec<f64> {
+        match self.kind {
+            SchemeKind::BackwardEuler => u.iter().zip(w).map(|(u, w)| u + self.k * w).collect(),
+            _ => u.iter().zip(v).zip(w).map(|((u, v), w)| u + 0.5 * self.k * (v + w)).collect(),
+        }
+    }
+
+    /// The velocity at which the viscous force acts: v^{n+½} (midpoint) or v^{n+1}.
+    pub fn viscous_velocity(&self, v: &[f64], w: &[f64]) -> Vec<f64> {
+        match self.kind {
+            SchemeKind::BackwardEuler => w.to_vec(),
+            _ => v.iter().zip(w).map(|(a, b)| 0.5 * (a + b)).collect(),
+        }
+    }
+
+    /// The contact kinematics of this scheme (decisions 2 and 3): friction at v^{n+½} and
+    /// p_τ at the predictor d^n + (k/2) v_ν^n of d^{n+½} for midpoint and trapezoid; all
+    /// terms at t_{n+1} for backward Euler.
+    pub fn contact_rule(&self) -> ContactRule {
+        let k = self.k;
+        match self.kind {
+            SchemeKind::Midpoint => ContactRule { a_d: 0.5 * k, b_d: 1.0, a_v: 0.5, b_v: 1.0, force: NormalForceRule::DiscreteGradient, p_d: 0.5 * k },
+            SchemeKind::Trapezoid => ContactRule { a_d: 0.5 * k, b_d: 1.0, a_v: 0.5, b_v: 1.0, force: NormalForceRule::Average, p_d: 0.5 * k },
+            SchemeKind::BackwardEuler => ContactRule { a_d: k, b_d: 0.0, a_v: 1.0, b_v: 0.0, force: NormalForceRule::EndPoint, p_d: k },
+        }
+    }
+}

@@ -1,0 +1,142 @@
+//! The per-step contact problem (model.md §4.3–§4.5) on the contact DOFs only.
+//!
+//! With A_k factored and W = H A_k⁻¹ Hᵀ (the Delassus operator, computed once), the step
+//! (S.2)–(S.5) reduces to: find the contact velocities y = H w, multipliers λ and friction
+//! forces t with
+//!
+//!   y = y_free − W r,   r_ν,i = ω_i (q_i(y) + λ_i),   r_τ,i = ω_i t_i,
+//!
+//! q_i the normal force of the scheme (S.3), λ complementary to d_i^{n+1} ≤ g (S.4), and t_i
+//! in the friction law with the bound S_i frozen (S.5). The inner solvers (`newton`, `conic`)
+//! solve that frozen problem; the fixed point (F.1) updates S.
+
+pub mod conic;
+pub mod delassus;
+pub mod fixed_point;
+pub mod newton;
+
+use faer::Mat;
+
+use crate::model::laws::{NormalForceRule, NormalLaw};
+
+/// Data of one contact node for one step.
+#[derive(Debug, Clone, Copy)]
+pub struct NodeData {
+    pub omega: f64,
+    /// d^n
+    pub d_n: f64,
+    /// d^{n+1} = d_aff + a_d y_ν
+    pub d_aff: f64,
+    /// v̄ = v_aff + a_v y_τ
+    pub v_aff: f64,
+    /// Some(g): the exact constraint d^{n+1} ≤ g (Problem P)
+    pub bound: Option<f64>,
+}
+
+/// The frozen-S contact problem of one step, condensed on the contact DOFs.
+pub struct StepData<'a> {
+    /// Delassus operator W = H A_k⁻¹ Hᵀ, components interleaved (ν_1, τ_1, ν_2, τ_2, …)
+    pub w: &'a Mat<f64>,
+    pub y_free: Vec<f64>,
+    pub nodes: Vec<NodeData>,
+    pub a_d: f64,
+    pub a_v: f64,
+    pub rule: NormalForceRule,
+    pub law: &'a NormalLaw,
+    /// friction is modelled (t variables exist)
+    pub friction: bool,
+}
+
+/// Contact status of a node after a step (contact.csv `status`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NodeStatus {
+    Separated,
+    Stick,
+    Slip,
+}
+
+impl NodeStatus {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            NodeStatus::Separated => "separated",
+            NodeStatus::Stick => "stick",
+            NodeStatus::Slip => "slip",
+        }
+    }
+    pub fn code(self) -> i32 {
+        match self {
+            NodeStatus::Separated => 0,
+            NodeStatus::Stick => 1,
+            NodeStatus::Slip => 2,
+        }
+    }
+}
+
+/// The solution of the frozen problem.
+#[derive(Debug, Clone)]
+pub struct ContactSolution {
+    pub y: Vec<f64>,
+    pub lambda: Vec<f64>,
+    pub t: Vec<f64>,
+    /// normal force q_i of the scheme at the solution
+    pub q: Vec<f64>,
+    pub status: Vec<NodeStatus>,
+    /// Newton iterations (or conic solves)
+    pub iterations: usize,
+    /// final ‖residual‖_∞ relative to the velocity scale
+    pub residual: f64,
+}
+
+impl StepData<'_> {
+    pub fn n(&self) -> usize {
+        self.nodes.len()
+    }
+    /// d_i^{n+1}(y)
+    pub fn d_end(&self, i: usize, y: &[f64]) -> f64 {
+        self.nodes[i].d_aff + self.a_d * y[2 * i]
+    }
+    /// v̄_i(y), the slip rate the friction law sees
+    pub fn slip(&self, i: usize, y: &[f64]) -> f64 {
+        self.nodes[i].v_aff + self.a_v * y[2 * i + 1]
+    }
+    /// q_i(y)
+    pub fn q(&self, i: usize, y: &[f64]) -> f64 {
+        self.rule.force(self.law, self.nodes[i].d_n, self.d_end(i, y))
+    }
+    /// ∂q_i/∂y_ν,i
+    pub fn dq(&self, i: usize, y: &[f64]) -> f64 {
+        self.a_d * self.rule.force_db(self.law, self.nodes[i].d_n, self.d_end(i, y))
+    }
+    /// The velocity bound β_i: d^{n+1} ≤ g ⟺ y_ν,i ≤ β_i.
+    pub fn beta(&self, i: usize) -> Option<f64> {
+        self.nodes[i].bound.map(|g| (g - self.nodes[i].d_aff) / self.a_d)
+    }
+    /// The contact velocity at which v̄_i = 0 (stick).
+    pub fn y_stick(&self, i: usize) -> f64 {
+        -self.nodes[i].v_aff / self.a_v
+    }
+    /// r = [ω(q + λ), ω t] per node.
+    pub fn forces(&self, y: &[f64], lambda: &[f64], t: &[f64]) -> Vec<f64> {
+        let mut r = vec![0.0; 2 * self.n()];
+        for i in 0..self.n() {
+            let w = self.nodes[i].omega;
+            r[2 * i] = w * (self.q(i, y) + lambda[i]);
+            r[2 * i + 1] = w * t[i];
+        }
+        r
+    }
+    /// y_free − W r.
+    pub fn response(&self, r: &[f64]) -> Vec<f64> {
+        let m = r.len();
+        (0..m).map(|j| self.y_free[j] - (0..m).map(|l| self.w[(j, l)] * r[l]).sum::<f64>()).collect()
+    }
+    /// A velocity scale for relative tests: the largest of the free velocity, `y`, and the
+    /// velocities of the kinematics (v^n terms in d^{n+1} and v̄).
+    pub fn velocity_scale(&self, y: &[f64]) -> f64 {
+        let mut s = crate::linalg::norm_inf(&self.y_free).max(crate::linalg::norm_inf(y));
+        for nd in &self.nodes {
+            s = s.max((nd.v_aff / self.a_v).abs()).max(((nd.d_aff - nd.d_n) / self.a_d).abs());
+        }
+        s
+    }
+}

@@ -1,0 +1,243 @@
+//! The inner solver `newton`: Alart–Curnier semismooth Newton on the frozen-S step problem
+//! (model.md §4.4), condensed on the contact DOFs.
+//!
+//! All residuals are written in velocity units so one norm and one tolerance apply:
+//!   (N.1) F_y = y − y_free + W r(y, λ, t)
+//!   (N.2) F_λ,i = (λ_i − [λ_i + ρ_ν,i (y_ν,i − β_i)]_+) / ρ_ν,i
+//!   (N.3) F_t,i = (t_i − Proj_[−S_i, S_i](t_i + ρ_τ,i v̄_i)) / (ρ_τ,i a_v)
+//! where y_ν ≤ β_i ⟺ d^{n+1} ≤ g, and ρ_ν = r_ν a_d, ρ_τ = r_τ relate to model.md's r_ν, r_τ.
+//! The solution does not depend on ρ (tested); the default ρ_ν,i = 1/(ω_i W_νν,ii) and
+//! ρ_τ,i = 1/(a_v ω_i W_ττ,ii) make the trial values exact for an isolated node.
+
+use faer::Mat;
+
+use super::{ContactSolution, NodeStatus, StepData};
+use crate::linalg;
+
+/// Settings of the Newton solve.
+#[derive(Debug, Clone, Copy)]
+pub struct NewtonSettings {
+    /// stop when ‖F‖_∞ ≤ tolerance · (velocity scale) and the active/stick sets are stable
+    pub tolerance: f64,
+    pub max_iterations: usize,
+    /// multiplies the default ρ_ν, ρ_τ (the solution must not depend on them)
+    pub scale_normal: f64,
+    pub scale_tangent: f64,
+}
+
+impl Default for NewtonSettings {
+    fn default() -> Self {
+        NewtonSettings { tolerance: 1e-10, max_iterations: 50, scale_normal: 1.0, scale_tangent: 1.0 }
+    }
+}
+
+/// Why Newton stopped without converging.
+#[derive(Debug, Clone)]
+pub struct NewtonFailure {
+    pub iterations: usize,
+    /// ‖F‖_∞ / velocity scale at the last iterate
+    pub residual: f64,
+    pub reason: String,
+}
+
+struct Params {
+    rho_n: Vec<f64>,
+    rho_t: Vec<f64>,
+}
+
+/// (N.1) Momentum residual of the condensed step: F_y = y − y_free + W r(y, λ, t).
+pub fn momentum_residual(step: &StepData, y: &[f64], lambda: &[f64], t: &[f64]) -> Vec<f64> {
+    let r = step.forces(y, lambda, t);
+    let resp = step.response(&r);
+    y.iter().zip(&resp).map(|(a, b)| a - b).collect()
+}
+
+/// (N.2) Alart–Curnier residual of the normal constraint (S.4):
+/// F_λ = (λ − [λ + ρ_ν (y_ν − β)]_+)/ρ_ν; zero iff λ ≥ 0, y_ν ≤ β, λ (y_ν − β) = 0.
+pub fn normal_residual(lambda: f64, y_n: f64, beta: f64, rho_n: f64) -> f64 {
+    (lambda - (lambda + rho_n * (y_n - beta)).max(0.0)) / rho_n
+}
+
+/// (N.3) Alart–Curnier residual of the friction law (S.5) with S frozen:
+/// F_t = (t − Proj_[−S,S](t + ρ_τ v̄))/(ρ_τ a_v); zero iff |t| ≤ S and t = S v̄/|v̄| when v̄ ≠ 0.
+pub fn friction_residual(t: f64, slip: f64, s: f64, rho_t: f64, a_v: f64) -> f64 {
+    (t - (t + rho_t * slip).clamp(-s, s)) / (rho_t * a_v)
+}
+
+fn residual(step: &StepData, s: &[f64], p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> Vec<f64> {
+    let n = step.n();
+    let mut f = momentum_residual(step, y, lambda, t);
+    f.reserve(2 * n);
+    for i in 0..n {
+        f.push(match step.beta(i) {
+            Some(beta) => normal_residual(lambda[i], y[2 * i], beta, p.rho_n[i]),
+            None => 0.0,
+        });
+    }
+    for i in 0..n {
+        f.push(if step.friction { friction_residual(t[i], step.slip(i, y), s[i], p.rho_t[i], step.a_v) } else { 0.0 });
+    }
+    f
+}
+
+/// Active normal constraints and stick nodes at an iterate.
+fn sets(step: &StepData, s: &[f64], p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> (Vec<bool>, Vec<bool>) {
+    let n = step.n();
+    let active = (0..n)
+        .map(|i| step.beta(i).is_some_and(|beta| lambda[i] + p.rho_n[i] * (y[2 * i] - beta) > 0.0))
+        .collect();
+    let stick = (0..n)
+        .map(|i| step.friction && (t[i] + p.rho_t[i] * step.slip(i, y)).abs() <= s[i])
+        .collect();
+    (active, stick)
+}
+
+/// Solve the frozen-S step problem by semismooth Newton with a backtracking line search on
+/// ‖F‖₂. `s` is the frozen friction bound per node (ignored when frictionless); `lambda0`,
+/// `t0` warm-start the multipliers.
+pub fn solve(
+    step: &StepData,
+    s: &[f64],
+    lambda0: &[f64],
+    t0: &[f64],
+    set: &NewtonSettings,
+) -> Result<ContactSolution, NewtonFailure> {
+    let n = step.n();
+    let m = 2 * n;
+    let p = Params {
+        rho_n: (0..n).map(|i| set.scale_normal / (step.nodes[i].omega * step.w[(2 * i, 2 * i)])).collect(),
+        rho_t: (0..n)
+            .map(|i| set.scale_tangent / (step.a_v * step.nodes[i].omega * step.w[(2 * i + 1, 2 * i + 1)]))
+            .collect(),
+    };
+    let mut lambda: Vec<f64> = (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda0[i].max(0.0) } else { 0.0 }).collect();
+    let mut t: Vec<f64> = (0..n).map(|i| if step.friction { t0[i].clamp(-s[i], s[i]) } else { 0.0 }).collect();
+    let mut y = step.response(&step.forces(&step.y_free, &lambda, &t));
+
+    let mut f = residual(step, s, &p, &y, &lambda, &t);
+    let mut prev_sets: Option<(Vec<bool>, Vec<bool>)> = None;
+    let mut prev_ok = false;
+    for it in 0..=set.max_iterations {
+        let scale = step.velocity_scale(&y);
+        let res = linalg::norm_inf(&f);
+        let ok = res <= set.tolerance * scale;
+        let cur_sets = sets(step, s, &p, &y, &lambda, &t);
+        let stable = prev_sets.as_ref() == Some(&cur_sets);
+        if ok && (stable || prev_ok || it == 0 && res == 0.0) {
+            let q: Vec<f64> = (0..n).map(|i| step.q(i, &y)).collect();
+            let status = (0..n)
+                .map(|i| {
+                    if q[i] <= 0.0 && lambda[i] <= 0.0 {
+                        NodeStatus::Separated
+                    } else if cur_sets.1[i] {
+                        NodeStatus::Stick
+                    } else {
+                        NodeStatus::Slip
+                    }
+                })
+                .collect();
+            return Ok(ContactSolution { y, lambda, t, q, status, iterations: it, residual: if scale > 0.0 { res / scale } else { res } });
+        }
+        if it == set.max_iterations {
+            break;
+        }
+        prev_ok = ok;
+        let (active, stick) = cur_sets.clone();
+        prev_sets = Some(cur_sets);
+
+        // --- Newton direction on the reduced system (one unknown per contact component) ---
+        // prescribed-velocity components (active normal, stick) carry a force unknown Δm;
+        // the others carry a velocity unknown Δy with the force change known.
+        let mut dy = vec![0.0; m];
+        let mut dm = vec![0.0; m]; // Δλ_i at 2i, Δt_i at 2i+1
+        let mut prescribed = vec![false; m];
+        let mut g = vec![0.0; m]; // ∂q/∂y on normal components
+        for i in 0..n {
+            let (jn, jt) = (2 * i, 2 * i + 1);
+            g[jn] = step.dq(i, &y);
+            if active[i] {
+                prescribed[jn] = true;
+                dy[jn] = f[m + i]; // F_λ = β − y on the active set
+            } else {
+                dm[jn] = -lambda[i];
+            }
+            if step.friction {
+                if stick[i] {
+                    prescribed[jt] = true;
+                    dy[jt] = f[m + n + i] * 1.0; // F_t = y_stick − y on the stick set
+                } else {
+                    let sigma = (t[i] + p.rho_t[i] * step.slip(i, &y)).signum();
+                    dm[jt] = s[i] * sigma - t[i];
+                }
+            }
+        }
+        // J x = rhs with x_l = Δm_l (prescribed) or Δy_l (free)
+        let omega = |l: usize| step.nodes[l / 2].omega;
+        let mut jac = Mat::<f64>::zeros(m, m);
+        let mut rhs: Vec<f64> = f[..m].iter().map(|v| -v).collect();
+        for l in 0..m {
+            let wl = omega(l);
+            if prescribed[l] {
+                for j in 0..m {
+                    jac[(j, l)] = step.w[(j, l)] * wl;
+                    rhs[j] -= step.w[(j, l)] * wl * g[l] * dy[l];
+                }
+                rhs[l] -= dy[l];
+            } else {
+                for j in 0..m {
+                    jac[(j, l)] = step.w[(j, l)] * wl * g[l];
+                    rhs[j] -= step.w[(j, l)] * wl * dm[l];
+                }
+                jac[(l, l)] += 1.0;
+            }
+        }
+        let Some(x) = linalg::dense_solve(&jac, &rhs) else {
+            return Err(NewtonFailure { iterations: it, residual: res / scale.max(f64::MIN_POSITIVE), reason: "singular Newton matrix".into() });
+        };
+        for l in 0..m {
+            if prescribed[l] {
+                dm[l] = x[l];
+            } else {
+                dy[l] = x[l];
+            }
+        }
+
+        // --- line search on ½‖F‖² ---
+        let merit0 = 0.5 * linalg::dot(&f, &f);
+        let mut best: Option<(f64, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>)> = None;
+        let mut alpha = 1.0;
+        for _ in 0..30 {
+            let yt: Vec<f64> = (0..m).map(|l| y[l] + alpha * dy[l]).collect();
+            let lt: Vec<f64> = (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda[i] + alpha * dm[2 * i] } else { 0.0 }).collect();
+            let tt: Vec<f64> = (0..n).map(|i| if step.friction { t[i] + alpha * dm[2 * i + 1] } else { 0.0 }).collect();
+            let ft = residual(step, s, &p, &yt, &lt, &tt);
+            let merit = 0.5 * linalg::dot(&ft, &ft);
+            let accept = merit <= (1.0 - 1e-4 * alpha) * merit0;
+            if best.as_ref().is_none_or(|b| merit < b.0) {
+                best = Some((merit, yt, lt, tt, ft));
+            }
+            if accept {
+                break;
+            }
+            alpha *= 0.5;
+        }
+        let (merit, yt, lt, tt, ft) = best.unwrap_or((merit0, y.clone(), lambda.clone(), t.clone(), f.clone()));
+        if merit < merit0 {
+            (y, lambda, t, f) = (yt, lt, tt, ft);
+        } else {
+            // no decrease along the Newton direction: take the full step (semismooth Newton on a
+            // piecewise-linear system may need to cross a kink) and let the cap guard cycling
+            y = (0..m).map(|l| y[l] + dy[l]).collect();
+            lambda = (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda[i] + dm[2 * i] } else { 0.0 }).collect();
+            t = (0..n).map(|i| if step.friction { t[i] + dm[2 * i + 1] } else { 0.0 }).collect();
+            f = residual(step, s, &p, &y, &lambda, &t);
+        }
+    }
+    let scale = step.velocity_scale(&y);
+    let res = linalg::norm_inf(&f);
+    Err(NewtonFailure {
+        iterations: set.max_iterations,
+        residual: if scale > 0.0 { res / scale } else { res },
+        reason: format!("no convergence in {} iterations", set.max_iterations),
+    })
+}
