@@ -23,6 +23,7 @@ pub mod mesh;
 pub mod model;
 pub mod output;
 pub mod problem;
+pub mod reference;
 pub mod run;
 pub mod scene;
 pub mod scheme;

@@ -28,6 +28,13 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Write the assembled M, K, C and f(0) of a scene for the Python cross-check.
+    #[command(hide = true)]
+    ExportOperators {
+        scene: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Validate a scene and print the model it switches on, without solving.
     Check {
         /// scene file (TOML)
@@ -68,6 +75,12 @@ fn main() -> ExitCode {
                 println!("warning: {w}");
             }
             println!("outputs in {}", out.display());
+            Ok(())
+        }),
+        Command::ExportOperators { scene, out } => load(Some(scene)).and_then(|(s, dir)| {
+            let problem = Problem::new(s, &dir)?;
+            dyncontact::output::export::export_operators(&problem, out)?;
+            println!("operators of {} written to {}", problem.scene.name, out.display());
             Ok(())
         }),
         Command::Check { scene } => load(Some(scene)).and_then(|(s, dir)| {

@@ -72,8 +72,7 @@ impl Problem {
         loads.check_finite(scene.time.end)?;
 
         // initial data (S.0): nodal interpolation
-        let u0e = VecExpr::parse(&scene.initial.displacement, &["x", "y"], "initial.displacement")?;
-        let v0e = VecExpr::parse(&scene.initial.velocity, &["x", "y"], "initial.velocity")?;
+        let (u0e, v0e) = initial_fields(&scene)?;
         let (u0, v0) = initial_data(&mesh, &dofs, &u0e, &v0e)?;
 
         let contact = if scene.has_contact() { Some(build_contact(&scene, &mesh, &dofs, &clamped)?) } else { None };
@@ -132,6 +131,14 @@ fn build_mesh(scene: &Scene, scene_dir: &Path) -> Result<Mesh> {
     };
     mesh.check()?;
     Ok(mesh)
+}
+
+/// (P.7) The initial conditions u(0) = u0, u̇(0) = v0 of the scene, as fields in x, y.
+pub fn initial_fields(scene: &Scene) -> Result<(VecExpr, VecExpr)> {
+    Ok((
+        VecExpr::parse(&scene.initial.displacement, &["x", "y"], "initial.displacement")?,
+        VecExpr::parse(&scene.initial.velocity, &["x", "y"], "initial.velocity")?,
+    ))
 }
 
 /// (S.0) Discrete initial data u^0 = I_h u0, v^0 = I_h v0 (nodal interpolation; zero on Γ̄1).

@@ -5,7 +5,7 @@
 //! ranges physics requires and the combinations that make sense. Nothing here touches the
 //! mesh; side names are checked against the mesh in `crate::problem`.
 
-use serde::Deserialize;
+use serde::{Deserialize, Deserializer};
 
 use crate::error::{Error, Result};
 use crate::model::expr::{Expr, VecExpr};
@@ -59,7 +59,9 @@ pub enum Plane {
 #[serde(deny_unknown_fields)]
 pub struct Domain {
     pub kind: DomainKind,
+    #[serde(default, deserialize_with = "opt_pair")]
     pub size: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "opt_pair")]
     pub cells: Option<[i64; 2]>,
     pub file: Option<String>,
     #[serde(default)]
@@ -96,6 +98,7 @@ pub struct Material {
 #[serde(deny_unknown_fields)]
 pub struct Traction {
     pub side: String,
+    #[serde(deserialize_with = "pair")]
     pub value: [String; 2],
 }
 
@@ -106,7 +109,7 @@ fn zero_pair() -> [String; 2] {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Loads {
-    #[serde(default = "zero_pair")]
+    #[serde(default = "zero_pair", deserialize_with = "pair")]
     pub body: [String; 2],
     #[serde(default)]
     pub traction: Vec<Traction>,
@@ -121,9 +124,9 @@ impl Default for Loads {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Initial {
-    #[serde(default = "zero_pair")]
+    #[serde(default = "zero_pair", deserialize_with = "pair")]
     pub displacement: [String; 2],
-    #[serde(default = "zero_pair")]
+    #[serde(default = "zero_pair", deserialize_with = "pair")]
     pub velocity: [String; 2],
 }
 
@@ -134,11 +137,64 @@ impl Default for Initial {
 }
 
 /// A number or a string (for `penetration_bound = "inf"` and `gap = 0.0`).
-#[derive(Debug, Clone, Deserialize)]
-#[serde(untagged)]
+#[derive(Debug, Clone)]
 pub enum NumOrStr {
     Num(f64),
     Str(String),
+}
+
+// Hand-written rather than `#[serde(untagged)]`, whose error ("data did not match any variant
+// of untagged enum NumOrStr") names a Rust type instead of what the user should write.
+impl<'de> Deserialize<'de> for NumOrStr {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = NumOrStr;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or a string")
+            }
+            fn visit_f64<E>(self, v: f64) -> std::result::Result<NumOrStr, E> {
+                Ok(NumOrStr::Num(v))
+            }
+            fn visit_i64<E>(self, v: i64) -> std::result::Result<NumOrStr, E> {
+                Ok(NumOrStr::Num(v as f64))
+            }
+            fn visit_u64<E>(self, v: u64) -> std::result::Result<NumOrStr, E> {
+                Ok(NumOrStr::Num(v as f64))
+            }
+            fn visit_str<E>(self, v: &str) -> std::result::Result<NumOrStr, E> {
+                Ok(NumOrStr::Str(v.to_string()))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A TOML array of exactly two entries. serde's `[T; 2]` reads the first two entries and
+/// silently ignores the rest (`size = [2.0, 1.0, 3.0]` would be accepted), so pairs are read
+/// as a sequence and their length is checked; element errors keep their `[i]` key path.
+struct Pair<T>([T; 2]);
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Pair<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let v = Vec::<T>::deserialize(d)?;
+        let n = v.len();
+        <[T; 2]>::try_from(v)
+            .map(Pair)
+            .map_err(|_| serde::de::Error::invalid_length(n, &"exactly 2 entries [a, b]"))
+    }
+}
+
+fn pair<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> std::result::Result<[T; 2], D::Error> {
+    Pair::<T>::deserialize(d).map(|p| p.0)
+}
+
+fn opt_pair<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> std::result::Result<Option<[T; 2]>, D::Error> {
+    pair(d).map(Some)
+}
+
+fn opt_pairs<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Option<Vec<[f64; 2]>>, D::Error> {
+    Vec::<Pair<f64>>::deserialize(d).map(|v| Some(v.into_iter().map(|p| p.0).collect()))
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
@@ -193,6 +249,7 @@ pub struct Friction {
     pub kinetic: Option<f64>,
     pub decay: Option<f64>,
     pub coefficient: Option<f64>,
+    #[serde(default, deserialize_with = "opt_pairs")]
     pub points: Option<Vec<[f64; 2]>>,
 }
 
@@ -308,8 +365,13 @@ impl Scene {
             message: one_paragraph(&e.to_string()),
         })?;
         let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            let inner = one_paragraph(&e.into_inner().to_string());
+            let mut path = e.path().to_string();
+            let inner = e.into_inner();
+            // serde reports a missing key at its parent table; name the key itself.
+            if let Some(key) = inner.message().strip_prefix("missing field `").and_then(|r| r.split('`').next()) {
+                path = if path.is_empty() || path == "." { key.to_string() } else { format!("{path}.{key}") };
+            }
+            let inner = one_paragraph(&inner.to_string());
             if path.is_empty() || path == "." {
                 Error::SceneSyntax { file: file.to_string(), message: inner }
             } else {

@@ -16,6 +16,7 @@ use crate::step::fixed_point::{self, FixedPointSettings, Inner, StepReport};
 use crate::step::newton::NewtonSettings;
 use crate::step::{delassus, NodeData, NodeStatus, StepData};
 
+
 /// Per-node contact quantities after a step (contact.csv).
 #[derive(Debug, Clone, Copy)]
 pub struct NodeRecord {
@@ -192,52 +193,18 @@ impl<'p> Simulation<'p> {
     /// Advance one step.
     pub fn step(&mut self) -> Result<StepRecord> {
         let p = self.problem;
-        let t_n = p.time(self.n);
         let clock = std::time::Instant::now();
-        let f = p.loads.at(self.stepper.load_time(t_n));
-        let mut w = self.stepper.rhs(&self.u, &self.v, &f);
-        self.stepper.solve_in_place(&mut w);
+        let (mut w, f) = self.free_velocity();
         let t_free = clock.elapsed().as_secs_f64();
         let mut report = StepReport { fixed_point_converged: true, ..StepReport::default() };
         let mut t_contact = 0.0;
         let mut t_recover = 0.0;
         let mut contact_out = None;
-        if let (Some(c), Some(wmat)) = (&p.contact, &self.delassus) {
+        if let (Some(c), Some(_)) = (&p.contact, &self.delassus) {
             let clock = std::time::Instant::now();
-            let d_n = c.penetration(&self.u);
-            let vn = c.restrict(&self.v);
-            let rule = self.rule;
-            let nodes: Vec<NodeData> = (0..c.n())
-                .map(|i| NodeData {
-                    omega: c.omega[i],
-                    d_n: d_n[i],
-                    d_aff: d_n[i] + rule.a_d * rule.b_d * vn[2 * i],
-                    v_aff: rule.a_v * rule.b_v * vn[2 * i + 1],
-                    bound: c.constraint,
-                })
-                .collect();
-            let p_tau_hat: Vec<f64> = (0..c.n()).map(|i| c.p_tau.p_tau(d_n[i] + rule.p_d * vn[2 * i])).collect();
-            let data = StepData {
-                w: wmat,
-                y_free: c.restrict(&w),
-                nodes,
-                a_d: rule.a_d,
-                a_v: rule.a_v,
-                rule: rule.force,
-                law: &c.normal,
-                friction: c.friction.is_some(),
-            };
-            let (sol, s, rep) = fixed_point::solve(
-                &data,
-                c.friction.as_ref(),
-                &p_tau_hat,
-                &vn,
-                &self.lambda,
-                &self.t_fric,
-                &self.settings.inner,
-                &self.settings.fixed_point,
-            )
-            .map_err(|e| {
+            let y_free = c.restrict(&w);
+            let (data, p_tau_hat) = self.step_data(y_free).ok_or_else(|| self.failure("no contact data".into(), String::new(), ""))?;
+            let (sol, s, rep) = self.solve_frozen_sequence(&data, &p_tau_hat, &self.settings.inner, None).map_err(|e| {
                 self.failure(
                     format!("the {} solver failed in fixed-point iteration {} ({})", e.solver, e.fixed_point_iteration, e.reason),
                     format!("after {} iterations the relative residual is {:.3e}", e.iterations, e.residual),
@@ -257,7 +224,8 @@ impl<'p> Simulation<'p> {
                 }
             }
             t_recover = clock.elapsed().as_secs_f64();
-            contact_out = Some((sol, s, d_n, data.y_free.len()));
+            let d_n = c.penetration(&self.u);
+            contact_out = Some((sol, s, d_n));
         }
         let u_new = self.stepper.displacement(&self.u, &self.v, &w);
         if let Some(bad) = u_new.iter().chain(&w).position(|x| !x.is_finite()) {
@@ -280,7 +248,7 @@ impl<'p> Simulation<'p> {
         let mut rec_nodes = Vec::new();
         let (mut fn_sum, mut ft_sum, mut max_pen) = (0.0, 0.0, f64::NEG_INFINITY);
         let (mut n_contact, mut n_slip, mut n_stick) = (0, 0, 0);
-        if let (Some(c), Some((sol, s, d_n, _))) = (&p.contact, &contact_out) {
+        if let (Some(c), Some((sol, s, d_n))) = (&p.contact, &contact_out) {
             let d_new = c.penetration(&u_new);
             for i in 0..c.n() {
                 let w_i = c.omega[i];
@@ -340,6 +308,64 @@ impl<'p> Simulation<'p> {
             report,
             nodes: rec_nodes,
         })
+    }
+
+    /// The free velocity A_k⁻¹ b^n of the current state and the load used.
+    pub fn free_velocity(&self) -> (Vec<f64>, Vec<f64>) {
+        let f = self.problem.loads.at(self.stepper.load_time(self.problem.time(self.n)));
+        let mut w = self.stepper.rhs(&self.u, &self.v, &f);
+        self.stepper.solve_in_place(&mut w);
+        (w, f)
+    }
+
+    /// The condensed contact problem of the current state for a given free contact velocity
+    /// `y_free`, and p_τ(û) per node. None without contact.
+    pub fn step_data(&self, y_free: Vec<f64>) -> Option<(StepData<'_>, Vec<f64>)> {
+        let (c, wmat) = (self.problem.contact.as_ref()?, self.delassus.as_ref()?);
+        let d_n = c.penetration(&self.u);
+        let vn = c.restrict(&self.v);
+        let rule = self.rule;
+        let nodes: Vec<NodeData> = (0..c.n())
+            .map(|i| NodeData {
+                omega: c.omega[i],
+                d_n: d_n[i],
+                d_aff: d_n[i] + rule.a_d * rule.b_d * vn[2 * i],
+                v_aff: rule.a_v * rule.b_v * vn[2 * i + 1],
+                bound: c.constraint,
+            })
+            .collect();
+        let p_tau_hat: Vec<f64> = (0..c.n()).map(|i| c.p_tau.p_tau(d_n[i] + rule.p_d * vn[2 * i])).collect();
+        let data = StepData {
+            w: wmat,
+            y_free,
+            nodes,
+            a_d: rule.a_d,
+            a_v: rule.a_v,
+            rule: rule.force,
+            law: &c.normal,
+            friction: c.friction.is_some(),
+        };
+        Some((data, p_tau_hat))
+    }
+
+    /// (F.1) on the current state with a given inner solver; `trace` collects the contact
+    /// velocities of every convex solve.
+    pub fn solve_frozen_sequence(
+        &self,
+        data: &StepData,
+        p_tau_hat: &[f64],
+        inner: &Inner,
+        trace: Option<&mut Vec<Vec<f64>>>,
+    ) -> std::result::Result<(crate::step::ContactSolution, Vec<f64>, StepReport), fixed_point::InnerFailure> {
+        let c = self.problem.contact.as_ref().ok_or_else(|| fixed_point::InnerFailure {
+            solver: "none",
+            iterations: 0,
+            residual: 0.0,
+            reason: "the problem has no contact".into(),
+            fixed_point_iteration: 0,
+        })?;
+        let vn = c.restrict(&self.v);
+        fixed_point::solve(data, c.friction.as_ref(), p_tau_hat, &vn, &self.lambda, &self.t_fric, inner, &self.settings.fixed_point, trace)
     }
 
     pub fn scheme(&self) -> SchemeKind {

@@ -4,6 +4,7 @@
 pub mod assemble;
 pub mod element;
 pub mod loads;
+pub mod norms;
 
 pub use assemble::{Dofs, Operators};
 pub use loads::LoadVector;

@@ -11,7 +11,10 @@ use crate::error::{Error, Result};
 
 /// Read a `.msh` file.
 pub fn read(path: &Path) -> Result<Mesh> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    // A binary .msh is not UTF-8; decode lossily so that its ASCII header is still read and
+    // the "binary files are not supported" message is given instead of an encoding error.
+    let text = String::from_utf8_lossy(&bytes);
     parse(&text, &path.display().to_string())
 }
 
@@ -19,6 +22,8 @@ struct Cursor<'a> {
     lines: Vec<(usize, &'a str)>,
     pos: usize,
     file: &'a str,
+    /// the section being read (without `$`), for end-of-file messages
+    section: String,
 }
 
 impl<'a> Cursor<'a> {
@@ -27,7 +32,19 @@ impl<'a> Cursor<'a> {
         Error::mesh(self.file, format!("line {line}: {msg}"))
     }
     fn next_line(&mut self) -> Result<&'a str> {
-        let l = self.lines.get(self.pos).ok_or_else(|| Error::mesh(self.file, "unexpected end of file"))?;
+        let Some(l) = self.lines.get(self.pos) else {
+            return Err(if self.section.is_empty() {
+                Error::mesh(self.file, "unexpected end of file")
+            } else {
+                Error::mesh(
+                    self.file,
+                    format!(
+                        "unexpected end of file in ${0}: the file is truncated or $End{0} is missing; save the mesh again",
+                        self.section
+                    ),
+                )
+            });
+        };
         self.pos += 1;
         Ok(l.1)
     }
@@ -54,24 +71,34 @@ struct Raw {
     nodes: HashMap<i64, [f64; 2]>,
     node_order: Vec<i64>,
     triangles: Vec<(i64, [i64; 3])>,          // element tag, node tags
-    lines: Vec<(Vec<i64>, [i64; 2])>,         // physical tags, node tags
+    lines: Vec<(i64, Vec<i64>, [i64; 2])>,    // element tag, physical tags, node tags
 }
 
 /// Parse the text of a `.msh` file; `file` names it in messages.
 pub fn parse(text: &str, file: &str) -> Result<Mesh> {
     let lines: Vec<(usize, &str)> =
         text.lines().enumerate().map(|(i, l)| (i + 1, l)).filter(|(_, l)| !l.trim().is_empty()).collect();
-    let mut c = Cursor { lines, pos: 0, file };
+    let mut c = Cursor { lines, pos: 0, file, section: String::new() };
     let mut raw = Raw::default();
     while c.pos < c.lines.len() {
         let head = c.next_line()?.trim().to_string();
+        c.section = head.strip_prefix('$').unwrap_or("").to_string();
         match head.as_str() {
             "$MeshFormat" => {
                 let f = c.next_line()?;
                 let mut it = f.split_whitespace();
                 raw.version = it.next().unwrap_or("").to_string();
-                if it.next() != Some("0") {
-                    return Err(c.err("binary .msh files are not supported; save as ASCII (Gmsh: File > Export, uncheck binary)"));
+                match it.next() {
+                    Some("0") => {}
+                    Some("1") => {
+                        return Err(c.err("binary .msh files are not supported; save as ASCII (Gmsh: File > Export, uncheck binary)"));
+                    }
+                    _ => {
+                        return Err(c.err(format!(
+                            "the $MeshFormat line should read \"4.1 0 8\" or \"2.2 0 8\" (version, 0 = ASCII, 8), found \"{}\"",
+                            f.trim()
+                        )));
+                    }
                 }
                 if !(raw.version.starts_with("2.") || raw.version.starts_with("4.1")) {
                     return Err(c.err(format!("format version {} is not supported; save as 4.1 or 2.2 ASCII", raw.version)));
@@ -82,10 +109,13 @@ pub fn parse(text: &str, file: &str) -> Result<Mesh> {
                 let n: Vec<i64> = c.nums("the number of physical names")?;
                 for _ in 0..n.first().copied().unwrap_or(0) {
                     let l = c.next_line()?;
-                    let mut it = l.splitn(3, char::is_whitespace);
-                    let dim: i64 = it.next().and_then(|w| w.parse().ok()).ok_or_else(|| c.err("bad physical name line"))?;
-                    let tag: i64 = it.next().and_then(|w| w.trim().parse().ok()).ok_or_else(|| c.err("bad physical name line"))?;
-                    let name = it.next().unwrap_or("").trim().trim_matches('"').to_string();
+                    // dim tag "name": the name may contain spaces, the separators may be runs
+                    let bad = || c.err(format!("a physical name line should read: dim tag \"name\", found \"{}\"", l.trim()));
+                    let (dim, rest) = l.trim().split_once(char::is_whitespace).ok_or_else(bad)?;
+                    let (tag, name) = rest.trim_start().split_once(char::is_whitespace).ok_or_else(bad)?;
+                    let dim: i64 = dim.parse().map_err(|_| bad())?;
+                    let tag: i64 = tag.parse().map_err(|_| bad())?;
+                    let name = name.trim().trim_matches('"').to_string();
                     raw.names.insert((dim, tag), name);
                 }
                 c.expect("$EndPhysicalNames")?;
@@ -116,6 +146,7 @@ pub fn parse(text: &str, file: &str) -> Result<Mesh> {
             }
             other => return Err(c.err(format!("unexpected line \"{other}\" outside a section"))),
         }
+        c.section.clear();
     }
     if raw.version.is_empty() {
         return Err(Error::mesh(file, "no $MeshFormat section: is this a Gmsh .msh file?"));
@@ -134,8 +165,14 @@ fn read_entities(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
             let tag = *w.first().ok_or_else(|| c.err("empty entity line"))? as i64;
             // points: tag x y z nphys phys...; others: tag minx miny minz maxx maxy maxz nphys phys...
             let at = if dim == 0 { 4 } else { 7 };
-            let np = *w.get(at).ok_or_else(|| c.err("entity line too short"))? as usize;
-            let phys: Vec<i64> = w.get(at + 1..at + 1 + np).ok_or_else(|| c.err("entity line too short"))?.iter().map(|v| *v as i64).collect();
+            let short = || c.err(format!("the line of entity {tag} (dim {dim}) is too short for its physical tags"));
+            let np = *w.get(at).ok_or_else(short)?;
+            if !(np >= 0.0 && np.fract() == 0.0 && np <= w.len() as f64) {
+                let np = if np.abs() < 1e15 { format!("{np}") } else { format!("{np:e}") };
+                return Err(c.err(format!("entity {tag} (dim {dim}) lists {np} physical tags, which this line cannot hold")));
+            }
+            let np = np as usize;
+            let phys: Vec<i64> = w.get(at + 1..at + 1 + np).ok_or_else(short)?.iter().map(|v| *v as i64).collect();
             raw.entity_phys.insert((dim as i64, tag), phys);
         }
     }
@@ -165,24 +202,42 @@ fn insert_node(c: &Cursor, raw: &mut Raw, tag: i64, x: [f64; 2]) -> Result<()> {
     Ok(())
 }
 
+/// The count of a 4.1 block header, checked against what the section header announced.
+fn block_count(c: &Cursor, what: &str, b: &[i64], left: &mut usize) -> Result<usize> {
+    let count = usize::try_from(b[3])
+        .map_err(|_| c.err(format!("{what} block (dim {}, entity {}) has count {}; it must be >= 0", b[0], b[1], b[3])))?;
+    if count > *left {
+        return Err(c.err(format!(
+            "{what} block (dim {}, entity {}) holds {count} {what}s, more than the section header announces; the file is corrupt",
+            b[0], b[1]
+        )));
+    }
+    *left -= count;
+    Ok(count)
+}
+
 fn read_nodes_41(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
     let h: Vec<usize> = c.nums("the $Nodes header")?;
-    let blocks = *h.first().ok_or_else(|| c.err("empty $Nodes header"))?;
+    if h.len() < 2 {
+        return Err(c.err("the $Nodes header needs: numBlocks numNodes minTag maxTag"));
+    }
+    let (blocks, mut left) = (h[0], h[1]);
     for _ in 0..blocks {
         let b: Vec<i64> = c.nums("a node block header")?;
         if b.len() < 4 {
             return Err(c.err("a node block header needs: dim tag parametric count"));
         }
-        let (parametric, count) = (b[2], b[3] as usize);
-        let mut tags = Vec::with_capacity(count);
+        let count = block_count(c, "node", &b, &mut left)?;
+        let mut tags = Vec::new();
         for _ in 0..count {
             let t: Vec<i64> = c.nums("a node tag")?;
             tags.push(*t.first().ok_or_else(|| c.err("missing node tag"))?);
         }
         for tag in tags {
+            // x y z, then u [v] for parametric nodes
             let w: Vec<f64> = c.nums("node coordinates")?;
-            if w.len() < 3 || (parametric == 0 && w.len() != 3) && w.len() < 3 {
-                return Err(c.err("node coordinates need x y z"));
+            if w.len() < 3 {
+                return Err(c.err(format!("node {tag}: coordinates need x y z")));
             }
             insert_node(c, raw, tag, [w[0], w[1]])?;
         }
@@ -191,6 +246,8 @@ fn read_nodes_41(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
 }
 
 fn push_element(c: &Cursor, raw: &mut Raw, tag: i64, etype: i64, phys: Vec<i64>, nodes: &[i64]) -> Result<()> {
+    // physical tag 0 (2.2 with Mesh.SaveAll) means "in no physical group"
+    let phys: Vec<i64> = phys.into_iter().filter(|&p| p != 0).collect();
     let need = match etype {
         1 => 2,
         2 => 3,
@@ -204,7 +261,7 @@ fn push_element(c: &Cursor, raw: &mut Raw, tag: i64, etype: i64, phys: Vec<i64>,
         return Err(c.err(format!("element {tag} lists {} nodes, type {etype} needs {need}", nodes.len())));
     }
     match etype {
-        1 => raw.lines.push((phys, [nodes[0], nodes[1]])),
+        1 => raw.lines.push((tag, phys, [nodes[0], nodes[1]])),
         2 => raw.triangles.push((tag, [nodes[0], nodes[1], nodes[2]])),
         _ => {}
     }
@@ -218,9 +275,11 @@ fn read_elements_22(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
         if w.len() < 3 {
             return Err(c.err("an element line needs: tag type ntags tags... nodes..."));
         }
-        let (tag, etype, ntags) = (w[0], w[1], w[2] as usize);
+        let (tag, etype) = (w[0], w[1]);
+        let ntags = usize::try_from(w[2])
+            .map_err(|_| c.err(format!("element {tag} has {} tags; the count must be >= 0", w[2])))?;
         let phys = w.get(3).copied().filter(|_| ntags > 0).map(|p| vec![p]).unwrap_or_default();
-        let nodes = w.get(3 + ntags..).unwrap_or(&[]);
+        let nodes = ntags.checked_add(3).and_then(|k| w.get(k..)).unwrap_or(&[]);
         push_element(c, raw, tag, etype, phys, nodes)?;
     }
     c.expect("$EndElements")
@@ -228,13 +287,17 @@ fn read_elements_22(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
 
 fn read_elements_41(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
     let h: Vec<usize> = c.nums("the $Elements header")?;
-    let blocks = *h.first().ok_or_else(|| c.err("empty $Elements header"))?;
+    if h.len() < 2 {
+        return Err(c.err("the $Elements header needs: numBlocks numElements minTag maxTag"));
+    }
+    let (blocks, mut left) = (h[0], h[1]);
     for _ in 0..blocks {
         let b: Vec<i64> = c.nums("an element block header")?;
         if b.len() < 4 {
             return Err(c.err("an element block header needs: dim tag type count"));
         }
-        let (dim, etag, etype, count) = (b[0], b[1], b[2], b[3] as usize);
+        let count = block_count(c, "element", &b, &mut left)?;
+        let (dim, etag, etype) = (b[0], b[1], b[2]);
         let phys = raw.entity_phys.get(&(dim, etag)).cloned().unwrap_or_default();
         for _ in 0..count {
             let w: Vec<i64> = c.nums("an element")?;
@@ -268,10 +331,14 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
     }
     // sides: one per physical curve (dim 1), named by $PhysicalNames or by the tag
     let mut sides: Vec<Side> = Vec::new();
-    for (phys, [a, b]) in &raw.lines {
-        let (a, b) = (lookup(*a, "a line element")?, lookup(*b, "a line element")?);
+    // (element tag, side name, node tags, node indices) of every side edge, for the check below
+    let mut side_lines: Vec<(i64, String, [i64; 2], [usize; 2])> = Vec::new();
+    for (tag, phys, [ta, tb]) in &raw.lines {
+        let what = format!("line element {tag}");
+        let (a, b) = (lookup(*ta, &what)?, lookup(*tb, &what)?);
         for p in phys {
             let name = raw.names.get(&(1, *p)).cloned().unwrap_or_else(|| p.to_string());
+            side_lines.push((*tag, name.clone(), [*ta, *tb], [a, b]));
             match sides.iter_mut().find(|s| s.name == name) {
                 Some(s) => s.edges.push([a, b]),
                 None => sides.push(Side { name, edges: vec![[a, b]] }),
@@ -291,7 +358,13 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
             t.swap(1, 2);
         }
     } else if negative > 0 {
-        let t = signs.iter().position(|a| *a < 0.0).unwrap_or(0);
+        // name a triangle of the minority orientation: that is the one that is inverted
+        let t = if 2 * negative <= signs.len() {
+            signs.iter().position(|a| *a < 0.0)
+        } else {
+            signs.iter().position(|a| *a > 0.0)
+        }
+        .unwrap_or(0);
         return Err(Error::mesh(
             file,
             format!(
@@ -302,21 +375,27 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
             ),
         ));
     }
-    // duplicate nodes: equal coordinates under different tags
-    let mut order: Vec<usize> = (0..mesh.nodes.len()).collect();
-    order.sort_by(|&i, &j| mesh.nodes[i][0].total_cmp(&mesh.nodes[j][0]).then(mesh.nodes[i][1].total_cmp(&mesh.nodes[j][1])));
+    // duplicate nodes: coordinates equal within tol under different tags. A grid of cells of
+    // size tol finds every pair within tol in both coordinates among the 9 cells around a node.
     let tol = 1e-12 * mesh.bbox_diameter();
-    for w in order.windows(2) {
-        let (p, q) = (mesh.nodes[w[0]], mesh.nodes[w[1]]);
-        if (p[0] - q[0]).abs() <= tol && (p[1] - q[1]).abs() <= tol {
-            return Err(Error::mesh(
-                file,
-                format!(
-                    "nodes {} and {} are duplicates (both at ({}, {})); merge them (Gmsh: Coherence)",
-                    raw.node_order[w[0]], raw.node_order[w[1]], p[0], p[1]
-                ),
-            ));
+    let lo = mesh.nodes.iter().fold([f64::INFINITY; 2], |m, p| [m[0].min(p[0]), m[1].min(p[1])]);
+    let cell = |p: [f64; 2]| (((p[0] - lo[0]) / tol).floor() as i64, ((p[1] - lo[1]) / tol).floor() as i64);
+    let mut grid: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+    for (i, &p) in mesh.nodes.iter().enumerate() {
+        let (cx, cy) = cell(p);
+        for (dx, dy) in [-1i64, 0, 1].into_iter().flat_map(|dx| [-1i64, 0, 1].map(|dy| (dx, dy))) {
+            let near = grid.get(&(cx.saturating_add(dx), cy.saturating_add(dy))).map(|v| v.as_slice()).unwrap_or(&[]);
+            if let Some(&j) = near.iter().find(|&&j| (mesh.nodes[j][0] - p[0]).abs() <= tol && (mesh.nodes[j][1] - p[1]).abs() <= tol) {
+                return Err(Error::mesh(
+                    file,
+                    format!(
+                        "nodes {} and {} are duplicates (both at ({}, {})); merge them (Gmsh: `Coherence Mesh;` in the .geo file, or Geometry > Coherence)",
+                        raw.node_order[j], raw.node_order[i], p[0], p[1]
+                    ),
+                ));
+            }
         }
+        grid.entry((cx, cy)).or_default().push(i);
     }
     // unreferenced nodes
     let mut used = vec![false; mesh.nodes.len()];
@@ -329,6 +408,37 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
                 raw.node_order[v]
             ),
         ));
+    }
+    // side edges must be boundary edges (one owning triangle); say so in Gmsh's terms
+    let mut owners: HashMap<(usize, usize), usize> = HashMap::new();
+    for tri in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            *owners.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    for (tag, name, [ta, tb], [a, b]) in &side_lines {
+        match owners.get(&(*a.min(b), *a.max(b))).copied().unwrap_or(0) {
+            1 => {}
+            0 => {
+                return Err(Error::mesh(
+                    file,
+                    format!(
+                        "side \"{name}\": line element {tag} (nodes {ta} {tb}) is not an edge of any triangle; \
+                         the curve mesh and the surface mesh do not conform — mesh the curve as part of the surface boundary"
+                    ),
+                ));
+            }
+            n => {
+                return Err(Error::mesh(
+                    file,
+                    format!(
+                        "side \"{name}\": line element {tag} (nodes {ta} {tb}) is an interior edge (shared by {n} triangles); \
+                         a side must lie on the boundary: put only boundary curves in the physical group"
+                    ),
+                ));
+            }
+        }
     }
     mesh.check()?;
     Ok(mesh)

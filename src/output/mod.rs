@@ -5,6 +5,7 @@
 //! flushed whole after each step, and the PVD, the summary and the charts are written to a
 //! temporary name and renamed.
 
+pub mod export;
 pub mod plots;
 pub mod summary;
 pub mod vtu;

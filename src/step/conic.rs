@@ -4,18 +4,24 @@
 //! Condensed on the contact DOFs, (S.6) is: minimize over (r, y)
 //!   ½ rᵀ W r + Σ_i (ω_i S_i/a_v) |v̄_i(y)| + Σ_i (ω_i/a_d) F_i(d_i^{n+1}(y))
 //!   subject to y + W r = y_free and y_ν,i ≤ β_i (exact constraint),
-//! whose optimality conditions are exactly (N.1)–(N.3) (r = ∇G(y) + multipliers). Here
-//! F_i' = q_i(d^n, ·) is the scheme's normal force, written hinge by hinge (c/2)(r − s)_+²:
+//! whose optimality conditions are exactly (N.1)–(N.3) (r = ∇G(y) + multipliers). The friction
+//! term is an epigraph (two inequalities in 2-D), the bound a nonnegative cone. F_i' = q_i is
+//! the scheme's normal force, hinge by hinge (c/2)(r − s)_+², with z = d^{n+1} − s, A = d^n − s:
 //!
-//! * d^n above the hinge (A = d^n − s ≥ 0), discrete gradient: F = q0 z + (c/4) z_+² + ψ_L(z)
-//!   with ψ_L(z) = κ(−ln(1 − z/A) − z/A) for z < 0, κ = cA²/2: a quadratic epigraph and one
-//!   exponential cone — exact;
-//! * d^n below the hinge (δ = s − d^n > 0), discrete gradient: F = (c/2)(z²/2 − δz + δ² ln(1 + z/δ))
-//!   for z > 0 is convex but a convex quadratic *plus a concave logarithm*, which no standard
-//!   cone represents. It is handled by majorization–minimization: the logarithm is replaced
-//!   by its tangent at the current z (a convex quadratic majorant, exact at the touching
-//!   point), and the program is re-solved until the touching points stop moving;
-//! * trapezoid and backward-Euler forces are exact quadratics.
+//! * trapezoid and backward Euler: F = (cA_+/2) z + (c/4) z_+², resp. (c/2) z_+²: exact;
+//! * discrete gradient, A ≥ 0: F = (cA/2) z + (c/4) z_+² + ψ_L(min(z, 0)),
+//!   ψ_L(z) = (cA²/2)(−ln(1 − z/A) − z/A);
+//! * discrete gradient, A < 0: F = ψ_R(max(z, 0)), ψ_R(z) = (c/2)(z²/2 + Az + A² ln(1 − z/A)).
+//!
+//! ψ_R is a convex quadratic plus a concave logarithm, which no standard cone represents;
+//! ψ_L fits an exponential cone, but that cone made Clarabel stall (InsufficientProgress)
+//! whenever d^n sat just above the hinge, because its scale cA² vanishes there. Both log
+//! branches are therefore handled the same way: since F'' ≤ c/2 on every branch, the quadratic
+//! ψ(z_l) + ψ'(z_l)(z − z_l) + (c/4)(z − z_l)² majorizes ψ and touches it at z_l;
+//! the program is re-solved with updated touching points until they stop moving
+//! (majorization–minimization: monotone, and contracting by about ω a_d c W_νν/2 per round,
+//! ≈ 2e-3 on the academic scene). Quadratic pieces are exact, so a node that stays on one
+//! side of every hinge needs one round.
 //!
 //! Clarabel has no warm start, so each solve starts from scratch.
 
@@ -31,7 +37,7 @@ use crate::model::laws::NormalForceRule;
 pub struct ConicSettings {
     /// Clarabel's gap and feasibility tolerances
     pub tolerance: f64,
-    /// majorization–minimization rounds for hinges crossed within the step
+    /// majorization–minimization rounds for the logarithmic branches
     pub max_rounds: usize,
 }
 
@@ -57,7 +63,6 @@ struct Builder {
     q: Vec<f64>,
     zero: Vec<(Vec<(usize, f64)>, f64)>,
     nonneg: Vec<(Vec<(usize, f64)>, f64)>,
-    exp: Vec<[(Vec<(usize, f64)>, f64); 3]>,
 }
 
 impl Builder {
@@ -89,16 +94,10 @@ impl Builder {
         for (a, bi) in &self.nonneg {
             push(a, *bi, &mut trip, &mut b);
         }
-        for cone in &self.exp {
-            for (a, bi) in cone {
-                push(a, *bi, &mut trip, &mut b);
-            }
-        }
         let mut cones = vec![SupportedConeT::ZeroConeT(self.zero.len())];
         if !self.nonneg.is_empty() {
             cones.push(SupportedConeT::NonnegativeConeT(self.nonneg.len()));
         }
-        cones.extend(self.exp.iter().map(|_| SupportedConeT::ExponentialConeT()));
         let a = csc(row, n, trip);
         (p, self.q, a, b, cones)
     }
@@ -128,59 +127,79 @@ fn csc(m: usize, n: usize, mut t: Vec<(usize, usize, f64)>) -> CscMatrix<f64> {
     CscMatrix::new(m, n, colptr, rowval, nzval)
 }
 
-/// A hinge crossed from below within the step, majorized at z_l.
-struct Crossing {
+/// A logarithmic branch, majorized at the touching point z_l.
+struct Majorized {
     node: usize,
     c: f64,
+    /// A = d^n − s (A > 0: left branch ψ_L on z ≤ 0; A < 0: right branch ψ_R on z ≥ 0)
+    a: f64,
     s: f64,
-    /// δ = s − d^n > 0
-    delta: f64,
 }
 
-/// Solve the frozen-S problem with Clarabel (majorization rounds where needed).
+impl Majorized {
+    /// ψ'(z) on the branch: ψ_L' = cAz/(2(A − z)), ψ_R' = cz²/(2(z − A)).
+    fn dpsi(&self, z: f64) -> f64 {
+        if self.a > 0.0 { self.c * self.a * z / (2.0 * (self.a - z)) } else { self.c * z * z / (2.0 * (z - self.a)) }
+    }
+    /// the touching point kept on the branch's half-line
+    fn clip(&self, z: f64) -> f64 {
+        if self.a > 0.0 { z.min(0.0) } else { z.max(0.0) }
+    }
+}
+
+/// Solve the frozen-S problem with Clarabel, with majorization rounds for the log branches.
 pub fn solve(step: &StepData, s: &[f64], set: &ConicSettings) -> Result<ContactSolution, ConicFailure> {
     let n = step.n();
-    // hinges crossed from below need majorization; their touching points start at 0
-    let mut crossings = Vec::new();
+    let mut pieces = Vec::new();
     if step.rule == NormalForceRule::DiscreteGradient {
         for i in 0..n {
             for h in &step.law.hinges {
                 let a = step.nodes[i].d_n - h.s;
-                if a < 0.0 {
-                    crossings.push(Crossing { node: i, c: h.c, s: h.s, delta: -a });
+                if a != 0.0 {
+                    pieces.push(Majorized { node: i, c: h.c, a, s: h.s });
                 }
             }
         }
     }
-    let mut z_l = vec![0.0; crossings.len()];
+    // first touching points: the free motion
+    let mut z_l: Vec<f64> = pieces.iter().map(|m| m.clip(step.d_end(m.node, &step.y_free) - m.s)).collect();
+    // the program is solved in units of the step's velocity scale V (y = V ỹ, r = V r̃, the
+    // objective divided by V²), so Clarabel's tolerances act relative to the motion even
+    // when everything is nearly at rest
+    let v_scale = step.velocity_scale(&step.y_free);
+    if v_scale == 0.0 {
+        // at rest with no load: y = 0 and r = 0 solve the problem exactly
+        let m = 2 * n;
+        return Ok(finish(step, s, vec![0.0; m], vec![0.0; m], 0));
+    }
     let mut iterations = 0usize;
-    for round in 0..set.max_rounds.max(1) {
-        let (y, r, its) = solve_once(step, s, set, &crossings, &z_l)?;
+    let mut moved = f64::INFINITY;
+    let mut z_scale = 0.0;
+    for _ in 0..set.max_rounds.max(1) {
+        let (y, r, its) = solve_once(step, s, set, &pieces, &z_l, v_scale)?;
         iterations += its;
-        let z_new: Vec<f64> = crossings.iter().map(|c| (step.d_end(c.node, &y) - c.s).max(0.0)).collect();
-        let moved = z_new.iter().zip(&z_l).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        let z_scale = step.a_d * step.velocity_scale(&y);
+        let z_new: Vec<f64> = pieces.iter().map(|m| m.clip(step.d_end(m.node, &y) - m.s)).collect();
+        moved = z_new.iter().zip(&z_l).fold(0.0f64, |acc, (a, b)| acc.max((a - b).abs()));
+        z_scale = step.a_d * step.velocity_scale(&y);
         z_l = z_new;
-        if moved <= set.tolerance * z_scale || crossings.is_empty() || round + 1 == set.max_rounds {
-            if !crossings.is_empty() && moved > set.tolerance * z_scale {
-                return Err(ConicFailure {
-                    iterations,
-                    residual: moved / z_scale.max(f64::MIN_POSITIVE),
-                    reason: format!("majorization did not settle in {} rounds", set.max_rounds),
-                });
-            }
+        if moved <= set.tolerance * z_scale {
             return Ok(finish(step, s, y, r, iterations));
         }
     }
-    Err(ConicFailure { iterations, residual: f64::NAN, reason: "no majorization round ran".into() })
+    Err(ConicFailure {
+        iterations,
+        residual: moved / z_scale.max(f64::MIN_POSITIVE),
+        reason: format!("majorization did not settle in {} rounds", set.max_rounds),
+    })
 }
 
 fn solve_once(
     step: &StepData,
     s: &[f64],
     set: &ConicSettings,
-    crossings: &[Crossing],
+    pieces: &[Majorized],
     z_l: &[f64],
+    v: f64,
 ) -> Result<(Vec<f64>, Vec<f64>, usize), ConicFailure> {
     let n = step.n();
     let m = 2 * n;
@@ -197,63 +216,62 @@ fn solve_once(
     for j in 0..m {
         let mut row = vec![(y[j], 1.0)];
         row.extend((0..m).map(|l| (r[l], step.w[(j, l)])));
-        b.zero.push((row, step.y_free[j]));
+        b.zero.push((row, step.y_free[j] / v));
     }
+    let ad = step.a_d;
     for i in 0..n {
         let nd = step.nodes[i];
         let (yn, yt) = (y[2 * i], y[2 * i + 1]);
         // exact constraint y_ν ≤ β
         if let Some(beta) = step.beta(i) {
-            b.le(vec![(yn, 1.0)], beta);
+            b.le(vec![(yn, 1.0)], beta / v);
         }
         // friction (ω S/a_v)|v̄|, v̄ = v_aff + a_v y_τ, via s ≥ ±v̄
         if step.friction && s[i] > 0.0 {
             let sv = b.var();
-            b.q[sv] = nd.omega * s[i] / step.a_v;
-            b.le(vec![(yt, step.a_v), (sv, -1.0)], -nd.v_aff);
-            b.le(vec![(yt, -step.a_v), (sv, -1.0)], nd.v_aff);
+            b.q[sv] = nd.omega * s[i] / (step.a_v * v);
+            b.le(vec![(yt, step.a_v), (sv, -1.0)], -nd.v_aff / v);
+            b.le(vec![(yt, -step.a_v), (sv, -1.0)], nd.v_aff / v);
         }
-        // normal force, hinge by hinge; z = d^{n+1} − s = (d_aff − s) + a_d y_ν
-        let wd = nd.omega / step.a_d;
+        // normal force, hinge by hinge. All pieces are written in ξ = z/a_d (velocity units):
+        // z = d^{n+1} − s = z0 + a_d y_ν, and (ω/a_d) F(z) becomes ω a_d (·) ξ² + ω (·) ξ.
         for h in &step.law.hinges {
             let a = nd.d_n - h.s;
             let z0 = nd.d_aff - h.s;
-            // F on this hinge = lin_z·z + quad·zR² + lin_zr·zR with zR ≥ max(z, 0)
-            let (lin_z, quad, lin_zr) = match step.rule {
-                NormalForceRule::DiscreteGradient if a >= 0.0 => (0.5 * h.c * a, 0.25 * h.c, 0.0),
-                NormalForceRule::DiscreteGradient => {
-                    let k = crossings.iter().position(|c| c.node == i && c.s == h.s && c.c == h.c);
-                    let (zl, delta) = k.map(|k| (z_l[k], crossings[k].delta)).unwrap_or((0.0, -a));
-                    // tangent majorant (c/4) zR² + ℓ zR, ℓ = −(c/2) δ z_l/(z_l + δ)
-                    (0.0, 0.25 * h.c, -0.5 * h.c * delta * zl / (zl + delta))
-                }
-                NormalForceRule::Average => (0.5 * h.c * a.max(0.0), 0.25 * h.c, 0.0),
-                NormalForceRule::EndPoint => (0.0, 0.5 * h.c, 0.0),
+            // exact quadratic part: lin·z + quad·z_+²
+            let (lin, quad) = match step.rule {
+                NormalForceRule::DiscreteGradient => (0.5 * h.c * a.max(0.0), if a >= 0.0 { 0.25 * h.c } else { 0.0 }),
+                NormalForceRule::Average => (0.5 * h.c * a.max(0.0), 0.25 * h.c),
+                NormalForceRule::EndPoint => (0.0, 0.5 * h.c),
             };
-            // linear part on z: coefficient wd·lin_z·a_d on y_ν
-            b.q[yn] += wd * lin_z * step.a_d;
-            // quadratic part on zR ≥ max(z, 0)
-            let zr = b.var();
-            b.p.push((zr, zr, 2.0 * wd * quad));
-            b.q[zr] += wd * lin_zr;
-            b.le(vec![(yn, step.a_d), (zr, -1.0)], -z0);
-            b.le(vec![(zr, -1.0)], 0.0);
-            // the logarithmic branch below the hinge when d^n is above it
-            if step.rule == NormalForceRule::DiscreteGradient && a > 1e-14 * (1.0 + h.s.abs()) {
-                let kappa = 0.5 * h.c * a * a;
-                let tl = b.var(); // τ̃ ≥ −ln(1 − z̃) − z̃
-                let zt = b.var(); // z̃ = z_L/A ≤ min(z/A, 0)
-                b.q[tl] = wd * kappa;
-                b.le(vec![(zt, a), (yn, -step.a_d)], z0);
-                b.le(vec![(zt, 1.0)], 0.0);
-                // (−τ̃ − z̃, 1, 1 − z̃) ∈ K_exp  ⟺  e^{−τ̃ − z̃} ≤ 1 − z̃
-                b.exp.push([(vec![(tl, 1.0), (zt, 1.0)], 0.0), (vec![], 1.0), (vec![(zt, 1.0)], 1.0)]);
+            b.q[yn] += nd.omega * lin / v;
+            if quad > 0.0 {
+                let xi = b.var(); // ξ ≥ max(y + z0/a_d, 0)
+                b.p.push((xi, xi, 2.0 * nd.omega * ad * quad));
+                b.le(vec![(yn, 1.0), (xi, -1.0)], -z0 / (ad * v));
+                b.le(vec![(xi, -1.0)], 0.0);
             }
+        }
+    }
+    // majorized log branches: (c/4) x² + (ψ'(z_l) − (c/2) z_l) x, x = z_L ≤ min(z, 0) or z_R ≥ max(z, 0)
+    for (k, mj) in pieces.iter().enumerate() {
+        let nd = step.nodes[mj.node];
+        let yn = y[2 * mj.node];
+        let z0 = nd.d_aff - mj.s;
+        let xi = b.var();
+        b.p.push((xi, xi, 2.0 * nd.omega * ad * 0.25 * mj.c));
+        b.q[xi] += nd.omega * (mj.dpsi(z_l[k]) - 0.5 * mj.c * z_l[k]) / v;
+        if mj.a > 0.0 {
+            b.le(vec![(xi, 1.0), (yn, -1.0)], z0 / (ad * v));
+            b.le(vec![(xi, 1.0)], 0.0);
+        } else {
+            b.le(vec![(yn, 1.0), (xi, -1.0)], -z0 / (ad * v));
+            b.le(vec![(xi, -1.0)], 0.0);
         }
     }
     let (p, q, a, bb, cones) = b.build();
     let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
+        .verbose(std::env::var_os("DYNCONTACT_CLARABEL_VERBOSE").is_some())
         .tol_gap_abs(set.tolerance)
         .tol_gap_rel(set.tolerance)
         .tol_feas(set.tolerance)
@@ -275,8 +293,8 @@ fn solve_once(
             });
         }
     }
-    let yv: Vec<f64> = y.iter().map(|&j| sol.x[j]).collect();
-    let rv: Vec<f64> = r.iter().map(|&j| sol.x[j]).collect();
+    let yv: Vec<f64> = y.iter().map(|&j| v * sol.x[j]).collect();
+    let rv: Vec<f64> = r.iter().map(|&j| v * sol.x[j]).collect();
     Ok((yv, rv, sol.iterations as usize))
 }
 
@@ -289,10 +307,11 @@ fn finish(step: &StepData, s: &[f64], y: Vec<f64>, r: Vec<f64>, iterations: usiz
         .map(|i| if step.nodes[i].bound.is_some() { (r[2 * i] / step.nodes[i].omega - q[i]).max(0.0) } else { 0.0 })
         .collect();
     let t: Vec<f64> = (0..n).map(|i| if step.friction { r[2 * i + 1] / step.nodes[i].omega } else { 0.0 }).collect();
+    let f_max = (0..n).fold(0.0f64, |m, i| m.max(q[i] + lambda[i]));
     let status = (0..n)
         .map(|i| {
             let force = q[i] + lambda[i];
-            if force <= 1e-9 * (1.0 + q.iter().fold(0.0f64, |m, v| m.max(v.abs()))) {
+            if force <= 1e-8 * f_max {
                 NodeStatus::Separated
             } else if step.friction && s[i] > 0.0 && step.slip(i, &y).abs() <= 1e-7 * step.a_v * scale {
                 NodeStatus::Stick

@@ -40,6 +40,9 @@ pub struct StepReport {
     pub fixed_point_change: f64,
     /// final relative residual of the last inner solve
     pub inner_residual: f64,
+    /// unknowns of the step problem: multipliers λ (exact constraint) and friction forces t
+    pub multipliers: usize,
+    pub friction_unknowns: usize,
 }
 
 /// Why the step failed.
@@ -84,6 +87,7 @@ pub fn solve(
     t0: &[f64],
     inner: &Inner,
     fp: &FixedPointSettings,
+    mut trace: Option<&mut Vec<Vec<f64>>>,
 ) -> Result<(ContactSolution, Vec<f64>, StepReport), InnerFailure> {
     let n = step.n();
     let fail = |l: usize, e: (&'static str, usize, f64, String)| InnerFailure {
@@ -93,11 +97,18 @@ pub fn solve(
         reason: e.3,
         fixed_point_iteration: l,
     };
-    let mut report = StepReport::default();
+    let mut report = StepReport {
+        multipliers: step.nodes.iter().filter(|nd| nd.bound.is_some()).count(),
+        friction_unknowns: if step.friction { n } else { 0 },
+        ..StepReport::default()
+    };
     let Some(mu) = mu.filter(|_| step.friction) else {
         // frictionless: one convex solve, no fixed point
         let s = vec![0.0; n];
         let sol = inner_solve(step, &s, lambda0, t0, inner).map_err(|e| fail(0, e))?;
+        if let Some(tr) = trace {
+            tr.push(sol.y.clone());
+        }
         report.inner_iterations = sol.iterations;
         report.fixed_point_converged = true;
         report.inner_residual = sol.residual;
@@ -109,6 +120,9 @@ pub fn solve(
     let mut last: Option<(ContactSolution, Vec<f64>)> = None;
     for l in 1..=fp.max_iterations {
         let sol = inner_solve(step, &s, &lam, &tf, inner).map_err(|e| fail(l, e))?;
+        if let Some(tr) = trace.as_deref_mut() {
+            tr.push(sol.y.clone());
+        }
         report.inner_iterations += sol.iterations;
         report.fixed_point_iterations = l;
         report.inner_residual = sol.residual;

@@ -107,7 +107,8 @@ impl StepData<'_> {
     pub fn dq(&self, i: usize, y: &[f64]) -> f64 {
         self.a_d * self.rule.force_db(self.law, self.nodes[i].d_n, self.d_end(i, y))
     }
-    /// The velocity bound β_i: d^{n+1} ≤ g ⟺ y_ν,i ≤ β_i.
+    /// (S.4) The nodal constraint d_i^{n+1} ≤ g as a bound on the contact velocity:
+    /// d^{n+1} ≤ g ⟺ y_ν,i ≤ β_i = (g − d_aff)/a_d; its multiplier is ω_i λ_i ≥ 0.
     pub fn beta(&self, i: usize) -> Option<f64> {
         self.nodes[i].bound.map(|g| (g - self.nodes[i].d_aff) / self.a_d)
     }

@@ -1,1 +1,345 @@
-fn main() {}
+//! Project tasks: `cargo xtask verify | crosscheck`.
+//!
+//! `verify` is the project's test command. It
+//! 1. builds every test target (`cargo test --workspace --no-run`) and runs each test binary
+//!    directly, recording which test passed (so a test is tied to its file);
+//! 2. checks the equation trace (spec/equations.toml): every `implemented` ID names code anchors
+//!    that exist — a function whose doc comment starts with `/// (ID)` — and at least one test
+//!    that exists and passed in this run; every ID cited in a doc comment under src/ or tests/
+//!    is in the spec; `planned` IDs are listed as open;
+//! 3. runs the Python cross-check (`crosscheck`);
+//! 4. writes target/verify/trace.md and exits non-zero on any failure.
+
+mod crosscheck;
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode, Stdio};
+
+use serde::Deserialize;
+
+#[derive(Debug, Deserialize)]
+struct Spec {
+    equation: Vec<Equation>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Equation {
+    id: String,
+    statement: String,
+    provenance: String,
+    status: String,
+    #[serde(default)]
+    code: Vec<String>,
+    #[serde(default)]
+    tests: Vec<String>,
+    #[serde(default)]
+    notes: String,
+}
+
+fn root() -> PathBuf {
+    let here = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    here.parent().map(Path::to_path_buf).unwrap_or(here)
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let root = root();
+    let result = match args.first().map(String::as_str) {
+        Some("verify") => verify(&root, args.iter().any(|a| a == "--no-crosscheck")),
+        Some("crosscheck") => crosscheck::run(&root).map(|r| println!("{r}")),
+        Some("trace") => trace_only(&root),
+        _ => Err("usage: cargo xtask <verify [--no-crosscheck] | crosscheck | trace>".to_string()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// A test binary built by cargo: the source file of its target and the executable.
+struct TestBinary {
+    src: String,
+    exe: PathBuf,
+}
+
+fn build_tests(root: &Path) -> Result<Vec<TestBinary>, String> {
+    let out = Command::new(env!("CARGO"))
+        .args(["test", "--workspace", "--no-run", "--message-format=json-render-diagnostics"])
+        .current_dir(root)
+        .stderr(Stdio::inherit())
+        .output()
+        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    if !out.status.success() {
+        return Err("building the tests failed".into());
+    }
+    let mut bins = Vec::new();
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let Ok(v) = serde_json::from_str::<serde_json::Value>(line) else { continue };
+        if v["reason"] != "compiler-artifact" || v["profile"]["test"] != true {
+            continue;
+        }
+        let (Some(exe), Some(src)) = (v["executable"].as_str(), v["target"]["src_path"].as_str()) else { continue };
+        let src = Path::new(src).strip_prefix(root).map(|p| p.to_string_lossy().to_string()).unwrap_or_else(|_| src.to_string());
+        bins.push(TestBinary { src, exe: PathBuf::from(exe) });
+    }
+    Ok(bins)
+}
+
+/// Outcome of every test: (source file of the target, libtest name) → passed.
+type Outcomes = BTreeMap<(String, String), bool>;
+
+fn run_tests(root: &Path, bins: &[TestBinary]) -> Result<Outcomes, String> {
+    let mut outcomes = Outcomes::new();
+    let mut failed_bins = Vec::new();
+    for b in bins {
+        println!("== running {} ({})", b.src, b.exe.file_name().map(|f| f.to_string_lossy().to_string()).unwrap_or_default());
+        let out = Command::new(&b.exe)
+            .current_dir(root)
+            .env("CI", "true")
+            .stderr(Stdio::inherit())
+            .output()
+            .map_err(|e| format!("cannot run {}: {e}", b.exe.display()))?;
+        let text = String::from_utf8_lossy(&out.stdout);
+        print!("{text}");
+        for line in text.lines() {
+            // "test NAME ... ok" | "... FAILED" | "... ignored"
+            let Some(rest) = line.strip_prefix("test ") else { continue };
+            let Some((name, result)) = rest.rsplit_once(" ... ") else { continue };
+            let passed = result.trim() == "ok";
+            if result.trim() == "ok" || result.trim() == "FAILED" {
+                outcomes.insert((b.src.clone(), name.trim().to_string()), passed);
+            }
+        }
+        if !out.status.success() {
+            failed_bins.push(b.src.clone());
+        }
+    }
+    if !failed_bins.is_empty() {
+        let failed: Vec<String> = outcomes.iter().filter(|(_, p)| !**p).map(|((f, n), _)| format!("{f}::{n}")).collect();
+        return Err(format!("tests failed in {}: {}", failed_bins.join(", "), failed.join(", ")));
+    }
+    Ok(outcomes)
+}
+
+/// Look up a test reference `file.rs::name` (integration tests) or
+/// `src/a/b.rs::tests::name` (unit tests: the lib target with module path a::b::tests::name).
+fn test_passed(outcomes: &Outcomes, reference: &str) -> Option<bool> {
+    let (file, name) = reference.split_once("::")?;
+    if file.starts_with("src/") && file != "src/main.rs" {
+        let module = file.trim_start_matches("src/").trim_end_matches(".rs").trim_end_matches("/mod").replace('/', "::");
+        let full = if module == "lib" { name.to_string() } else { format!("{module}::{name}") };
+        return outcomes.get(&("src/lib.rs".to_string(), full)).copied();
+    }
+    outcomes
+        .iter()
+        .find(|((f, n), _)| f == file && (n == name || n.ends_with(&format!("::{name}"))))
+        .map(|(_, p)| *p)
+}
+
+/// Does `file` contain `fn name` whose doc comment starts with `/// (ID)`?
+fn anchor_ok(root: &Path, anchor: &str, id: &str) -> Result<(), String> {
+    let (file, name) = anchor.split_once("::").ok_or_else(|| format!("anchor `{anchor}` is not `file.rs::function`"))?;
+    let text = std::fs::read_to_string(root.join(file)).map_err(|_| format!("anchor `{anchor}`: file {file} does not exist"))?;
+    let lines: Vec<&str> = text.lines().collect();
+    let want = format!("/// ({id})");
+    let mut found_fn = false;
+    for (k, l) in lines.iter().enumerate() {
+        let t = l.trim_start();
+        let is_fn = ["fn ", "pub fn ", "pub(crate) fn ", "pub const fn ", "const fn "]
+            .iter()
+            .any(|p| t.starts_with(&format!("{p}{name}(")) || t.starts_with(&format!("{p}{name}<")));
+        if !is_fn {
+            continue;
+        }
+        found_fn = true;
+        // walk up over attributes to the start of the doc block
+        let mut j = k;
+        let mut first_doc: Option<&str> = None;
+        while j > 0 {
+            j -= 1;
+            let p = lines[j].trim_start();
+            if p.starts_with("#[") {
+                continue;
+            }
+            if p.starts_with("///") {
+                first_doc = Some(p);
+                continue;
+            }
+            break;
+        }
+        if first_doc.is_some_and(|d| d.starts_with(&want)) {
+            return Ok(());
+        }
+    }
+    if found_fn {
+        Err(format!("anchor `{anchor}`: the doc comment of `{name}` does not start with `{want}`"))
+    } else {
+        Err(format!("anchor `{anchor}`: no function `{name}` in {file}"))
+    }
+}
+
+/// IDs cited at the start of doc comments (`/// (ID)` or `//! (ID)`) under a folder.
+fn cited_ids(dir: &Path, out: &mut BTreeMap<String, BTreeSet<String>>) {
+    let Ok(rd) = std::fs::read_dir(dir) else { return };
+    for e in rd.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            cited_ids(&p, out);
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            let Ok(text) = std::fs::read_to_string(&p) else { continue };
+            for l in text.lines() {
+                let t = l.trim_start();
+                let Some(rest) = t.strip_prefix("///").or_else(|| t.strip_prefix("//!")) else { continue };
+                let rest = rest.trim_start();
+                if let Some(inner) = rest.strip_prefix('(') {
+                    if let Some((id, _)) = inner.split_once(')') {
+                        if is_id(id) {
+                            out.entry(id.to_string()).or_default().insert(p.display().to_string());
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// An equation ID: capital letter, optional lower-case letter, dot, digits/letters (P.1, Pe.5, C.k).
+fn is_id(s: &str) -> bool {
+    let Some((head, tail)) = s.split_once('.') else { return false };
+    let mut h = head.chars();
+    let first_ok = h.next().is_some_and(|c| c.is_ascii_uppercase());
+    let rest_ok = head.len() <= 2 && h.all(|c| c.is_ascii_lowercase());
+    first_ok && rest_ok && !tail.is_empty() && tail.len() <= 3 && tail.chars().all(|c| c.is_ascii_alphanumeric())
+}
+
+struct TraceResult {
+    markdown: String,
+    failures: Vec<String>,
+    open: Vec<String>,
+}
+
+fn check_trace(root: &Path, outcomes: Option<&Outcomes>) -> Result<TraceResult, String> {
+    let text = std::fs::read_to_string(root.join("spec/equations.toml")).map_err(|e| format!("spec/equations.toml: {e}"))?;
+    let spec: Spec = toml::from_str(&text).map_err(|e| format!("spec/equations.toml: {e}"))?;
+    let mut failures = Vec::new();
+    let mut open = Vec::new();
+    let mut md = String::from("# Equation trace\n\n| ID | provenance | status | code | tests | result |\n|---|---|---|---|---|---|\n");
+    let mut ids = BTreeSet::new();
+    for eq in &spec.equation {
+        if !ids.insert(eq.id.clone()) {
+            failures.push(format!("{}: listed twice in the spec", eq.id));
+        }
+        if eq.statement.trim().is_empty() {
+            failures.push(format!("{}: empty statement", eq.id));
+        }
+        let mut problems = Vec::new();
+        match eq.status.as_str() {
+            "implemented" => {
+                if eq.code.is_empty() {
+                    problems.push("no code anchor".to_string());
+                }
+                for a in &eq.code {
+                    if let Err(e) = anchor_ok(root, a, &eq.id) {
+                        problems.push(e);
+                    }
+                }
+                if eq.tests.is_empty() {
+                    problems.push("no test".to_string());
+                }
+                if let Some(o) = outcomes {
+                    let mut any_passed = false;
+                    for t in &eq.tests {
+                        match test_passed(o, t) {
+                            Some(true) => any_passed = true,
+                            Some(false) => problems.push(format!("test `{t}` failed")),
+                            None => problems.push(format!("test `{t}` does not exist (or did not run)")),
+                        }
+                    }
+                    if !any_passed && !eq.tests.is_empty() {
+                        problems.push("no passing test".into());
+                    }
+                }
+            }
+            "planned" => open.push(format!("{} — {}", eq.id, eq.notes)),
+            other => problems.push(format!("status must be implemented or planned, got `{other}`")),
+        }
+        let result = if problems.is_empty() {
+            if eq.status == "planned" { "open".to_string() } else { "ok".to_string() }
+        } else {
+            failures.extend(problems.iter().map(|p| format!("{}: {p}", eq.id)));
+            format!("FAIL: {}", problems.join("; "))
+        };
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} |\n",
+            eq.id,
+            eq.provenance,
+            eq.status,
+            eq.code.join("<br>"),
+            eq.tests.join("<br>"),
+            result
+        ));
+    }
+    let mut cited = BTreeMap::new();
+    cited_ids(&root.join("src"), &mut cited);
+    cited_ids(&root.join("tests"), &mut cited);
+    for (id, files) in &cited {
+        if !ids.contains(id) {
+            failures.push(format!("{id} is cited in {} but is not in spec/equations.toml", files.iter().cloned().collect::<Vec<_>>().join(", ")));
+        }
+    }
+    if !open.is_empty() {
+        md.push_str("\n## Open (planned) IDs\n\n");
+        for o in &open {
+            md.push_str(&format!("- {o}\n"));
+        }
+    }
+    Ok(TraceResult { markdown: md, failures, open })
+}
+
+fn write_report(root: &Path, name: &str, text: &str) -> Result<PathBuf, String> {
+    let dir = root.join("target/verify");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let p = dir.join(name);
+    std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))?;
+    Ok(p)
+}
+
+fn trace_only(root: &Path) -> Result<(), String> {
+    let t = check_trace(root, None)?;
+    println!("{}", t.markdown);
+    if t.failures.is_empty() { Ok(()) } else { Err(t.failures.join("\n")) }
+}
+
+fn verify(root: &Path, skip_crosscheck: bool) -> Result<(), String> {
+    let start = std::time::Instant::now();
+    let bins = build_tests(root)?;
+    let outcomes = run_tests(root, &bins)?;
+    let passed = outcomes.values().filter(|p| **p).count();
+    println!("\n== {passed} tests passed in {} binaries", bins.len());
+    let trace = check_trace(root, Some(&outcomes))?;
+    println!("\n{}", trace.markdown);
+    let path = write_report(root, "trace.md", &trace.markdown)?;
+    println!("trace written to {}", path.display());
+    let mut failures = trace.failures;
+    if skip_crosscheck {
+        println!("cross-check skipped (--no-crosscheck)");
+    } else {
+        match crosscheck::run(root) {
+            Ok(r) => println!("\n== cross-check\n{r}"),
+            Err(e) => failures.push(format!("cross-check: {e}")),
+        }
+    }
+    println!("\n{} open (planned) IDs", trace.open.len());
+    println!("verify took {:.1} s", start.elapsed().as_secs_f64());
+    if failures.is_empty() {
+        println!("verify: OK");
+        Ok(())
+    } else {
+        Err(format!("verify failed:\n  {}", failures.join("\n  ")))
+    }
+}

@@ -1,0 +1,31 @@
+//! Helpers shared by the integration tests: fixture scenes and in-memory runs.
+#![allow(dead_code)]
+
+use dyncontact::problem::Problem;
+use dyncontact::scene::Scene;
+use dyncontact::simulation::{Settings, Simulation, StepRecord};
+
+/// A scene of fixtures/scenes by name (without .toml).
+pub fn fixture(name: &str) -> Scene {
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes").join(format!("{name}.toml"));
+    Scene::from_file(&path).unwrap_or_else(|e| panic!("fixture {name}: {e}"))
+}
+
+pub fn problem(scene: Scene) -> Problem {
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes");
+    Problem::new(scene, &dir).unwrap_or_else(|e| panic!("problem: {e}"))
+}
+
+/// Run to the end in memory and return every record (t = 0 first).
+pub fn records(p: &Problem) -> Vec<StepRecord> {
+    records_with(p, Settings::from_problem(p))
+}
+
+pub fn records_with(p: &Problem, settings: Settings) -> Vec<StepRecord> {
+    let mut sim = Simulation::with_settings(p, settings).unwrap_or_else(|e| panic!("setup: {e}"));
+    let mut out = vec![sim.initial_record()];
+    for _ in 0..p.steps {
+        out.push(sim.step().unwrap_or_else(|e| panic!("step: {e}")));
+    }
+    out
+}

@@ -1,0 +1,536 @@
+//! The scene contract of SCENES.md, tested from the outside: malformed scenes are refused with
+//! messages that name the key path, every shipped scene loads, and defaults are what the
+//! contract says. `cargo test --test scenes -- --nocapture` prints the table of messages, which
+//! doubles as documentation of what a user sees.
+
+use std::path::Path;
+
+use dyncontact::problem::Problem;
+use dyncontact::scene::{
+    Bound, DomainKind, Enforcement, FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind, Scene,
+    DEFAULT_SCENE,
+};
+
+/// The valid base scene every malformed case is edited from.
+const BASE: &str = DEFAULT_SCENE;
+
+/// `BASE` with `from` replaced by `to`; `from` must occur exactly once (keeps the table honest).
+fn edit(from: &str, to: &str) -> String {
+    edit_in(BASE, from, to)
+}
+
+fn edit_in(text: &str, from: &str, to: &str) -> String {
+    assert_eq!(text.matches(from).count(), 1, "the base scene must contain {from:?} exactly once");
+    text.replacen(from, to, 1)
+}
+
+/// `BASE` with several replacements applied in order.
+fn edits(pairs: &[(&str, &str)]) -> String {
+    pairs.iter().fold(BASE.to_string(), |text, (from, to)| edit_in(&text, from, to))
+}
+
+/// `BASE` with `lines` inserted right after the section header `header` (e.g. "[contact.friction]").
+fn after(header: &str, lines: &str) -> String {
+    edit(&format!("{header}\n"), &format!("{header}\n{lines}\n"))
+}
+
+/// `BASE` with the text from `start` (inclusive) to `end` (exclusive) removed.
+fn cut(start: &str, end: &str) -> String {
+    cut_in(BASE, start, end)
+}
+
+fn cut_in(text: &str, start: &str, end: &str) -> String {
+    assert_eq!(text.matches(start).count(), 1, "the base scene must contain {start:?} exactly once");
+    let i = text.find(start).unwrap();
+    let j = i + text[i..].find(end).expect("end marker after start marker");
+    format!("{}{}", &text[..i], &text[j..])
+}
+
+/// The friction section of the base scene, to swap for another law.
+const FRICTION: &str = "law = \"exponential\"\nstatic = 0.6\nkinetic = 0.3\ndecay = 20.0\n";
+
+fn friction(lines: &str) -> String {
+    edit(FRICTION, &format!("{lines}\n"))
+}
+
+/// Where a case must be refused.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Stage {
+    /// `Scene::from_toml` (serde schema or `validate`).
+    Scene,
+    /// `Scene::from_toml` accepts; `Problem::new` (mesh-dependent checks) refuses.
+    Problem,
+}
+
+struct Case {
+    what: &'static str,
+    toml: String,
+    stage: Stage,
+    /// The exact key path; the message must contain `"{path}: "`.
+    path: &'static str,
+    /// A fragment naming the problem.
+    problem: &'static str,
+}
+
+fn case(what: &'static str, toml: String, path: &'static str, problem: &'static str) -> Case {
+    Case { what, toml, stage: Stage::Scene, path, problem }
+}
+
+fn mesh_case(what: &'static str, toml: String, path: &'static str, problem: &'static str) -> Case {
+    Case { what, toml, stage: Stage::Problem, path, problem }
+}
+
+fn cases() -> Vec<Case> {
+    vec![
+        // ---- schema: unknown keys, wrong types, unknown variants, missing keys (serde) ----
+        case("unknown top-level key", format!("colour = \"red\"\n{BASE}"), "colour", "unknown field `colour`"),
+        case(
+            "unknown key in a section",
+            after("[material]", "elasticity = 3.0"),
+            "material.elasticity",
+            "unknown field `elasticity`",
+        ),
+        case("unknown nested key", after("[contact.friction]", "foo = 1.0"), "contact.friction.foo", "unknown field `foo`"),
+        case(
+            "unknown key in an inline table",
+            edit("zeta = 1.5 }", "zeta = 1.5, eta = 1.0 }"),
+            "material.viscosity.eta",
+            "unknown field `eta`",
+        ),
+        case(
+            "unknown key in an array of tables",
+            edit("side = \"top\"", "side = \"top\"\nsides = \"top\""),
+            "loads.traction[0].sides",
+            "unknown field `sides`",
+        ),
+        case("string for a number", edit("density = 1.0", "density = \"heavy\""), "material.density", "invalid type: string"),
+        case("string inside an integer pair", edit("cells = [32, 16]", "cells = [32, \"16\"]"), "domain.cells[1]", "invalid type"),
+        case("float for an integer", edit("every = 10", "every = 2.5"), "output.every", "invalid type"),
+        case(
+            "number for an expression string",
+            edit("value = [\"0\", \"-40*min(t/0.2, 1)\"]", "value = [\"0\", -40]"),
+            "loads.traction[0].value[1]",
+            "invalid type",
+        ),
+        case("pair with three entries", edit("size = [2.0, 1.0]", "size = [2.0, 1.0, 3.0]"), "domain.size", "invalid length 3, expected exactly 2 entries"),
+        case(
+            "expression pair with one entry",
+            edit("value = [\"0\", \"-40*min(t/0.2, 1)\"]", "value = [\"-40\"]"),
+            "loads.traction[0].value",
+            "invalid length 1",
+        ),
+        case(
+            "table point with three entries",
+            friction("law = \"table\"\npoints = [[0.0, 0.6], [0.1, 0.35, 0.3]]"),
+            "contact.friction.points[1]",
+            "invalid length 3",
+        ),
+        case(
+            "unknown time scheme",
+            edit("scheme = \"midpoint\"", "scheme = \"rk4\""),
+            "time.scheme",
+            "unknown variant `rk4`, expected one of `midpoint`, `trapezoid`, `backward-euler`",
+        ),
+        case("unknown domain kind", edit("kind = \"rectangle\"", "kind = \"circle\""), "domain.kind", "unknown variant `circle`"),
+        case("unknown plane", edit("plane = \"strain\"", "plane = \"shell\""), "domain.plane", "unknown variant `shell`"),
+        case("unknown inner solver", edit("inner = \"newton\"", "inner = \"cg\""), "solver.inner", "unknown variant `cg`"),
+        case(
+            "unknown friction bound",
+            edit("friction_bound = \"capped\"", "friction_bound = \"soft\""),
+            "contact.friction_bound",
+            "unknown variant `soft`",
+        ),
+        case("unknown friction law", friction("law = \"coulomb\""), "contact.friction.law", "unknown variant `coulomb`"),
+        case("missing required key", edit("young = 1000.0\n", ""), "material.young", "missing field `young`"),
+        case(
+            "missing key in an inline table",
+            edit("viscosity = { theta = 2.0, zeta = 1.5 }", "viscosity = { theta = 2.0 }"),
+            "material.viscosity.zeta",
+            "missing field `zeta`",
+        ),
+        case("missing required section", cut("[time]", "[solver]"), "time", "missing field `time`"),
+        case(
+            "boolean penetration bound",
+            edit("penetration_bound = 0.02", "penetration_bound = true"),
+            "contact.penetration_bound",
+            "invalid type: boolean `true`, expected a number or a string",
+        ),
+        // ---- name and domain ----
+        case("name with a slash", edit("name = \"academic\"", "name = \"a/b\""), "name", "without slashes"),
+        case("missing rectangle size", edit("size = [2.0, 1.0]\n", ""), "domain.size", "missing"),
+        case("missing rectangle cells", edit("cells = [32, 16]\n", ""), "domain.cells", "missing"),
+        case("zero length", edit("size = [2.0, 1.0]", "size = [2.0, 0.0]"), "domain.size[1]", "must be > 0"),
+        case("zero cells", edit("cells = [32, 16]", "cells = [0, 16]"), "domain.cells[0]", "must be >= 1"),
+        case(
+            "gmsh without file",
+            edits(&[("kind = \"rectangle\"", "kind = \"gmsh\""), ("size = [2.0, 1.0]\n", ""), ("cells = [32, 16]\n", "")]),
+            "domain.file",
+            "missing",
+        ),
+        case("gmsh with rectangle size", edit("kind = \"rectangle\"", "kind = \"gmsh\"\nfile = \"m.msh\""), "domain.size", "remove it"),
+        case("rectangle with a mesh file", after("[domain]", "file = \"m.msh\""), "domain.file", "only used with kind = \"gmsh\""),
+        // ---- material ----
+        case("negative density", edit("density = 1.0", "density = -1.0"), "material.density", "must be > 0, got -1"),
+        case("NaN density", edit("density = 1.0", "density = nan"), "material.density", "must be > 0, got NaN"),
+        case("zero Young modulus", edit("young = 1000.0", "young = 0.0"), "material.young", "must be > 0, got 0"),
+        case("Poisson ratio 0.5", edit("poisson = 0.3", "poisson = 0.5"), "material.poisson", "must be in (-1, 0.5), got 0.5"),
+        case("Poisson ratio -1", edit("poisson = 0.3", "poisson = -1.0"), "material.poisson", "must be in (-1, 0.5), got -1"),
+        case("negative viscosity", edit("theta = 2.0", "theta = -2.0"), "material.viscosity.theta", "must be >= 0, got -2"),
+        case("negative shear viscosity", edit("zeta = 1.5", "zeta = -0.1"), "material.viscosity.zeta", "must be >= 0"),
+        case(
+            "plane stress, non-proportional viscosity",
+            edit("plane = \"strain\"", "plane = \"stress\""),
+            "material.viscosity",
+            "plane stress with viscosity needs A proportional to B",
+        ),
+        // ---- boundary ----
+        case(
+            "side both clamped and in contact",
+            edit("dirichlet = [\"left\"]", "dirichlet = [\"left\", \"bottom\"]"),
+            "boundary.dirichlet[1]",
+            "also a contact side",
+        ),
+        case(
+            "side listed twice",
+            edit("contact = [\"bottom\"]", "contact = [\"bottom\", \"bottom\"]"),
+            "boundary.contact[1]",
+            "listed twice",
+        ),
+        case("contact sides without [contact]", cut("[contact]\n", "[time]"), "contact", "missing section [contact]"),
+        // ---- loads and initial data ----
+        case(
+            "unknown function in the body force",
+            edit("body = [\"0\", \"0\"]", "body = [\"foo(x)\", \"0\"]"),
+            "loads.body[0]",
+            "unknown function `foo`",
+        ),
+        case(
+            "syntax error in a traction",
+            edit("\"-40*min(t/0.2, 1)\"", "\"-40*min(t/0.2, 1\""),
+            "loads.traction[0].value[1]",
+            "cannot parse",
+        ),
+        case("empty expression", edit("body = [\"0\", \"0\"]", "body = [\"0\", \"\"]"), "loads.body[1]", "empty"),
+        case("traction on a clamped side", edit("side = \"top\"", "side = \"left\""), "loads.traction[0].side", "Dirichlet side"),
+        case("traction on a contact side", edit("side = \"top\"", "side = \"bottom\""), "loads.traction[0].side", "contact side"),
+        case("two tractions on one side", edit("side = \"right\"", "side = \"top\""), "loads.traction[1].side", "already has a traction"),
+        case(
+            "time in the initial displacement",
+            edit("displacement = [\"0\", \"0\"]", "displacement = [\"t\", \"0\"]"),
+            "initial.displacement[0]",
+            "`t`",
+        ),
+        // ---- contact ----
+        case("gap depending on time", edit("gap = \"0\"", "gap = \"0.01*t\""), "contact.gap", "`t`"),
+        case("infinite numeric gap", edit("gap = \"0\"", "gap = inf"), "contact.gap", "must be finite"),
+        case("negative compliance", edit("compliance = 1000.0", "compliance = -1.0"), "contact.compliance", "must be >= 0"),
+        case(
+            "penalty with exact enforcement",
+            edit("enforcement = \"exact\"", "enforcement = \"exact\"\npenalty = 1.0e-4"),
+            "contact.penalty",
+            "only used with enforcement = \"penalty\"",
+        ),
+        case(
+            "penalty enforcement without penalty",
+            edit("enforcement = \"exact\"", "enforcement = \"penalty\""),
+            "contact.penalty",
+            "missing",
+        ),
+        case(
+            "zero penalty",
+            edit("enforcement = \"exact\"", "enforcement = \"penalty\"\npenalty = 0.0"),
+            "contact.penalty",
+            "must be > 0",
+        ),
+        case(
+            "penalty with an infinite bound",
+            edits(&[
+                ("enforcement = \"exact\"", "enforcement = \"penalty\"\npenalty = 1.0e-4"),
+                ("penetration_bound = 0.02", "penetration_bound = \"inf\""),
+            ]),
+            "contact.enforcement",
+            "needs a finite penetration_bound",
+        ),
+        case(
+            "negative penetration bound",
+            edit("penetration_bound = 0.02", "penetration_bound = -1.0"),
+            "contact.penetration_bound",
+            "must be >= 0 or \"inf\", got -1",
+        ),
+        case(
+            "misspelled infinite bound",
+            edit("penetration_bound = 0.02", "penetration_bound = \"infinity\""),
+            "contact.penetration_bound",
+            "the string \"inf\", got \"infinity\"",
+        ),
+        case(
+            "no force at all",
+            edits(&[("compliance = 1000.0", "compliance = 0.0"), ("penetration_bound = 0.02", "penetration_bound = \"inf\"")]),
+            "contact.compliance",
+            "no force",
+        ),
+        // ---- friction ----
+        case(
+            "exponential law without decay",
+            friction("law = \"exponential\"\nstatic = 0.6\nkinetic = 0.3"),
+            "contact.friction.decay",
+            "missing: law = \"exponential\" needs it",
+        ),
+        case(
+            "negative decay",
+            friction("law = \"exponential\"\nstatic = 0.6\nkinetic = 0.3\ndecay = -3.0"),
+            "contact.friction.decay",
+            "must be >= 0, got -3",
+        ),
+        case(
+            "constant law with a stray static",
+            friction("law = \"constant\"\ncoefficient = 0.3\nstatic = 0.6"),
+            "contact.friction.static",
+            "not used by law = \"constant\"",
+        ),
+        case("constant law without coefficient", friction("law = \"constant\""), "contact.friction.coefficient", "missing"),
+        case("no friction with a coefficient", friction("law = \"none\"\ncoefficient = 0.3"), "contact.friction.coefficient", "not used"),
+        case("table without points", friction("law = \"table\""), "contact.friction.points", "missing"),
+        case("empty table", friction("law = \"table\"\npoints = []"), "contact.friction.points", "is empty"),
+        case(
+            "unsorted table",
+            friction("law = \"table\"\npoints = [[0.0, 0.6], [1.0, 0.3], [0.1, 0.35]]"),
+            "contact.friction.points[2][0]",
+            "must increase strictly",
+        ),
+        case(
+            "table with a repeated slip rate",
+            friction("law = \"table\"\npoints = [[0.0, 0.6], [0.1, 0.4], [0.1, 0.3]]"),
+            "contact.friction.points[2][0]",
+            "must increase strictly",
+        ),
+        case(
+            "table with a negative mu",
+            friction("law = \"table\"\npoints = [[0.0, 0.6], [0.1, -0.35]]"),
+            "contact.friction.points[1][1]",
+            "μ must be >= 0",
+        ),
+        case(
+            "table not starting at 0",
+            friction("law = \"table\"\npoints = [[0.1, 0.6], [1.0, 0.3]]"),
+            "contact.friction.points[0][0]",
+            "the first slip rate must be 0",
+        ),
+        // ---- time ----
+        case("zero end time", edit("end = 1.0", "end = 0.0"), "time.end", "must be > 0"),
+        case("negative step", edit("step = 5.0e-4", "step = -5.0e-4"), "time.step", "must be > 0"),
+        case("step longer than the run", edit("step = 5.0e-4", "step = 2.0"), "time.step", "must be <= time.end"),
+        case("end not a whole number of steps", edit("step = 5.0e-4", "step = 0.3"), "time.step", "not a whole number of steps"),
+        case("too many steps", edit("step = 5.0e-4", "step = 1.0e-9"), "time.step", "at most 1e8"),
+        // ---- solver and output ----
+        case("relaxation 0", edit("relaxation = 1.0", "relaxation = 0.0"), "solver.relaxation", "must be in (0, 1]"),
+        case("relaxation above 1", edit("relaxation = 1.0", "relaxation = 1.5"), "solver.relaxation", "must be in (0, 1]"),
+        case(
+            "Newton tolerance 2",
+            edit("newton_tolerance = 1.0e-10", "newton_tolerance = 2.0"),
+            "solver.newton_tolerance",
+            "must be in (0, 1), got 2",
+        ),
+        case(
+            "zero fixed-point tolerance",
+            edit("fixed_point_tolerance = 1.0e-8", "fixed_point_tolerance = 0.0"),
+            "solver.fixed_point_tolerance",
+            "must be in (0, 1)",
+        ),
+        case(
+            "zero Newton iterations",
+            edit("max_newton_iterations = 50", "max_newton_iterations = 0"),
+            "solver.max_newton_iterations",
+            "must be in 1..=100000",
+        ),
+        case("output every 0 steps", edit("every = 10", "every = 0"), "output.every", "must be >= 1, got 0"),
+        // ---- checks against the mesh (Problem::new) ----
+        mesh_case(
+            "contact side the mesh lacks",
+            edit("contact = [\"bottom\"]", "contact = [\"bottm\"]"),
+            "boundary.contact[0]",
+            "no side named \"bottm\"; the mesh has bottom, right, top, left",
+        ),
+        mesh_case(
+            "clamped side the mesh lacks",
+            edit("dirichlet = [\"left\"]", "dirichlet = [\"lft\"]"),
+            "boundary.dirichlet[0]",
+            "no side named \"lft\"",
+        ),
+        mesh_case("traction side the mesh lacks", edit("side = \"top\"", "side = \"Top\""), "loads.traction[0].side", "no side named \"Top\""),
+        mesh_case(
+            "gmsh file that does not exist",
+            edits(&[
+                ("kind = \"rectangle\"", "kind = \"gmsh\"\nfile = \"no/such/mesh.msh\""),
+                ("size = [2.0, 1.0]\n", ""),
+                ("cells = [32, 16]\n", ""),
+            ]),
+            "domain.file",
+            "does not exist",
+        ),
+        mesh_case(
+            "initial displacement beyond the bound",
+            edit("displacement = [\"0\", \"0\"]", "displacement = [\"0\", \"-0.05*x\"]"),
+            "initial.displacement",
+            "penetrates beyond the bound",
+        ),
+        mesh_case(
+            "gap not finite on the contact side",
+            edit("gap = \"0\"", "gap = \"sqrt(x - 1)\""),
+            "contact.gap",
+            "evaluates to NaN",
+        ),
+        mesh_case(
+            "body force not finite on the mesh",
+            edit("body = [\"0\", \"0\"]", "body = [\"0\", \"sqrt(x - 1)\"]"),
+            "loads.body",
+            "must be finite",
+        ),
+        mesh_case(
+            "every node clamped",
+            edit_in(
+                &cut_in(
+                    &edits(&[("cells = [32, 16]", "cells = [1, 1]"), ("dirichlet = [\"left\"]", "dirichlet = [\"left\", \"right\"]")]),
+                    "[[loads.traction]]\nside = \"right\"",
+                    "[initial]",
+                ),
+                "contact = [\"bottom\"]",
+                "contact = []",
+            ),
+            "boundary.dirichlet",
+            "clamps every node",
+        ),
+    ]
+}
+
+/// Every malformed scene is refused with a message that names the exact key path.
+#[test]
+fn malformed_scenes_are_refused_with_the_key_path() {
+    let cases = cases();
+    assert!(cases.len() >= 25);
+    let mut failures = Vec::new();
+    for c in &cases {
+        let refused = match (Scene::from_toml(&c.toml, "case.toml"), c.stage) {
+            (Err(e), Stage::Scene) => Ok(e.to_string()),
+            (Err(e), Stage::Problem) => Err(format!("refused too early (the scene should parse): {e}")),
+            (Ok(_), Stage::Scene) => Err("accepted by Scene::from_toml".to_string()),
+            (Ok(scene), Stage::Problem) => match Problem::new(scene, Path::new(".")) {
+                Err(e) => Ok(e.to_string()),
+                Ok(_) => Err("accepted by Problem::new".to_string()),
+            },
+        };
+        match refused {
+            Ok(msg) => {
+                println!("{:<42} {msg}", c.what);
+                let key = format!("{}: ", c.path);
+                let named = msg.starts_with(&key) || msg.contains(&format!(" {key}"));
+                if !named || !msg.contains(c.problem) {
+                    failures.push(format!("{}: expected `{key}` and {:?} in\n    {msg}", c.what, c.problem));
+                }
+                assert!(!msg.contains('\n'), "{}: the message must be one paragraph: {msg}", c.what);
+            }
+            Err(why) => failures.push(format!("{}: {why}", c.what)),
+        }
+    }
+    assert!(failures.is_empty(), "{} of {} cases failed:\n  {}", failures.len(), cases.len(), failures.join("\n  "));
+}
+
+/// The embedded default scene parses, validates and builds a problem.
+#[test]
+fn the_default_scene_is_valid() {
+    let scene = Scene::from_toml(DEFAULT_SCENE, "<embedded>").expect("the embedded default scene is valid");
+    scene.validate().expect("validate() agrees with from_toml");
+    assert_eq!(scene.name, "academic");
+    let again = Scene::default_scene();
+    assert_eq!(again.name, scene.name);
+    let problem = Problem::new(scene, Path::new(".")).expect("the default scene builds a problem");
+    assert_eq!(problem.steps, 2000);
+    assert!(problem.contact.is_some());
+}
+
+/// Every shipped scene in fixtures/scenes parses, validates and builds a problem.
+#[test]
+fn every_fixture_scene_loads() {
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/scenes"));
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .expect("fixtures/scenes exists")
+        .map(|e| e.expect("readable directory entry").path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.iter().any(|p| p.ends_with("academic.toml")), "fixtures/scenes/academic.toml is shipped");
+    let mut failures = Vec::new();
+    for path in &files {
+        let loaded = Scene::from_file(path).and_then(|scene| Problem::new(scene, path.parent().unwrap_or(dir)));
+        match loaded {
+            Ok(p) => println!("ok   {} ({} steps)", path.display(), p.steps),
+            Err(e) => failures.push(format!("{}: {e}", path.display())),
+        }
+    }
+    assert!(failures.is_empty(), "fixture scenes that do not load:\n  {}", failures.join("\n  "));
+}
+
+/// A scene with only [domain], [material] and [time] gets the defaults SCENES.md documents.
+#[test]
+fn defaults_follow_the_contract() {
+    let text = r#"
+[domain]
+kind = "rectangle"
+size = [1.0, 1.0]
+cells = [4, 4]
+
+[material]
+density = 1.0
+young = 100.0
+poisson = 0.25
+
+[time]
+end = 1
+step = 0.1
+"#;
+    let s = Scene::from_toml(text, "minimal.toml").expect("a minimal scene is valid");
+    assert_eq!(s.domain.kind, DomainKind::Rectangle);
+    assert_eq!(s.domain.plane, Plane::Strain);
+    assert!(s.boundary.dirichlet.is_empty());
+    assert!(s.boundary.contact.is_empty());
+    assert!(s.contact.is_none());
+    assert!(!s.has_contact());
+    assert_eq!((s.material.viscosity.theta, s.material.viscosity.zeta), (0.0, 0.0));
+    assert_eq!(s.loads.body, ["0".to_string(), "0".to_string()]);
+    assert!(s.loads.traction.is_empty());
+    assert_eq!(s.initial.displacement, ["0".to_string(), "0".to_string()]);
+    assert_eq!(s.initial.velocity, ["0".to_string(), "0".to_string()]);
+    assert_eq!(s.time.scheme, SchemeKind::Midpoint);
+    assert_eq!(s.steps(), 10);
+    assert_eq!(s.solver.inner, InnerSolver::Newton);
+    assert_eq!(s.solver.mass, MassKind::Lumped);
+    assert_eq!(s.solver.newton_tolerance, 1e-10);
+    assert_eq!(s.solver.fixed_point_tolerance, 1e-8);
+    assert_eq!(s.solver.max_newton_iterations, 50);
+    assert_eq!(s.solver.max_fixed_point_iterations, 50);
+    assert_eq!(s.solver.relaxation, 1.0);
+    assert_eq!(s.output.every, 10);
+    // A free body is allowed ("May be empty for a free body"), with zero loads.
+    let p = Problem::new(s, Path::new(".")).expect("a free body builds a problem");
+    assert!(p.contact.is_none());
+    assert!(p.u0.iter().chain(&p.v0).all(|&v| v == 0.0));
+
+    // A minimal [contact] section: exact enforcement, capped friction bound, no friction, zero gap.
+    let with_contact = format!("{text}\n[boundary]\ncontact = [\"bottom\"]\n\n[contact]\npenetration_bound = 0.1\ncompliance = 10\n");
+    let s = Scene::from_toml(&with_contact, "minimal-contact.toml").expect("a minimal contact scene is valid");
+    let c = s.contact.as_ref().expect("contact section");
+    assert_eq!(c.enforcement, Enforcement::Exact);
+    assert_eq!(c.friction_bound, FrictionBound::Capped);
+    assert_eq!(c.friction.law, FrictionLaw::None);
+    assert!(c.gap.is_none() && c.penalty.is_none());
+    assert_eq!(s.bound_of(c).unwrap(), Bound::Finite(0.1));
+    assert_eq!(c.compliance, 10.0, "an integer is accepted where a number is expected");
+    let zero = with_contact.replace("penetration_bound = 0.1", "penetration_bound = 0");
+    let s = Scene::from_toml(&zero, "zero.toml").expect("penetration_bound = 0 (integer) is valid");
+    assert_eq!(s.bound_of(s.contact.as_ref().unwrap()).unwrap(), Bound::Finite(0.0));
+
+    // "inf" means pure normal compliance.
+    let inf = with_contact.replace("penetration_bound = 0.1", "penetration_bound = \"inf\"");
+    let s = Scene::from_toml(&inf, "inf.toml").expect("penetration_bound = \"inf\" is valid");
+    assert_eq!(s.bound_of(s.contact.as_ref().unwrap()).unwrap(), Bound::Infinite);
+}
