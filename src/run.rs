@@ -27,6 +27,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Summary> {
 pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Result<Summary> {
     let start = Instant::now();
     let mut sim = Simulation::with_settings(problem, settings)?;
+    let [assembly_s, factorization_s, delassus_s] = sim.setup_timing;
     let info = ModelInfo::of(problem);
     let mut summary = Summary {
         scene: problem.scene.name.clone(),
@@ -37,7 +38,7 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
         steps_completed: 0,
         final_time: 0.0,
         wall_time_s: 0.0,
-        timing: Timing { setup_s: start.elapsed().as_secs_f64(), ..Timing::default() },
+        timing: Timing { setup_s: start.elapsed().as_secs_f64(), assembly_s, factorization_s, delassus_s, ..Timing::default() },
         newton_iterations_total: 0,
         fixed_point_iterations_total: 0,
         fixed_point_iterations_max: 0,

@@ -101,6 +101,8 @@ pub struct Simulation<'p> {
     energy_scale: f64,
     /// wall-clock split of the last step: free solve, contact solve, recovery (seconds)
     pub timing: [f64; 3],
+    /// setup: assembly, factorization of A_k, Delassus operator (seconds)
+    pub setup_timing: [f64; 3],
 }
 
 impl<'p> Simulation<'p> {
@@ -109,9 +111,15 @@ impl<'p> Simulation<'p> {
     }
 
     pub fn with_settings(problem: &'p Problem, settings: Settings) -> Result<Simulation<'p>> {
+        let clock = std::time::Instant::now();
         let ops = Operators::new(&problem.mesh, &problem.material, problem.scene.solver.mass, &problem.dofs)?;
+        let t_assembly = clock.elapsed().as_secs_f64();
+        let clock = std::time::Instant::now();
         let stepper = StepOperator::new(&ops, problem.scene.time.scheme, problem.k)?;
+        let t_factor = clock.elapsed().as_secs_f64();
+        let clock = std::time::Instant::now();
         let delassus = problem.contact.as_ref().map(|c| delassus::delassus(stepper.factor(), c));
+        let t_delassus = clock.elapsed().as_secs_f64();
         let nc = problem.contact.as_ref().map(|c| c.n()).unwrap_or(0);
         let u = problem.u0.clone();
         let v = problem.v0.clone();
@@ -139,6 +147,7 @@ impl<'p> Simulation<'p> {
             energy,
             energy_scale,
             timing: [0.0; 3],
+            setup_timing: [t_assembly, t_factor, t_delassus],
         })
     }
 

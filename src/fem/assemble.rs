@@ -78,7 +78,7 @@ pub fn assemble_full(mesh: &Mesh, mat: &Material, mass: MassKind) -> Result<(SpM
     let (mut tm, mut tk, mut tc) = (Vec::with_capacity(cap), Vec::with_capacity(cap), Vec::with_capacity(cap));
     for tri in &mesh.triangles {
         let x = [mesh.nodes[tri[0]], mesh.nodes[tri[1]], mesh.nodes[tri[2]]];
-        let (_, area) = element::gradients(x);
+        let area = element::gradients(x).1.abs();
         let ke = element::operator_matrix(x, &db);
         let ce = element::operator_matrix(x, &da);
         let me = match mass {
@@ -128,7 +128,7 @@ pub fn lumped_masses(mesh: &Mesh, mat: &Material, dofs: &Dofs) -> Vec<f64> {
     let mut d = vec![0.0; dofs.n_free];
     for tri in &mesh.triangles {
         let x = [mesh.nodes[tri[0]], mesh.nodes[tri[1]], mesh.nodes[tri[2]]];
-        let (_, area) = element::gradients(x);
+        let area = element::gradients(x).1.abs();
         for &v in tri {
             for c in 0..2 {
                 if let Some(i) = dofs.map[2 * v + c] {

@@ -3,7 +3,8 @@
 
 use nalgebra::{Matrix3, SMatrix};
 
-/// Gradients of the three P1 basis functions (constant on the triangle) and its area.
+/// Gradients of the three P1 basis functions (constant on the triangle) and its signed area
+/// (positive when counterclockwise; the gradients do not depend on the orientation).
 /// grad φ_i = (b_i, c_i)/(2A) with b = (y2 − y3, y3 − y1, y1 − y2), c = (x3 − x2, x1 − x3, x2 − x1).
 pub fn gradients(x: [[f64; 2]; 3]) -> ([[f64; 2]; 3], f64) {
     let [[x1, y1], [x2, y2], [x3, y3]] = x;
@@ -25,12 +26,12 @@ pub fn strain_matrix(grad: &[[f64; 2]; 3]) -> SMatrix<f64, 3, 6> {
     s
 }
 
-/// ∫_T D ε(φ_j) : ε(φ_i): the element matrix of an isotropic operator given as its Voigt
-/// matrix D (B gives the stiffness K, A the viscous matrix C).
+/// (P.1) Element matrix ∫_T D ε(φ_j) : ε(φ_i) of the Kelvin–Voigt operators, D given as its
+/// Voigt matrix: D = B gives the stiffness K, D = A the viscous matrix C.
 pub fn operator_matrix(x: [[f64; 2]; 3], d: &Matrix3<f64>) -> SMatrix<f64, 6, 6> {
     let (grad, area) = gradients(x);
     let s = strain_matrix(&grad);
-    s.transpose() * d * s * area
+    s.transpose() * d * s * area.abs()
 }
 
 /// ∫_T ρ φ_j φ_i per component: ρA/12 (1 + δ_ij).

@@ -38,7 +38,8 @@ pub fn error_norms(
     let (mut l2, mut en) = (0.0, 0.0);
     for tri in &mesh.triangles {
         let x = [mesh.nodes[tri[0]], mesh.nodes[tri[1]], mesh.nodes[tri[2]]];
-        let (grad, area) = element::gradients(x);
+        let (grad, signed) = element::gradients(x);
+        let area = signed.abs();
         // the constant FE gradient
         let mut gh = [[0.0; 2]; 2];
         for (k, g) in grad.iter().enumerate() {

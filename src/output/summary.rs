@@ -32,6 +32,8 @@ pub struct ModelInfo {
     /// (C.k): the largest k for which the unfrozen step problem is convex, and where
     pub ck_step_limit: Option<f64>,
     pub ck_limiting_node: Option<usize>,
+    /// why (C.k) gives no limit, when it does not
+    pub ck_note: String,
 }
 
 impl ModelInfo {
@@ -64,6 +66,7 @@ impl ModelInfo {
             step: p.k,
             ck_step_limit: None,
             ck_limiting_node: None,
+            ck_note: "no velocity-dependent friction: every step problem is convex".into(),
         };
         let (Some(c), Some(cs)) = (&p.contact, &s.contact) else { return info };
         info.contact = format!("on sides {}: {} contact nodes", s.boundary.contact.join(", "), c.n());
@@ -104,6 +107,13 @@ impl ModelInfo {
             if let Some((k, i)) = c.convex_step_limit(&lumped) {
                 info.ck_step_limit = Some(k);
                 info.ck_limiting_node = Some(c.nodes[i]);
+                info.ck_note = String::new();
+            } else if !c.p_tau.sup().is_finite() && c.friction.as_ref().is_some_and(|m| m.lipschitz() > 0.0) {
+                info.ck_note = "p_τ is unbounded (g = inf or uncapped): no step size makes the step problem convex for every \
+                                state; F.1 still applies (a majorization–minimization for velocity-weakening μ)"
+                    .into();
+            } else {
+                info.ck_note = "μ is constant or p_τ ≡ 0: every step problem is convex".into();
             }
         }
         info
@@ -131,7 +141,7 @@ impl ModelInfo {
                 "(C.k)          : the unfrozen step problem is convex for k <= {k:.4e} (limited at node {})",
                 self.ck_limiting_node.unwrap_or(0)
             )),
-            None => v.push("(C.k)          : no step-size condition (no velocity-dependent friction)".into()),
+            None => v.push(format!("(C.k)          : no limit — {}", self.ck_note)),
         }
         v
     }
@@ -162,6 +172,9 @@ fn bound_str(p: &Problem) -> Option<f64> {
 #[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct Timing {
     pub setup_s: f64,
+    pub assembly_s: f64,
+    pub factorization_s: f64,
+    pub delassus_s: f64,
     pub free_solve_s: f64,
     pub contact_solve_s: f64,
     pub recovery_s: f64,

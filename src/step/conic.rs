@@ -147,7 +147,8 @@ impl Majorized {
     }
 }
 
-/// Solve the frozen-S problem with Clarabel, with majorization rounds for the log branches.
+/// (S.6) Minimize the frozen-S step functional Φ_n^S over C_n = {y_ν,i ≤ β_i} with Clarabel,
+/// in the condensed form of this module's header (majorization rounds for the log branches).
 pub fn solve(step: &StepData, s: &[f64], set: &ConicSettings) -> Result<ContactSolution, ConicFailure> {
     let n = step.n();
     let mut pieces = Vec::new();

@@ -68,7 +68,8 @@ fn inner_solve(
     }
 }
 
-/// The friction bound S_i = μ(‖v̄_i(y)‖) p_τ(û_i).
+/// (S.5) The friction bound S_i = μ(‖v̄_i‖) p_τ(û_i), with v̄_i the slip rate of the contact
+/// velocities y and û_i the (fixed) predictor of u_ν,i^{n+½}.
 pub fn friction_bound(step: &StepData, mu: &FrictionCoefficient, p_tau_hat: &[f64], y: &[f64]) -> Vec<f64> {
     (0..step.n()).map(|i| mu.mu(step.slip(i, y).abs()) * p_tau_hat[i]).collect()
 }

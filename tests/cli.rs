@@ -1,0 +1,112 @@
+//! The command line (SCENES.md): `run` writes every output with the contract's columns,
+//! `check` prints the model and (C.k), bad input exits 1 with a message naming the key.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_dyncontact");
+
+fn tmp(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn scene(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes").join(format!("{name}.toml"))
+}
+
+fn header(path: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    text.lines().next().unwrap_or("").split(',').map(str::to_string).collect()
+}
+
+const HISTORY: &str = "step,t,kinetic,elastic,compliance,external_work,viscous_dissipation,friction_dissipation,constraint_dissipation,energy_residual,normal_force,tangential_force,max_penetration,contact_nodes,slip_nodes,stick_nodes,newton_iterations,fixed_point_iterations";
+const CONTACT: &str = "step,t,node,x,y,u_n,u_t,v_t,p,lambda,friction,status";
+
+/// `dyncontact run` with no scene runs the embedded academic scene and writes history.csv
+/// (a row per step plus t = 0, the contract's columns in order), contact.csv, summary.json
+/// ("completed", no warning but the (C.k) note), frames with a PVD listing exactly the frames
+/// written, and plots/energy.svg with its eight series.
+#[test]
+fn cli_run_default_scene_writes_outputs() {
+    let out = tmp("cli_default");
+    let st = Command::new(BIN).args(["run", "--out"]).arg(&out).output().expect("run");
+    assert!(st.status.success(), "run failed: {}", String::from_utf8_lossy(&st.stderr));
+    let h = header(&out.join("history.csv"));
+    let want: Vec<&str> = HISTORY.split(',').collect();
+    assert_eq!(&h[..want.len()], want.as_slice(), "history.csv columns");
+    let rows = std::fs::read_to_string(out.join("history.csv")).expect("history").lines().count();
+    assert_eq!(rows, 1 + 2001, "header + t = 0 + 2000 steps");
+    let c = header(&out.join("contact.csv"));
+    let want_c: Vec<&str> = CONTACT.split(',').collect();
+    assert_eq!(&c[..want_c.len()], want_c.as_slice(), "contact.csv columns");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+    assert_eq!(summary["status"], "completed");
+    assert_eq!(summary["scene"], "academic");
+    assert_eq!(summary["steps_completed"], 2000);
+    assert!(summary["max_relative_energy_residual"].as_f64().expect("residual") <= 1e-9);
+    assert_eq!(summary["fixed_point_cap_hits"], 0);
+    // the only warning allowed is the (C.k) note of decision 6 (k = 5e-4 exceeds the corner limit)
+    let warnings = summary["warnings"].as_array().expect("warnings");
+    assert!(warnings.iter().all(|w| w.as_str().unwrap_or("").contains("(C.k)")), "unexpected warnings: {warnings:?}");
+    let pvd = std::fs::read_to_string(out.join("series.pvd")).expect("pvd");
+    let listed: Vec<&str> = pvd.lines().filter_map(|l| l.split("file=\"").nth(1)).map(|s| s.trim_end_matches("\"/>")).collect();
+    assert_eq!(listed.len(), 201, "frames every 10 steps, t = 0 included");
+    for f in &listed {
+        assert!(out.join(f).exists(), "{f} listed but missing");
+    }
+    let frames = std::fs::read_dir(out.join("frames")).expect("frames").count();
+    assert_eq!(frames, listed.len(), "frames on disk that the PVD does not list");
+    let svg = std::fs::read_to_string(out.join("plots/energy.svg")).expect("energy.svg");
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert!(svg.matches("<polyline").count() >= 8, "energy chart has fewer than 8 series");
+}
+
+/// `dyncontact check` prints the model and the (C.k) limit (3.4722e-4 at the corner node of
+/// the academic mesh, decision 6) and warns that k = 5e-4 exceeds it.
+#[test]
+fn check_prints_the_ck_limit_and_warns() {
+    let st = Command::new(BIN).arg("check").arg(scene("academic")).output().expect("check");
+    assert!(st.status.success());
+    let out = String::from_utf8_lossy(&st.stdout);
+    println!("{out}");
+    assert!(out.contains("(C.k)") && out.contains("3.4722e-4"), "no (C.k) limit in: {out}");
+    assert!(out.contains("warning: time.step = 0.0005 exceeds the (C.k) limit"), "no warning in: {out}");
+    assert!(out.contains("32 contact nodes") && out.contains("32 multipliers"));
+}
+
+/// Bad input exits with code 1 and one message naming the key path; a missing file names it.
+#[test]
+fn cli_bad_input_exits_1_with_a_message() {
+    let dir = tmp("cli_bad");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let bad = dir.join("bad.toml");
+    let text = std::fs::read_to_string(scene("academic")).expect("academic").replace("decay = 20.0", "decay = -3");
+    std::fs::write(&bad, text).expect("write");
+    let st = Command::new(BIN).arg("run").arg(&bad).arg("--out").arg(dir.join("out")).output().expect("run");
+    assert_eq!(st.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&st.stderr);
+    assert!(err.contains("contact.friction.decay: must be >= 0, got -3"), "{err}");
+    let st = Command::new(BIN).args(["check", "/nonexistent/scene.toml"]).output().expect("check");
+    assert_eq!(st.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&st.stderr).contains("/nonexistent/scene.toml"));
+}
+
+/// A scene without contact writes contact.csv with its header only and zeros in the contact
+/// columns of history.csv.
+#[test]
+fn cli_run_without_contact() {
+    let out = tmp("cli_no_contact");
+    let st = Command::new(BIN).arg("run").arg(scene("gmsh_square")).arg("--out").arg(&out).output().expect("run");
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    let c = std::fs::read_to_string(out.join("contact.csv")).expect("contact.csv");
+    assert_eq!(c.lines().count(), 1);
+    let text = std::fs::read_to_string(out.join("history.csv")).expect("history");
+    for line in text.lines().skip(1) {
+        let v: Vec<&str> = line.split(',').collect();
+        for col in [10, 11, 12, 13, 14, 15] {
+            assert_eq!(v[col].parse::<f64>().expect("number"), 0.0, "contact column {col} not zero");
+        }
+    }
+}
