@@ -115,6 +115,6 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
     summary.status = "completed".into();
     summary.wall_time_s = start.elapsed().as_secs_f64();
     summary.timing.total_s = summary.wall_time_s;
-    writer.finish(&summary)?;
+    writer.finish(&summary, &sim)?;
     Ok(summary)
 }

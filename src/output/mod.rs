@@ -22,7 +22,7 @@ pub use summary::{ModelInfo, Summary};
 /// The required history.csv columns (SCENES.md), then our additions.
 pub const HISTORY_COLUMNS: &str = "step,t,kinetic,elastic,compliance,external_work,viscous_dissipation,friction_dissipation,\
 constraint_dissipation,energy_residual,normal_force,tangential_force,max_penetration,contact_nodes,slip_nodes,\
-stick_nodes,newton_iterations,fixed_point_iterations,energy_scale,fixed_point_converged";
+stick_nodes,newton_iterations,fixed_point_iterations,energy_scale,fixed_point_converged,inner_residual";
 
 /// The contact.csv columns (SCENES.md), then our additions.
 pub const CONTACT_COLUMNS: &str = "step,t,node,x,y,u_n,u_t,v_t,p,lambda,friction,status,friction_bound";
@@ -58,6 +58,8 @@ pub struct Writer {
     frames: Vec<(f64, String)>,
     every: usize,
     pub rows: Vec<ChartRow>,
+    /// the contact nodes of every frame: (step, t, records), for the contact charts
+    pub contact_frames: Vec<(usize, f64, Vec<crate::simulation::NodeRecord>)>,
 }
 
 fn csv_io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
@@ -100,6 +102,7 @@ impl Writer {
             frames: Vec::new(),
             every: sim.problem.scene.output.every.max(1) as usize,
             rows: Vec::new(),
+            contact_frames: Vec::new(),
         })
     }
 
@@ -115,7 +118,7 @@ impl Writer {
         let hp = self.dir.join("history.csv");
         writeln!(
             self.history,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             rec.step,
             rec.t,
             e.kinetic,
@@ -135,7 +138,8 @@ impl Writer {
             r.inner_iterations,
             r.fixed_point_iterations,
             rec.energy_scale,
-            r.fixed_point_converged as u8
+            r.fixed_point_converged as u8,
+            r.inner_residual
         )
         .map_err(csv_io(&hp))?;
         self.history.flush().map_err(csv_io(&hp))?;
@@ -188,6 +192,9 @@ impl Writer {
             }
             w.flush().map_err(csv_io(&cp))?;
         }
+        if !rec.nodes.is_empty() {
+            self.contact_frames.push((rec.step, rec.t, rec.nodes.clone()));
+        }
         let u = p.dofs.expand(&sim.u);
         let v = p.dofs.expand(&sim.v);
         let frame = vtu::Frame { mesh: &p.mesh, material: &p.material, u: &u, v: &v, contact: &contact };
@@ -198,10 +205,10 @@ impl Writer {
     }
 
     /// Write summary.json and the charts.
-    pub fn finish(&mut self, summary: &Summary) -> Result<()> {
+    pub fn finish(&mut self, summary: &Summary, sim: &Simulation) -> Result<()> {
         let json = serde_json::to_string_pretty(summary).map_err(|e| Error::Output(format!("summary.json: {e}")))?;
         write_atomic(&self.dir.join("summary.json"), json.as_bytes())?;
-        self.charts()
+        self.charts(sim)
     }
 
     /// Write only the summary (used when a run fails).
@@ -210,7 +217,7 @@ impl Writer {
         write_atomic(&self.dir.join("summary.json"), json.as_bytes())
     }
 
-    fn charts(&self) -> Result<()> {
+    fn charts(&self, _sim: &Simulation) -> Result<()> {
         use plots::Series;
         let s = |name: &str, f: fn(&ChartRow) -> f64, secondary: bool| Series {
             name: name.into(),
