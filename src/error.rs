@@ -34,6 +34,10 @@ pub enum Error {
     #[error("output: {0}")]
     Output(String),
 
+    /// The run was stopped (SIGINT or a step limit) after a completed step.
+    #[error("interrupted after step {step} (t = {time}); the outputs are valid up to that step and checkpoint.json holds it")]
+    Interrupted { step: usize, time: f64 },
+
     /// Reading or writing a file failed.
     #[error("{path}: {source}")]
     Io {

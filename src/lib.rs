@@ -15,6 +15,7 @@
 //! - [`output`]: history.csv, contact.csv, summary.json, VTU frames, SVG plots
 //! - [`linalg`]: thin wrappers over faer
 
+pub mod checkpoint;
 pub mod energy;
 pub mod error;
 pub mod fem;

@@ -3,6 +3,8 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use clap::{Parser, Subcommand};
 use dyncontact::output::ModelInfo;
@@ -27,6 +29,15 @@ enum Command {
         /// output folder (default: out/<scene name>)
         #[arg(long)]
         out: Option<PathBuf>,
+        /// write DIR/checkpoint.json every N steps
+        #[arg(long, value_name = "N")]
+        checkpoint_every: Option<usize>,
+        /// continue the run in DIR from its checkpoint.json (same scene)
+        #[arg(long, value_name = "DIR", conflicts_with = "out")]
+        resume: Option<PathBuf>,
+        /// stop cleanly after step N, writing a checkpoint (batch control, tests)
+        #[arg(long, value_name = "N", hide = true)]
+        stop_after: Option<usize>,
     },
     /// Write the assembled M, K, C and f(0) of a scene for the Python cross-check.
     #[command(hide = true)]
@@ -56,11 +67,23 @@ fn load(scene: Option<&Path>) -> Result<(Scene, PathBuf), Error> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
-        Command::Run { scene, out } => load(scene.as_deref()).and_then(|(s, dir)| {
-            let out = out.clone().unwrap_or_else(|| PathBuf::from("out").join(&s.name));
+        Command::Run { scene, out, checkpoint_every, resume, stop_after } => load(scene.as_deref()).and_then(|(s, dir)| {
+            let out = resume.clone().or_else(|| out.clone()).unwrap_or_else(|| PathBuf::from("out").join(&s.name));
             let problem = Problem::new(s, &dir)?;
             let progress = std::io::stdout().is_terminal();
-            let summary = run(&problem, &RunOptions { out: out.clone(), progress })?;
+            let interrupt = Arc::new(AtomicBool::new(false));
+            let flag = interrupt.clone();
+            // a second Ctrl-C while the step finishes is ignored: the step completes and the files stay valid
+            let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
+            let opts = RunOptions {
+                out: out.clone(),
+                progress,
+                checkpoint_every: *checkpoint_every,
+                resume: resume.is_some(),
+                stop_after: *stop_after,
+                interrupt: Some(interrupt),
+            };
+            let summary = run(&problem, &opts)?;
             println!(
                 "{}: {} steps in {:.2} s, max |(E.1) residual| = {:.3e} ({:.3e} relative), Newton iterations {}, fixed-point iterations {}",
                 summary.scene,
@@ -100,7 +123,11 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            if e.is_solver_failure() { ExitCode::from(2) } else { ExitCode::from(1) }
+            match e {
+                Error::Interrupted { .. } => ExitCode::from(130),
+                e if e.is_solver_failure() => ExitCode::from(2),
+                _ => ExitCode::from(1),
+            }
         }
     }
 }

@@ -1,20 +1,37 @@
-//! `dyncontact run`: the time loop with outputs, progress and a summary that says how it ended.
+//! `dyncontact run`: the time loop with outputs, progress, checkpoints, interruption, and a
+//! summary that says how the run ended.
+//!
+//! However it ends, the folder stays valid: history.csv holds every completed step,
+//! series.pvd lists exactly the frames on disk, and summary.json says `completed`, `failed`
+//! (with the step, time, residuals and a suggestion) or `interrupted` (with where it stopped;
+//! a checkpoint of that step is written so `--resume` continues from it).
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
-use crate::error::Result;
+use crate::checkpoint::{fingerprint, Checkpoint, Counters};
+use crate::error::{Error, Result};
 use crate::output::summary::Timing;
 use crate::output::{ModelInfo, Summary, Writer};
 use crate::problem::Problem;
-use crate::simulation::{Settings, Simulation};
+use crate::simulation::{Settings, Simulation, StepRecord};
 
 /// Options of a run.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct RunOptions {
     pub out: PathBuf,
     /// show a progress bar (only on a terminal)
     pub progress: bool,
+    /// write DIR/checkpoint.json every N steps
+    pub checkpoint_every: Option<usize>,
+    /// continue from DIR/checkpoint.json
+    pub resume: bool,
+    /// stop cleanly (as if interrupted) after this step — for tests and batch control
+    pub stop_after: Option<usize>,
+    /// set by a signal handler to stop cleanly at the end of the current step
+    pub interrupt: Option<Arc<AtomicBool>>,
 }
 
 /// Run a problem to its end time, writing every output. On a solver failure the files written
@@ -23,9 +40,40 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Summary> {
     run_with(problem, Settings::from_problem(problem), opts)
 }
 
+fn counters(s: &Summary, first_cap: Option<usize>) -> Counters {
+    Counters {
+        newton_iterations_total: s.newton_iterations_total,
+        fixed_point_iterations_total: s.fixed_point_iterations_total,
+        fixed_point_iterations_max: s.fixed_point_iterations_max,
+        fixed_point_cap_hits: s.fixed_point_cap_hits,
+        first_cap,
+        max_abs_energy_residual: s.max_abs_energy_residual.to_bits(),
+        max_relative_energy_residual: s.max_relative_energy_residual.to_bits(),
+    }
+}
+
+fn tally(summary: &mut Summary, first_cap: &mut Option<usize>, rec: &StepRecord) {
+    let r = &rec.report;
+    summary.newton_iterations_total += r.inner_iterations;
+    summary.fixed_point_iterations_total += r.fixed_point_iterations;
+    summary.fixed_point_iterations_max = summary.fixed_point_iterations_max.max(r.fixed_point_iterations);
+    if !r.fixed_point_converged {
+        summary.fixed_point_cap_hits += 1;
+        first_cap.get_or_insert(rec.step);
+    }
+    let res = rec.energy.residual.abs();
+    summary.max_abs_energy_residual = summary.max_abs_energy_residual.max(res);
+    if rec.energy_scale > 0.0 {
+        summary.max_relative_energy_residual = summary.max_relative_energy_residual.max(res / rec.energy_scale);
+    }
+    summary.steps_completed = rec.step;
+    summary.final_time = rec.t;
+}
+
 /// As [`run`] with explicit solver settings.
 pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Result<Summary> {
     let start = Instant::now();
+    let scene_hash = fingerprint(&format!("{:?}", problem.scene));
     let mut sim = Simulation::with_settings(problem, settings)?;
     let [assembly_s, factorization_s, delassus_s] = sim.setup_timing;
     let info = ModelInfo::of(problem);
@@ -47,19 +95,45 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
         max_relative_energy_residual: 0.0,
         warnings: info.ck_warning().into_iter().collect(),
     };
-    let mut writer = Writer::create(&opts.out, &sim)?;
-    let t_out = Instant::now();
-    writer.record(&sim.initial_record(), &sim, problem.steps == 0)?;
-    summary.timing.output_s += t_out.elapsed().as_secs_f64();
+    let mut first_cap: Option<usize> = None;
+    let mut writer = if opts.resume {
+        let cp = Checkpoint::read(&opts.out)?;
+        if cp.scene_hash != scene_hash {
+            return Err(Error::Output(format!(
+                "{}: the checkpoint was written for a different scene (or another version of it); resume needs the same scene",
+                opts.out.join("checkpoint.json").display()
+            )));
+        }
+        let c = cp.counters.clone();
+        sim.restore(cp.state())?;
+        summary.newton_iterations_total = c.newton_iterations_total;
+        summary.fixed_point_iterations_total = c.fixed_point_iterations_total;
+        summary.fixed_point_iterations_max = c.fixed_point_iterations_max;
+        summary.fixed_point_cap_hits = c.fixed_point_cap_hits;
+        summary.max_abs_energy_residual = f64::from_bits(c.max_abs_energy_residual);
+        summary.max_relative_energy_residual = f64::from_bits(c.max_relative_energy_residual);
+        summary.steps_completed = cp.step;
+        summary.final_time = problem.time(cp.step);
+        first_cap = c.first_cap;
+        summary.warnings.push(format!("resumed from the checkpoint of step {}", cp.step));
+        Writer::reopen(&opts.out, &sim, cp.step)?
+    } else {
+        let mut w = Writer::create(&opts.out, &sim)?;
+        w.record(&sim.initial_record(), &sim, problem.steps == 0)?;
+        w
+    };
     let bar = opts.progress.then(|| {
         let b = indicatif::ProgressBar::new(problem.steps as u64);
         if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {elapsed_precise} (eta {eta})  {msg}") {
             b.set_style(style);
         }
+        b.set_position(sim.n as u64);
         b
     });
-    let mut first_cap: Option<usize> = None;
-    for n in 0..problem.steps {
+    let stop_now = |n: usize| {
+        opts.stop_after.is_some_and(|s| n >= s) || opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst))
+    };
+    while sim.n < problem.steps {
         let rec = match sim.step() {
             Ok(r) => r,
             Err(e) => {
@@ -78,26 +152,33 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
         summary.timing.free_solve_s += tf;
         summary.timing.contact_solve_s += tc;
         summary.timing.recovery_s += tr;
-        let r = &rec.report;
-        summary.newton_iterations_total += r.inner_iterations;
-        summary.fixed_point_iterations_total += r.fixed_point_iterations;
-        summary.fixed_point_iterations_max = summary.fixed_point_iterations_max.max(r.fixed_point_iterations);
-        if !r.fixed_point_converged {
-            summary.fixed_point_cap_hits += 1;
-            first_cap.get_or_insert(rec.step);
-        }
-        let res = rec.energy.residual.abs();
-        summary.max_abs_energy_residual = summary.max_abs_energy_residual.max(res);
-        if rec.energy_scale > 0.0 {
-            summary.max_relative_energy_residual = summary.max_relative_energy_residual.max(res / rec.energy_scale);
-        }
-        summary.steps_completed = rec.step;
-        summary.final_time = rec.t;
+        tally(&mut summary, &mut first_cap, &rec);
         let t_out = Instant::now();
-        writer.record(&rec, &sim, n + 1 == problem.steps)?;
+        let last = sim.n == problem.steps;
+        let stopping = !last && stop_now(sim.n);
+        writer.record(&rec, &sim, last)?;
+        if opts.checkpoint_every.is_some_and(|c| c > 0 && sim.n % c == 0) || stopping {
+            Checkpoint::new(scene_hash.clone(), &sim.state(), counters(&summary, first_cap)).write(&opts.out)?;
+        }
         summary.timing.output_s += t_out.elapsed().as_secs_f64();
         if let Some(b) = &bar {
             b.inc(1);
+        }
+        if stopping {
+            summary.status = "interrupted".into();
+            summary.failure = Some(format!(
+                "stopped after step {} (t = {}); checkpoint.json holds that step: continue with --resume {}",
+                sim.n,
+                rec.t,
+                opts.out.display()
+            ));
+            summary.wall_time_s = start.elapsed().as_secs_f64();
+            summary.timing.total_s = summary.wall_time_s;
+            writer.finish(&summary, &sim)?;
+            if let Some(b) = &bar {
+                b.abandon_with_message("interrupted");
+            }
+            return Err(Error::Interrupted { step: sim.n, time: rec.t });
         }
     }
     if let Some(b) = &bar {

@@ -377,6 +377,37 @@ impl<'p> Simulation<'p> {
         fixed_point::solve(data, c.friction.as_ref(), p_tau_hat, &vn, &self.lambda, &self.t_fric, inner, &self.settings.fixed_point, trace)
     }
 
+    /// The state to checkpoint after the current step.
+    pub fn state(&self) -> crate::checkpoint::State {
+        crate::checkpoint::State {
+            step: self.n,
+            u: self.u.clone(),
+            v: self.v.clone(),
+            lambda: self.lambda.clone(),
+            t_fric: self.t_fric.clone(),
+            energy: self.energy,
+            energy_scale: self.energy_scale,
+        }
+    }
+
+    /// Continue from a checkpointed state (sizes must match this problem).
+    pub fn restore(&mut self, s: crate::checkpoint::State) -> Result<()> {
+        if s.u.len() != self.u.len() || s.v.len() != self.v.len() || s.lambda.len() != self.lambda.len() || s.t_fric.len() != self.t_fric.len() {
+            return Err(Error::Output("the checkpoint does not match this problem's sizes".into()));
+        }
+        if s.step > self.problem.steps {
+            return Err(Error::Output(format!("the checkpoint is at step {}, beyond the scene's {} steps", s.step, self.problem.steps)));
+        }
+        self.n = s.step;
+        self.u = s.u;
+        self.v = s.v;
+        self.lambda = s.lambda;
+        self.t_fric = s.t_fric;
+        self.energy = s.energy;
+        self.energy_scale = s.energy_scale;
+        Ok(())
+    }
+
     pub fn scheme(&self) -> SchemeKind {
         self.stepper.kind
     }

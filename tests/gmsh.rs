@@ -254,7 +254,7 @@ fn gmsh_scene_runs() {
     assert!(problem.contact.is_none());
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("gmsh_scene_runs");
     let _ = std::fs::remove_dir_all(&out);
-    let summary = run(&problem, &RunOptions { out: out.clone(), progress: false }).expect("the run completes");
+    let summary = run(&problem, &RunOptions { out: out.clone(), progress: false, ..Default::default() }).expect("the run completes");
     assert_eq!(summary.status, "completed");
     assert_eq!(summary.steps_completed, problem.steps);
     assert!(problem.steps > 0);

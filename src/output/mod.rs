@@ -7,6 +7,7 @@
 
 pub mod export;
 pub mod plots;
+pub mod resume;
 pub mod summary;
 pub mod vtu;
 
