@@ -30,5 +30,6 @@ pub mod scene;
 pub mod scheme;
 pub mod simulation;
 pub mod step;
+pub mod study;
 
 pub use error::{Error, Result};

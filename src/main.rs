@@ -39,6 +39,11 @@ enum Command {
         #[arg(long, value_name = "N", hide = true)]
         stop_after: Option<usize>,
     },
+    /// Studies: `study penalty [SCENE] [--eps LIST]` — the ε → 0 study of Problem P_ε against P.
+    Study {
+        #[command(subcommand)]
+        study: StudyKind,
+    },
     /// Write the assembled M, K, C and f(0) of a scene for the Python cross-check.
     #[command(hide = true)]
     ExportOperators {
@@ -50,6 +55,22 @@ enum Command {
     Check {
         /// scene file (TOML)
         scene: PathBuf,
+    },
+}
+
+#[derive(Subcommand)]
+enum StudyKind {
+    /// Run the exact problem and the penalty problem for each ε on the same mesh and step;
+    /// write study/penalty.csv and study/penalty.svg and print the fitted slopes.
+    Penalty {
+        /// scene file (TOML); omitted: the embedded default scene
+        scene: Option<PathBuf>,
+        /// comma-separated ε values (default 1e-2,1e-3,1e-4,1e-5,1e-6,1e-7)
+        #[arg(long, value_delimiter = ',')]
+        eps: Option<Vec<f64>>,
+        /// output folder (default: out/<scene name>); files go to its study/ subfolder
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
 }
 
@@ -98,6 +119,20 @@ fn main() -> ExitCode {
                 println!("warning: {w}");
             }
             println!("outputs in {}", out.display());
+            Ok(())
+        }),
+        Command::Study { study: StudyKind::Penalty { scene, eps, out } } => load(scene.as_deref()).and_then(|(s, dir)| {
+            let out = out.clone().unwrap_or_else(|| PathBuf::from("out").join(&s.name));
+            let eps = eps.clone().unwrap_or_else(|| dyncontact::study::DEFAULT_EPS.to_vec());
+            let st = dyncontact::study::penalty_study(&s, &dir, &eps)?;
+            println!("penalty study of {} (exact reference: {:.2} s)", s.name, st.reference_wall_time_s);
+            println!("{:>10} {:>12} {:>12} {:>12} {:>10}", "eps", "e_V", "e_H", "delta", "time [s]");
+            for r in &st.rows {
+                println!("{:>10.1e} {:>12.4e} {:>12.4e} {:>12.4e} {:>10.2}", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s);
+            }
+            println!("log-log slopes: e_V {:.3}, e_H {:.3}, delta {:.3}", st.slope_e_v, st.slope_e_h, st.slope_delta);
+            st.write(&out, &format!("{}: P_ε → P as ε → 0", s.name))?;
+            println!("written {}", out.join("study").display());
             Ok(())
         }),
         Command::ExportOperators { scene, out } => load(Some(scene)).and_then(|(s, dir)| {

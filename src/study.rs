@@ -1,0 +1,219 @@
+//! `dyncontact study penalty`: the ε → 0 study of model.md §5.3. The exact problem P (the
+//! constraint with multipliers) and the penalty problem P_ε are run on the same mesh and step;
+//! for each ε it reports
+//!   e_V(ε) = max_n ‖u_ε^n − u^n‖_V / max_n ‖u^n‖_V   (‖v‖_V = ‖ε(v)‖_{L²}),
+//!   e_H(ε) = max_n ‖v_ε^n − v^n‖_{L²} / max_n ‖v^n‖_{L²},
+//!   δ(ε)   = max_{n,i} (u_ε,ν,i^n − g)_+ (the penetration beyond the bound),
+//! and the least-squares log–log slopes of e_V, e_H and δ against ε. E.0 bounds δ by O(ε^½);
+//! B.2 gives O(ε) under steady pressing.
+
+use std::path::Path;
+use std::time::Instant;
+
+use plotters::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::fem::assemble::{assemble_full, restrict};
+use crate::linalg::{self, SpMat};
+use crate::model::material::Material;
+use crate::output::write_atomic;
+use crate::problem::Problem;
+use crate::scene::{Bound, Enforcement, MassKind, Scene};
+use crate::simulation::Simulation;
+
+/// One row of the study.
+#[derive(Debug, Clone, Copy)]
+pub struct PenaltyRow {
+    pub eps: f64,
+    pub e_v: f64,
+    pub e_h: f64,
+    pub delta: f64,
+    pub wall_time_s: f64,
+}
+
+/// The study's result: rows and fitted slopes (e_V, e_H, δ).
+#[derive(Debug, Clone)]
+pub struct PenaltyStudy {
+    pub rows: Vec<PenaltyRow>,
+    pub slope_e_v: f64,
+    pub slope_e_h: f64,
+    pub slope_delta: f64,
+    pub reference_wall_time_s: f64,
+}
+
+/// The default ε list of model.md §5.3.
+pub const DEFAULT_EPS: [f64; 6] = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
+
+/// Least-squares slope of log10(y) against log10(x) over the positive pairs.
+pub fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
+    let pts: Vec<(f64, f64)> = x.iter().zip(y).filter(|(a, b)| **a > 0.0 && **b > 0.0).map(|(a, b)| (a.log10(), b.log10())).collect();
+    let n = pts.len() as f64;
+    if pts.len() < 2 {
+        return f64::NAN;
+    }
+    let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    sxy / sxx
+}
+
+/// ‖·‖_V (strain) and ‖·‖_{L²} (ρ = 1) Gram matrices on the free DOFs of `p`.
+fn norm_matrices(p: &Problem) -> Result<(SpMat, SpMat)> {
+    let mut unit = Material::from_scene(&p.scene.material, p.scene.domain.plane);
+    // ε(v):ε(v) = ε_xx² + ε_yy² + γ²/2: the operator with λ = 0, μ = ½ (and ρ = 1 for L²)
+    unit.lambda = 0.0;
+    unit.mu = 0.5;
+    unit.theta = 0.0;
+    unit.zeta = 0.0;
+    unit.rho = 1.0;
+    let (m, k, _) = assemble_full(&p.mesh, &unit, MassKind::Consistent)?;
+    Ok((restrict(&k, &p.dofs)?, restrict(&m, &p.dofs)?))
+}
+
+fn norm(a: &SpMat, x: &[f64]) -> f64 {
+    linalg::quad(a, x, x).max(0.0).sqrt()
+}
+
+/// (E.0) The penetration beyond the bound of one step, max_i (u_ν,i − g)_+: the energy
+/// estimate of P_ε bounds it by C ε^½ (the study measures the rate).
+pub fn penetration_beyond_bound(nodes: &[crate::simulation::NodeRecord], g: f64) -> f64 {
+    nodes.iter().map(|n| (n.u_n - g).max(0.0)).fold(0.0, f64::max)
+}
+
+/// Run the study for `scene` (its contact section must have a finite penetration bound).
+pub fn penalty_study(scene: &Scene, scene_dir: &Path, eps_list: &[f64]) -> Result<PenaltyStudy> {
+    let c = scene.contact.as_ref().ok_or_else(|| Error::scene("contact", "the penalty study needs a scene with contact"))?;
+    if scene.bound_of(c)? == Bound::Infinite {
+        return Err(Error::scene("contact.penetration_bound", "the penalty study needs a finite g (it penalizes u_ν > g)"));
+    }
+    if let Some(e) = eps_list.iter().find(|e| !(e.is_finite() && **e > 0.0)) {
+        return Err(Error::scene("--eps", format!("every ε must be > 0, got {e}")));
+    }
+    let mut exact_scene = scene.clone();
+    if let Some(c) = exact_scene.contact.as_mut() {
+        c.enforcement = Enforcement::Exact;
+        c.penalty = None;
+    }
+    let exact = Problem::new(exact_scene, scene_dir)?;
+    let g = match exact.contact.as_ref().map(|c| c.bound) {
+        Some(Bound::Finite(g)) => g,
+        _ => return Err(Error::scene("contact.penetration_bound", "must be finite")),
+    };
+    let (kv, mh) = norm_matrices(&exact)?;
+    // the reference trajectory, kept in memory (two vectors per step)
+    let clock = Instant::now();
+    let mut sim = Simulation::new(&exact)?;
+    let mut reference = Vec::with_capacity(exact.steps);
+    for _ in 0..exact.steps {
+        sim.step()?;
+        reference.push((sim.u.clone(), sim.v.clone()));
+    }
+    let reference_wall_time_s = clock.elapsed().as_secs_f64();
+    let u_max = reference.iter().map(|(u, _)| norm(&kv, u)).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+    let v_max = reference.iter().map(|(_, v)| norm(&mh, v)).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+    let mut rows = Vec::new();
+    for &eps in eps_list {
+        let mut s = scene.clone();
+        if let Some(c) = s.contact.as_mut() {
+            c.enforcement = Enforcement::Penalty;
+            c.penalty = Some(eps);
+        }
+        let pen = Problem::new(s, scene_dir)?;
+        let clock = Instant::now();
+        let mut sim = Simulation::new(&pen)?;
+        let (mut e_v, mut e_h, mut delta): (f64, f64, f64) = (0.0, 0.0, 0.0);
+        for (u_ref, v_ref) in &reference {
+            let rec = sim.step()?;
+            let du: Vec<f64> = sim.u.iter().zip(u_ref).map(|(a, b)| a - b).collect();
+            let dv: Vec<f64> = sim.v.iter().zip(v_ref).map(|(a, b)| a - b).collect();
+            e_v = e_v.max(norm(&kv, &du));
+            e_h = e_h.max(norm(&mh, &dv));
+            delta = delta.max(penetration_beyond_bound(&rec.nodes, g));
+        }
+        rows.push(PenaltyRow { eps, e_v: e_v / u_max, e_h: e_h / v_max, delta, wall_time_s: clock.elapsed().as_secs_f64() });
+    }
+    let eps: Vec<f64> = rows.iter().map(|r| r.eps).collect();
+    let col = |f: fn(&PenaltyRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+    Ok(PenaltyStudy {
+        slope_e_v: loglog_slope(&eps, &col(|r| r.e_v)),
+        slope_e_h: loglog_slope(&eps, &col(|r| r.e_h)),
+        slope_delta: loglog_slope(&eps, &col(|r| r.delta)),
+        rows,
+        reference_wall_time_s,
+    })
+}
+
+impl PenaltyStudy {
+    /// study/penalty.csv.
+    pub fn csv(&self) -> String {
+        let mut s = String::from("eps,e_V,e_H,delta,wall_time_s\n");
+        for r in &self.rows {
+            s.push_str(&format!("{},{},{},{},{}\n", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s));
+        }
+        s
+    }
+
+    /// study/penalty.svg: e_V, e_H and δ against ε on log–log axes.
+    pub fn svg(&self, title: &str) -> Result<String> {
+        let mut svg = String::new();
+        {
+            let root = SVGBackend::with_string(&mut svg, (900, 560)).into_drawing_area();
+            let err = |e: &dyn std::fmt::Display| Error::Output(format!("study/penalty.svg: {e}"));
+            root.fill(&WHITE).map_err(|e| err(&e))?;
+            let pos = |v: f64| v.is_finite() && v > 0.0;
+            let xs: Vec<f64> = self.rows.iter().map(|r| r.eps).filter(|v| pos(*v)).collect();
+            let ys: Vec<f64> = self.rows.iter().flat_map(|r| [r.e_v, r.e_h, r.delta]).filter(|v| pos(*v)).collect();
+            let (x0, x1) = (xs.iter().copied().fold(f64::INFINITY, f64::min), xs.iter().copied().fold(0.0, f64::max));
+            let (y0, y1) = (ys.iter().copied().fold(f64::INFINITY, f64::min), ys.iter().copied().fold(0.0, f64::max));
+            if !(x0.is_finite() && y0.is_finite() && x1 > 0.0 && y1 > 0.0) {
+                return Err(Error::Output("study/penalty.svg: no positive values to plot".into()));
+            }
+            let mut chart = ChartBuilder::on(&root)
+                .caption(title, ("sans-serif", 20))
+                .margin(12)
+                .x_label_area_size(45)
+                .y_label_area_size(80)
+                .build_cartesian_2d((x0 / 2.0..x1 * 2.0).log_scale(), (y0 / 3.0..y1 * 3.0).log_scale())
+                .map_err(|e| err(&e))?;
+            chart
+                .configure_mesh()
+                .x_desc("ε (penalty compliance)")
+                .y_desc("error")
+                .x_label_formatter(&|v| format!("{v:.0e}"))
+                .y_label_formatter(&|v| format!("{v:.0e}"))
+                .draw()
+                .map_err(|e| err(&e))?;
+            let series: [(&str, f64, fn(&PenaltyRow) -> f64, RGBColor); 3] = [
+                ("e_V", self.slope_e_v, |r| r.e_v, RGBColor(31, 119, 180)),
+                ("e_H", self.slope_e_h, |r| r.e_h, RGBColor(255, 127, 14)),
+                ("δ (penetration beyond g)", self.slope_delta, |r| r.delta, RGBColor(44, 160, 44)),
+            ];
+            for (name, slope, f, color) in series {
+                let pts: Vec<(f64, f64)> = self.rows.iter().map(|r| (r.eps, f(r))).filter(|p| pos(p.0) && pos(p.1)).collect();
+                chart
+                    .draw_series(LineSeries::new(pts.clone(), ShapeStyle::from(&color).stroke_width(2)))
+                    .map_err(|e| err(&e))?
+                    .label(format!("{name}, slope {slope:.2}"))
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+                chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 4, color.filled()))).map_err(|e| err(&e))?;
+            }
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperLeft)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw()
+                .map_err(|e| err(&e))?;
+            root.present().map_err(|e| err(&e))?;
+        }
+        Ok(svg)
+    }
+
+    /// Write study/penalty.csv and study/penalty.svg under `dir`.
+    pub fn write(&self, dir: &Path, title: &str) -> Result<()> {
+        let d = dir.join("study");
+        std::fs::create_dir_all(&d).map_err(|e| Error::io(&d, e))?;
+        write_atomic(&d.join("penalty.csv"), self.csv().as_bytes())?;
+        write_atomic(&d.join("penalty.svg"), self.svg(title)?.as_bytes())
+    }
+}
