@@ -40,8 +40,11 @@ pub struct Checkpoint {
     v: Vec<u64>,
     lambda: Vec<u64>,
     t_fric: Vec<u64>,
-    /// kinetic, elastic, compliance, work, viscous, friction, constraint, residual
-    energy: [u64; 8],
+    /// kinetic, elastic, compliance, work, viscous, friction, constraint, persistency, residual
+    energy: [u64; 9],
+    /// contact nodes that were on the constraint / in stick at the end of the step (R.2)
+    active: Vec<bool>,
+    stick: Vec<bool>,
     energy_scale: u64,
     pub counters: Counters,
 }
@@ -55,6 +58,8 @@ pub struct State {
     pub t_fric: Vec<f64>,
     pub energy: EnergyTerms,
     pub energy_scale: f64,
+    pub active: Vec<bool>,
+    pub stick: Vec<bool>,
 }
 
 /// FNV-1a 64 of a text, as hex.
@@ -71,7 +76,7 @@ impl Checkpoint {
     pub fn new(scene_hash: String, s: &State, counters: Counters) -> Checkpoint {
         let e = &s.energy;
         Checkpoint {
-            format: 1,
+            format: 2,
             scene_hash,
             step: s.step,
             u: bits(&s.u),
@@ -80,10 +85,12 @@ impl Checkpoint {
             t_fric: bits(&s.t_fric),
             energy: [
                 e.kinetic, e.elastic, e.compliance, e.external_work, e.viscous_dissipation, e.friction_dissipation,
-                e.constraint_dissipation, e.residual,
+                e.constraint_dissipation, e.persistency_dissipation, e.residual,
             ]
             .map(f64::to_bits),
             energy_scale: s.energy_scale.to_bits(),
+            active: s.active.clone(),
+            stick: s.stick.clone(),
             counters,
         }
     }
@@ -104,9 +111,12 @@ impl Checkpoint {
                 viscous_dissipation: e[4],
                 friction_dissipation: e[5],
                 constraint_dissipation: e[6],
-                residual: e[7],
+                persistency_dissipation: e[7],
+                residual: e[8],
             },
             energy_scale: f64::from_bits(self.energy_scale),
+            active: self.active.clone(),
+            stick: self.stick.clone(),
         }
     }
 
@@ -122,7 +132,7 @@ impl Checkpoint {
         let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, e))?;
         let cp: Checkpoint = serde_json::from_str(&text)
             .map_err(|e| Error::Output(format!("{}: not a dyncontact checkpoint ({e})", p.display())))?;
-        if cp.format != 1 {
+        if cp.format != 2 {
             return Err(Error::Output(format!("{}: checkpoint format {} is not supported", p.display(), cp.format)));
         }
         Ok(cp)

@@ -15,6 +15,8 @@ pub struct EnergyTerms {
     pub viscous_dissipation: f64,
     pub friction_dissipation: f64,
     pub constraint_dissipation: f64,
+    /// kinetic energy removed by the velocity-level persistency (R.2), cumulative
+    pub persistency_dissipation: f64,
     /// the defect of (E.1) on the last step
     pub residual: f64,
 }
@@ -36,6 +38,8 @@ pub struct StepEnergy {
     pub friction: f64,
     /// Σ ω_i λ_i (g − d_i^n)
     pub constraint: f64,
+    /// ½ Σ m_i (v_c,i^{n+1})² removed by the persistency correction (R.2)
+    pub persistency: f64,
 }
 
 impl StepEnergy {
@@ -43,6 +47,7 @@ impl StepEnergy {
     /// solver tolerance for the midpoint scheme.
     pub fn residual(&self) -> f64 {
         self.d_kinetic + self.d_elastic + self.d_compliance - self.work + self.viscous + self.friction + self.constraint
+            + self.persistency
     }
 }
 
@@ -69,6 +74,7 @@ impl EnergyTerms {
             viscous_dissipation: self.viscous_dissipation + s.viscous,
             friction_dissipation: self.friction_dissipation + s.friction,
             constraint_dissipation: self.constraint_dissipation + s.constraint,
+            persistency_dissipation: self.persistency_dissipation + s.persistency,
             residual: s.residual(),
         }
     }
@@ -81,5 +87,6 @@ impl EnergyTerms {
             + self.viscous_dissipation
             + self.friction_dissipation
             + self.constraint_dissipation
+            + self.persistency_dissipation
     }
 }

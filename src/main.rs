@@ -74,6 +74,22 @@ enum StudyKind {
     },
 }
 
+/// println! that never panics: a closed stdout (`dyncontact run | head -1`) is ignored.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+/// eprintln! that never panics on a closed stderr.
+macro_rules! esay {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 fn load(scene: Option<&Path>) -> Result<(Scene, PathBuf), Error> {
     match scene {
         None => Ok((Scene::default_scene(), PathBuf::from("."))),
@@ -105,7 +121,7 @@ fn main() -> ExitCode {
                 interrupt: Some(interrupt),
             };
             let summary = run(&problem, &opts)?;
-            println!(
+            say!(
                 "{}: {} steps in {:.2} s, max |(E.1) residual| = {:.3e} ({:.3e} relative), Newton iterations {}, fixed-point iterations {}",
                 summary.scene,
                 summary.steps_completed,
@@ -116,40 +132,40 @@ fn main() -> ExitCode {
                 summary.fixed_point_iterations_total
             );
             for w in &summary.warnings {
-                println!("warning: {w}");
+                say!("warning: {w}");
             }
-            println!("outputs in {}", out.display());
+            say!("outputs in {}", out.display());
             Ok(())
         }),
         Command::Study { study: StudyKind::Penalty { scene, eps, out } } => load(scene.as_deref()).and_then(|(s, dir)| {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("out").join(&s.name));
             let eps = eps.clone().unwrap_or_else(|| dyncontact::study::DEFAULT_EPS.to_vec());
             let st = dyncontact::study::penalty_study(&s, &dir, &eps)?;
-            println!("penalty study of {} (exact reference: {:.2} s)", s.name, st.reference_wall_time_s);
-            println!("{:>10} {:>12} {:>12} {:>12} {:>10}", "eps", "e_V", "e_H", "delta", "time [s]");
+            say!("penalty study of {} (exact reference: {:.2} s)", s.name, st.reference_wall_time_s);
+            say!("{:>10} {:>12} {:>12} {:>12} {:>10}", "eps", "e_V", "e_H", "delta", "time [s]");
             for r in &st.rows {
-                println!("{:>10.1e} {:>12.4e} {:>12.4e} {:>12.4e} {:>10.2}", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s);
+                say!("{:>10.1e} {:>12.4e} {:>12.4e} {:>12.4e} {:>10.2}", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s);
             }
-            println!("log-log slopes: e_V {:.3}, e_H {:.3}, delta {:.3}", st.slope_e_v, st.slope_e_h, st.slope_delta);
+            say!("log-log slopes: e_V {:.3}, e_H {:.3}, delta {:.3}", st.slope_e_v, st.slope_e_h, st.slope_delta);
             st.write(&out, &format!("{}: P_ε → P as ε → 0", s.name))?;
-            println!("written {}", out.join("study").display());
+            say!("written {}", out.join("study").display());
             Ok(())
         }),
         Command::ExportOperators { scene, out } => load(Some(scene)).and_then(|(s, dir)| {
             let problem = Problem::new(s, &dir)?;
             dyncontact::output::export::export_operators(&problem, out)?;
-            println!("operators of {} written to {}", problem.scene.name, out.display());
+            say!("operators of {} written to {}", problem.scene.name, out.display());
             Ok(())
         }),
         Command::Check { scene } => load(Some(scene)).and_then(|(s, dir)| {
             let problem = Problem::new(s, &dir)?;
             let info = ModelInfo::of(&problem);
-            println!("scene {} is valid", problem.scene.name);
+            say!("scene {} is valid", problem.scene.name);
             for l in info.lines() {
-                println!("  {l}");
+                say!("  {l}");
             }
             if let Some(w) = info.ck_warning() {
-                println!("warning: {w}");
+                say!("warning: {w}");
             }
             Ok(())
         }),
@@ -157,7 +173,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            esay!("error: {e}");
             match e {
                 Error::Interrupted { .. } => ExitCode::from(130),
                 e if e.is_solver_failure() => ExitCode::from(2),

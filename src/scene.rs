@@ -277,6 +277,9 @@ pub enum InnerSolver {
     #[default]
     Newton,
     Conic,
+    /// (N.4) Newton on the unfrozen friction bound, F.1 as fallback
+    #[serde(rename = "newton-unfrozen")]
+    NewtonUnfrozen,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
@@ -285,6 +288,8 @@ pub enum MassKind {
     #[default]
     Lumped,
     Consistent,
+    /// (R.1) lumped, with zero mass on the contact nodes (redistributed)
+    Modified,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -304,6 +309,9 @@ pub struct Solver {
     pub max_fixed_point_iterations: i64,
     #[serde(default = "d_one")]
     pub relaxation: f64,
+    /// (R.2) velocity-level persistency on nodes that stay on the constraint or in stick
+    #[serde(default)]
+    pub persistency: bool,
 }
 
 fn d_newton_tol() -> f64 {
@@ -329,6 +337,7 @@ impl Default for Solver {
             max_newton_iterations: d_iters(),
             max_fixed_point_iterations: d_iters(),
             relaxation: 1.0,
+            persistency: false,
         }
     }
 }
@@ -404,7 +413,7 @@ impl Scene {
     pub fn validate(&self) -> Result<()> {
         let e = |p: &str, m: String| Err(Error::scene(p, m));
         if self.name.trim().is_empty() || self.name.contains(['/', '\\']) || self.name == "." || self.name == ".." {
-            return e("name", format!("must be a non-empty folder name without slashes, got \"{}\"", self.name));
+            return e("name", format!("must be a non-empty folder name without slashes, got {:?}", self.name));
         }
         // domain
         let d = &self.domain;
@@ -452,14 +461,14 @@ impl Scene {
             if self.boundary.contact.contains(s) {
                 return e(
                     &format!("boundary.dirichlet[{i}]"),
-                    format!("side \"{s}\" is also a contact side; a side is either clamped (Γ1) or in contact (Γ3)"),
+                    format!("side {s:?} is also a contact side; a side is either clamped (Γ1) or in contact (Γ3)"),
                 );
             }
         }
         for (name, list) in [("dirichlet", &self.boundary.dirichlet), ("contact", &self.boundary.contact)] {
             for (i, s) in list.iter().enumerate() {
                 if list[..i].contains(s) {
-                    return e(&format!("boundary.{name}[{i}]"), format!("side \"{s}\" is listed twice"));
+                    return e(&format!("boundary.{name}[{i}]"), format!("side {s:?} is listed twice"));
                 }
             }
         }
@@ -504,13 +513,13 @@ impl Scene {
             let p = format!("loads.traction[{i}]");
             VecExpr::parse(&tr.value, &["x", "y", "t"], &format!("{p}.value"))?;
             if self.boundary.dirichlet.contains(&tr.side) {
-                return e(&format!("{p}.side"), format!("\"{}\" is a Dirichlet side (Γ1); tractions act on Γ2 only", tr.side));
+                return e(&format!("{p}.side"), format!("{:?} is a Dirichlet side (Γ1); tractions act on Γ2 only", tr.side));
             }
             if self.boundary.contact.contains(&tr.side) {
-                return e(&format!("{p}.side"), format!("\"{}\" is a contact side (Γ3); tractions act on Γ2 only", tr.side));
+                return e(&format!("{p}.side"), format!("{:?} is a contact side (Γ3); tractions act on Γ2 only", tr.side));
             }
             if self.loads.traction[..i].iter().any(|o| o.side == tr.side) {
-                return e(&format!("{p}.side"), format!("\"{}\" already has a traction; give one per side", tr.side));
+                return e(&format!("{p}.side"), format!("{:?} already has a traction; give one per side", tr.side));
             }
         }
         VecExpr::parse(&self.initial.displacement, &["x", "y"], "initial.displacement")?;
@@ -561,6 +570,17 @@ impl Scene {
         }
         if !(s.relaxation.is_finite() && s.relaxation > 0.0 && s.relaxation <= 1.0) {
             return e("solver.relaxation", format!("must be in (0, 1], got {}", s.relaxation));
+        }
+        if s.persistency && s.mass == MassKind::Consistent {
+            return e(
+                "solver.persistency",
+                "needs a diagonal mass (mass = \"lumped\" or \"modified\"): with the consistent mass, zeroing one node's \
+                 velocity does not remove a nonnegative kinetic energy"
+                    .into(),
+            );
+        }
+        if s.mass == MassKind::Modified && self.boundary.contact.is_empty() {
+            return e("solver.mass", "\"modified\" moves the mass of the contact nodes and needs a contact side".into());
         }
         if self.output.every < 1 {
             return e("output.every", format!("must be >= 1, got {}", self.output.every));
@@ -686,7 +706,7 @@ impl Scene {
             NumOrStr::Str(s) if s.trim() == "inf" => Ok(Bound::Infinite),
             NumOrStr::Str(s) => Err(Error::scene(
                 "contact.penetration_bound",
-                format!("must be a number >= 0 or the string \"inf\", got \"{s}\""),
+                format!("must be a number >= 0 or the string \"inf\", got {s:?}"),
             )),
         }
     }
@@ -698,5 +718,10 @@ impl Scene {
 }
 
 fn one_paragraph(s: &str) -> String {
-    s.lines().map(str::trim_end).filter(|l| !l.trim().is_empty()).collect::<Vec<_>>().join(" | ")
+    // every line terminator (TOML errors quote the offending source line, which may hold a lone \r)
+    s.split(['\n', '\r', '\u{b}', '\u{c}', '\u{85}', '\u{2028}', '\u{2029}'])
+        .map(str::trim_end)
+        .filter(|l| !l.trim().is_empty())
+        .collect::<Vec<_>>()
+        .join(" | ")
 }

@@ -17,6 +17,18 @@ use crate::step::newton::NewtonSettings;
 use crate::step::{delassus, NodeData, NodeStatus, StepData};
 
 
+/// (R.2) Velocity-level persistency: on a node that stayed on the constraint (dir = ν) or in
+/// stick (dir = τ) over the step, set the end-point velocity component v_c^{n+1} = 0 instead
+/// of the −v_c^n that (S.1) gives; returns the kinetic energy removed, ½ m (v_c^{n+1})² ≥ 0
+/// (diagonal mass m), which (E.1) books as the persistency dissipation.
+pub fn persist_velocity(w: &mut [f64], dofs: [usize; 2], dir: [f64; 2], m: f64) -> f64 {
+    let [dx, dy] = dofs;
+    let wc = dir[0] * w[dx] + dir[1] * w[dy];
+    w[dx] -= wc * dir[0];
+    w[dy] -= wc * dir[1];
+    0.5 * m * wc * wc
+}
+
 /// Per-node contact quantities after a step (contact.csv).
 #[derive(Debug, Clone, Copy)]
 pub struct NodeRecord {
@@ -47,6 +59,11 @@ pub struct StepRecord {
     pub normal_force: f64,
     pub tangential_force: f64,
     pub max_penetration: f64,
+    /// max |v_c^{n+1}| over nodes that stayed on the constraint (normal component) or in
+    /// stick (tangential component) over the step: the velocity they should not have
+    pub chatter: f64,
+    /// ½ Σ m_i (v_c,i^{n+1})² over the same nodes (diagonal mass): kinetic energy trapped there
+    pub trapped_kinetic: f64,
     pub contact_nodes: usize,
     pub slip_nodes: usize,
     pub stick_nodes: usize,
@@ -71,6 +88,11 @@ impl Settings {
                 ..NewtonSettings::default()
             }),
             InnerSolver::Conic => Inner::Conic(ConicSettings { tolerance: s.newton_tolerance.max(1e-12), ..ConicSettings::default() }),
+            InnerSolver::NewtonUnfrozen => Inner::NewtonUnfrozen(NewtonSettings {
+                tolerance: s.newton_tolerance,
+                max_iterations: s.max_newton_iterations as usize,
+                ..NewtonSettings::default()
+            }),
         };
         Settings {
             inner,
@@ -97,6 +119,9 @@ pub struct Simulation<'p> {
     pub v: Vec<f64>,
     pub lambda: Vec<f64>,
     pub t_fric: Vec<f64>,
+    /// contact nodes on the constraint (λ > 0) / in stick at the end of the last step
+    pub active: Vec<bool>,
+    pub stick: Vec<bool>,
     pub energy: EnergyTerms,
     energy_scale: f64,
     /// wall-clock split of the last step: free solve, contact solve, recovery (seconds)
@@ -112,7 +137,8 @@ impl<'p> Simulation<'p> {
 
     pub fn with_settings(problem: &'p Problem, settings: Settings) -> Result<Simulation<'p>> {
         let clock = std::time::Instant::now();
-        let ops = Operators::new(&problem.mesh, &problem.material, problem.scene.solver.mass, &problem.dofs)?;
+        let contact_nodes: &[usize] = problem.contact.as_ref().map(|c| c.nodes.as_slice()).unwrap_or(&[]);
+        let ops = Operators::new(&problem.mesh, &problem.material, problem.scene.solver.mass, &problem.dofs, contact_nodes)?;
         let t_assembly = clock.elapsed().as_secs_f64();
         let clock = std::time::Instant::now();
         let stepper = StepOperator::new(&ops, problem.scene.time.scheme, problem.k)?;
@@ -144,6 +170,8 @@ impl<'p> Simulation<'p> {
             v,
             lambda: vec![0.0; nc],
             t_fric: vec![0.0; nc],
+            active: vec![false; nc],
+            stick: vec![false; nc],
             energy,
             energy_scale,
             timing: [0.0; 3],
@@ -181,6 +209,8 @@ impl<'p> Simulation<'p> {
             normal_force: 0.0,
             tangential_force: 0.0,
             max_penetration: if nodes.is_empty() { 0.0 } else { max_pen },
+            chatter: 0.0,
+            trapped_kinetic: 0.0,
             contact_nodes: 0,
             slip_nodes: 0,
             stick_nodes: 0,
@@ -297,6 +327,35 @@ impl<'p> Simulation<'p> {
             self.lambda.clone_from(&sol.lambda);
             self.t_fric.clone_from(&sol.t);
         }
+        let (mut chatter, mut trapped) = (0.0f64, 0.0f64);
+        if let (Some(c), Some((sol, _, _))) = (&p.contact, &contact_out) {
+            let persistency = p.scene.solver.persistency;
+            let mut removed = 0.0;
+            for i in 0..c.n() {
+                let now_active = sol.lambda[i] > 0.0;
+                let now_stick = sol.status[i] == NodeStatus::Stick;
+                let [dx, dy] = c.dofs[i];
+                let m = self.ops.m_lumped[dx];
+                for (persistent, dir) in [(self.active[i] && now_active, c.normals[i]), (self.stick[i] && now_stick, c.tangent(i))] {
+                    if !persistent {
+                        continue;
+                    }
+                    let wc = dir[0] * w[dx] + dir[1] * w[dy];
+                    if persistency {
+                        removed += persist_velocity(&mut w, [dx, dy], dir, m);
+                    } else {
+                        chatter = chatter.max(wc.abs());
+                        trapped += 0.5 * m * wc * wc;
+                    }
+                }
+                self.active[i] = now_active;
+                self.stick[i] = now_stick;
+            }
+            if persistency {
+                se.d_kinetic = energy::increment(&self.ops.m, &self.v, &w);
+                se.persistency = removed;
+            }
+        }
         self.energy = self.energy.advance(&se);
         self.energy_scale = self.energy_scale.max(self.energy.scale());
         self.u = u_new;
@@ -311,6 +370,8 @@ impl<'p> Simulation<'p> {
             normal_force: fn_sum,
             tangential_force: ft_sum,
             max_penetration: if rec_nodes.is_empty() { 0.0 } else { max_pen },
+            chatter,
+            trapped_kinetic: trapped,
             contact_nodes: n_contact,
             slip_nodes: n_slip,
             stick_nodes: n_stick,
@@ -387,6 +448,8 @@ impl<'p> Simulation<'p> {
             t_fric: self.t_fric.clone(),
             energy: self.energy,
             energy_scale: self.energy_scale,
+            active: self.active.clone(),
+            stick: self.stick.clone(),
         }
     }
 
@@ -405,6 +468,8 @@ impl<'p> Simulation<'p> {
         self.t_fric = s.t_fric;
         self.energy = s.energy;
         self.energy_scale = s.energy_scale;
+        self.active = s.active;
+        self.stick = s.stick;
         Ok(())
     }
 

@@ -1,7 +1,7 @@
 //! Assembly of M, K, C on the P1 space (model.md §4.1) and the elimination of the clamped
 //! DOFs of Γ1 (P.3).
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::linalg::{self, SpMat};
 use crate::mesh::Mesh;
 use crate::model::material::Material;
@@ -83,7 +83,8 @@ pub fn assemble_full(mesh: &Mesh, mat: &Material, mass: MassKind) -> Result<(SpM
         let ce = element::operator_matrix(x, &da);
         let me = match mass {
             MassKind::Consistent => element::consistent_mass(area, mat.rho),
-            MassKind::Lumped => element::lumped_mass(area, mat.rho),
+            // the modified mass starts from the lumped one (see `modified_masses`)
+            MassKind::Lumped | MassKind::Modified => element::lumped_mass(area, mat.rho),
         };
         for a in 0..6 {
             let ga = 2 * tri[a / 2] + a % 2;
@@ -112,15 +113,116 @@ pub fn restrict(a: &SpMat, dofs: &Dofs) -> Result<SpMat> {
 }
 
 impl Operators {
-    pub fn new(mesh: &Mesh, mat: &Material, mass: MassKind, dofs: &Dofs) -> Result<Operators> {
-        let (m, k, c) = assemble_full(mesh, mat, mass)?;
-        Ok(Operators {
-            m: restrict(&m, dofs)?,
-            k: restrict(&k, dofs)?,
-            c: restrict(&c, dofs)?,
-            m_lumped: lumped_masses(mesh, mat, dofs),
-        })
+    /// The operators of a scene; `contact_nodes` are the mesh nodes of Γ̄3 \ Γ̄1 (used by the
+    /// modified mass).
+    pub fn new(mesh: &Mesh, mat: &Material, mass: MassKind, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Operators> {
+        let kind = if mass == MassKind::Modified { MassKind::Lumped } else { mass };
+        let (m, k, c) = assemble_full(mesh, mat, kind)?;
+        let m_lumped = nodal_masses(mesh, mat, mass, dofs, contact_nodes)?;
+        let m = if mass == MassKind::Modified {
+            let trip: Vec<(usize, usize, f64)> = (0..dofs.n_free).map(|i| (i, i, m_lumped[i])).collect();
+            linalg::from_triplets(dofs.n_free, dofs.n_free, &trip)?
+        } else {
+            restrict(&m, dofs)?
+        };
+        Ok(Operators { m, k: restrict(&k, dofs)?, c: restrict(&c, dofs)?, m_lumped })
     }
+}
+
+/// The diagonal (lumped or modified) nodal mass per free DOF, the m_i of (C.k).
+pub fn nodal_masses(mesh: &Mesh, mat: &Material, mass: MassKind, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Vec<f64>> {
+    let lumped = lumped_masses(mesh, mat, dofs);
+    if mass != MassKind::Modified {
+        return Ok(lumped);
+    }
+    let per_node = modified_masses(mesh, mat, dofs, contact_nodes)?;
+    let mut out = vec![0.0; dofs.n_free];
+    for (k, m) in per_node.iter().enumerate() {
+        for c in 0..2 {
+            if let Some(i) = dofs.map[2 * k + c] {
+                out[i] = *m;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// (R.1) Modified mass (the Khenous–Laborde–Renard family, as classified by Doyen–Ern–Piperno):
+/// the lumped mass m_i of every contact node is set to zero and redistributed to the nodes
+/// within two edges of it (not on Γ3, not clamped), with weights w_j of least Σ w_j²/m_j such
+/// that Σ w_j = 1 and Σ w_j x_j = x_i: the total mass and the centre of mass are kept exactly.
+/// The boundary node lies outside its neighbours' hull, so some weights are negative (mass is
+/// moved in by extrapolation, e.g. +2 m_i to the first layer, −m_i from the second on a
+/// structured mesh); every resulting mass must stay positive, or this is an error.
+pub fn modified_masses(mesh: &Mesh, mat: &Material, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Vec<f64>> {
+    let n = mesh.nodes.len();
+    let mut mass = vec![0.0; n];
+    for tri in &mesh.triangles {
+        let x = [mesh.nodes[tri[0]], mesh.nodes[tri[1]], mesh.nodes[tri[2]]];
+        let area = element::gradients(x).1.abs();
+        for &v in tri {
+            mass[v] += mat.rho * area / 3.0;
+        }
+    }
+    let original = mass.clone();
+    let mut adj = vec![Vec::new(); n];
+    for tri in &mesh.triangles {
+        for a in 0..3 {
+            for b in 0..3 {
+                if a != b && !adj[tri[a]].contains(&tri[b]) {
+                    adj[tri[a]].push(tri[b]);
+                }
+            }
+        }
+    }
+    let mut is_contact = vec![false; n];
+    contact_nodes.iter().for_each(|&i| is_contact[i] = true);
+    let free = |j: usize| dofs.map[2 * j].is_some();
+    for &i in contact_nodes {
+        let mut cand: Vec<usize> = Vec::new();
+        for &j in &adj[i] {
+            for &l in std::iter::once(&j).chain(adj[j].iter()) {
+                if !is_contact[l] && free(l) && !cand.contains(&l) {
+                    cand.push(l);
+                }
+            }
+        }
+        let xi = mesh.nodes[i];
+        // least Σ w²/m subject to A w = b: w = D Aᵀ (A D Aᵀ)⁻¹ b, A = [1; x − x_i; y − y_i]
+        let rows: Vec<[f64; 3]> = cand.iter().map(|&j| [1.0, mesh.nodes[j][0] - xi[0], mesh.nodes[j][1] - xi[1]]).collect();
+        let mut g = nalgebra::Matrix3::<f64>::zeros();
+        for (r, &j) in rows.iter().zip(&cand) {
+            let a = nalgebra::Vector3::from(*r);
+            g += original[j] * a * a.transpose();
+        }
+        let lam = g.try_inverse().map(|gi| gi * nalgebra::Vector3::new(1.0, 0.0, 0.0)).ok_or_else(|| {
+            Error::scene(
+                "solver.mass",
+                format!(
+                    "\"modified\": contact node {i} at ({}, {}) has too few free neighbours within two edges to move its mass \
+                     while keeping the centre of mass; refine the mesh near the contact side or use mass = \"lumped\"",
+                    xi[0], xi[1]
+                ),
+            )
+        })?;
+        for (r, &j) in rows.iter().zip(&cand) {
+            let w = original[j] * nalgebra::Vector3::from(*r).dot(&lam);
+            mass[j] += original[i] * w;
+        }
+        mass[i] = 0.0;
+    }
+    if let Some(j) = (0..n).find(|&j| !is_contact[j] && free(j) && mass[j] <= 0.0) {
+        let x = mesh.nodes[j];
+        return Err(Error::scene(
+            "solver.mass",
+            format!(
+                "\"modified\": redistributing the contact nodes' mass leaves node {j} at ({}, {}) with mass {:.3e} <= 0; \
+                 refine the mesh near the contact side or use mass = \"lumped\"",
+                x[0], x[1], mass[j]
+            ),
+        ));
+    }
+    Ok(mass)
 }
 
 /// Row-sum lumped mass per free DOF: Σ over adjacent triangles of ρ|T|/3.

@@ -5,6 +5,7 @@
 //! flushed whole after each step, and the PVD, the summary and the charts are written to a
 //! temporary name and renamed.
 
+pub mod contact_charts;
 pub mod export;
 pub mod plots;
 pub mod resume;
@@ -23,7 +24,8 @@ pub use summary::{ModelInfo, Summary};
 /// The required history.csv columns (SCENES.md), then our additions.
 pub const HISTORY_COLUMNS: &str = "step,t,kinetic,elastic,compliance,external_work,viscous_dissipation,friction_dissipation,\
 constraint_dissipation,energy_residual,normal_force,tangential_force,max_penetration,contact_nodes,slip_nodes,\
-stick_nodes,newton_iterations,fixed_point_iterations,energy_scale,fixed_point_converged,inner_residual";
+stick_nodes,newton_iterations,fixed_point_iterations,energy_scale,fixed_point_converged,inner_residual,\
+persistency_dissipation,chatter,trapped_kinetic";
 
 /// The contact.csv columns (SCENES.md), then our additions.
 pub const CONTACT_COLUMNS: &str = "step,t,node,x,y,u_n,u_t,v_t,p,lambda,friction,status,friction_bound";
@@ -119,7 +121,7 @@ impl Writer {
         let hp = self.dir.join("history.csv");
         writeln!(
             self.history,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             rec.step,
             rec.t,
             e.kinetic,
@@ -140,7 +142,10 @@ impl Writer {
             r.fixed_point_iterations,
             rec.energy_scale,
             r.fixed_point_converged as u8,
-            r.inner_residual
+            r.inner_residual,
+            e.persistency_dissipation,
+            rec.chatter,
+            rec.trapped_kinetic
         )
         .map_err(csv_io(&hp))?;
         self.history.flush().map_err(csv_io(&hp))?;
@@ -218,8 +223,16 @@ impl Writer {
         write_atomic(&self.dir.join("summary.json"), json.as_bytes())
     }
 
-    fn charts(&self, _sim: &Simulation) -> Result<()> {
+    /// Write plots/: energy.svg and deformed.svg always; with contact, forces.svg,
+    /// contact_status.svg and normal_stress.svg (stale ones of an earlier run are removed
+    /// when the scene has no contact).
+    fn charts(&self, sim: &Simulation) -> Result<()> {
         use plots::Series;
+        let save = |name: &str, svg: std::result::Result<String, String>| -> Result<()> {
+            let file = format!("plots/{name}");
+            let svg = svg.map_err(|e| Error::Output(format!("{file}: {e}")))?;
+            write_atomic(&self.dir.join(&file), svg.as_bytes())
+        };
         let s = |name: &str, f: fn(&ChartRow) -> f64, secondary: bool| Series {
             name: name.into(),
             points: self.rows.iter().map(|r| (r.t, f(r))).collect(),
@@ -241,8 +254,21 @@ impl Writer {
                 s("residual", |r| r.residual, true),
             ],
             &[],
-        )
-        .map_err(|e| Error::Output(format!("plots/energy.svg: {e}")))?;
-        write_atomic(&self.dir.join("plots/energy.svg"), energy.as_bytes())
+        );
+        save("energy.svg", energy)?;
+        let p = sim.problem;
+        save("deformed.svg", contact_charts::deformed(&p.mesh, &p.dofs.expand(&sim.u), p.time(sim.n)))?;
+        let Some(c) = &p.contact else {
+            for stale in ["forces.svg", "contact_status.svg", "normal_stress.svg"] {
+                let _ = std::fs::remove_file(self.dir.join("plots").join(stale));
+            }
+            return Ok(());
+        };
+        let p_g = contact_charts::p_at_bound(c);
+        let gamma3: f64 = c.omega.iter().sum();
+        save("forces.svg", contact_charts::forces(&self.rows, p_g.map(|q| q * gamma3)))?;
+        let along = contact_charts::Along::of(&p.mesh, c, &p.scene.boundary.contact);
+        save("contact_status.svg", contact_charts::contact_status(&self.contact_frames, &along))?;
+        save("normal_stress.svg", contact_charts::normal_stress(&self.contact_frames, &along, p_g))
     }
 }

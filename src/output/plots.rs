@@ -2,6 +2,8 @@
 
 use plotters::prelude::*;
 
+pub use plotters::prelude::SeriesLabelPosition;
+
 /// One line of a chart.
 pub struct Series {
     pub name: String,
@@ -10,7 +12,26 @@ pub struct Series {
     pub secondary: bool,
 }
 
-const PALETTE: [RGBColor; 8] = [
+/// Presentation options of [`line_chart_with`] beyond the data; the default is the plain
+/// line chart of [`line_chart`] (legend upper left, no markers).
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// a filled circle at every finite point (e.g. at the mesh nodes of a profile)
+    pub markers: bool,
+    pub legend: SeriesLabelPosition,
+    /// extra room above the data, as a fraction of the primary range (keeps a legend placed
+    /// at the top off the lines)
+    pub headroom: f64,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options { markers: false, legend: SeriesLabelPosition::UpperLeft, headroom: 0.0 }
+    }
+}
+
+/// The colours of successive series (matplotlib's tab10).
+pub const PALETTE: [RGBColor; 8] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
@@ -21,7 +42,9 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(127, 127, 127),
 ];
 
-fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
+/// A padded range of the finite values (0..1 when there are none; a span that would overflow
+/// is left unpadded and clamped so the chart still draws).
+pub fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in vals.filter(|v| v.is_finite()) {
         lo = lo.min(v);
@@ -35,6 +58,9 @@ fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
         return (lo - pad, hi + pad);
     }
     let pad = 0.05 * (hi - lo);
+    if !pad.is_finite() || !(lo - pad).is_finite() || !(hi + pad).is_finite() {
+        return (lo.max(-f64::MAX / 4.0), hi.min(f64::MAX / 4.0));
+    }
     (lo - pad, hi + pad)
 }
 
@@ -48,13 +74,29 @@ pub fn line_chart(
     series: &[Series],
     hlines: &[(String, f64)],
 ) -> Result<String, String> {
+    line_chart_with(title, x_desc, y_desc, y2_desc, series, hlines, &Options::default())
+}
+
+/// [`line_chart`] with presentation [`Options`] (point markers, legend position).
+pub fn line_chart_with(
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    y2_desc: Option<&str>,
+    series: &[Series],
+    hlines: &[(String, f64)],
+    opts: &Options,
+) -> Result<String, String> {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (960, 540)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let prim = series.iter().filter(|s| !s.secondary);
         let (x0, x1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
-        let (y0, y1) = range(prim.flat_map(|s| s.points.iter().map(|p| p.1)).chain(hlines.iter().map(|h| h.1)));
+        let (y0, mut y1) = range(prim.flat_map(|s| s.points.iter().map(|p| p.1)).chain(hlines.iter().map(|h| h.1)));
+        if opts.headroom > 0.0 && (y1 + opts.headroom * (y1 - y0)).is_finite() {
+            y1 += opts.headroom * (y1 - y0);
+        }
         let (z0, z1) = range(series.iter().filter(|s| s.secondary).flat_map(|s| s.points.iter().map(|p| p.1)));
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 20))
@@ -84,6 +126,14 @@ pub fn line_chart(
             let color = PALETTE[k % PALETTE.len()];
             let style = ShapeStyle::from(&color).stroke_width(2);
             let pts = s.points.iter().copied().filter(|p| p.0.is_finite() && p.1.is_finite());
+            if opts.markers {
+                let dots = pts.clone().map(|p| Circle::new(p, 3, color.filled()));
+                if s.secondary {
+                    chart.draw_secondary_series(dots).map_err(|e| e.to_string())?;
+                } else {
+                    chart.draw_series(dots).map_err(|e| e.to_string())?;
+                }
+            }
             if s.secondary {
                 chart
                     .draw_secondary_series(LineSeries::new(pts, style))
@@ -98,7 +148,7 @@ pub fn line_chart(
                     .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
             }
         }
-        for (label, y) in hlines {
+        for (label, y) in hlines.iter().filter(|h| h.1.is_finite()) {
             let style = ShapeStyle::from(&BLACK).stroke_width(1);
             chart
                 .draw_series(LineSeries::new(vec![(x0, *y), (x1, *y)], style))
@@ -108,7 +158,7 @@ pub fn line_chart(
         }
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
+            .position(opts.legend.clone())
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .draw()

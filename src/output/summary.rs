@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use crate::fem::assemble::lumped_masses;
+use crate::fem::assemble::nodal_masses;
 use crate::model::laws::FrictionCoefficient;
 use crate::problem::Problem;
 use crate::scene::{Bound, Enforcement, FrictionBound};
@@ -103,8 +103,8 @@ impl ModelInfo {
                 (FrictionBound::Capped, Some(g)) => format!("μ(‖v̄‖) p(min(r_+, {g})) (capped)"),
                 _ => "μ(‖v̄‖) p(r) (uncapped)".into(),
             };
-            let lumped = lumped_masses(&p.mesh, &p.material, &p.dofs);
-            if let Some((k, i)) = c.convex_step_limit(&lumped) {
+            let masses = nodal_masses(&p.mesh, &p.material, p.scene.solver.mass, &p.dofs, &c.nodes).unwrap_or_default();
+            if let Some((k, i)) = c.convex_step_limit(&masses).filter(|_| !masses.is_empty()) {
                 info.ck_step_limit = Some(k);
                 info.ck_limiting_node = Some(c.nodes[i]);
                 info.ck_note = String::new();

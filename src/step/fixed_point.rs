@@ -17,6 +17,8 @@ use crate::model::laws::FrictionCoefficient;
 pub enum Inner {
     Newton(NewtonSettings),
     Conic(ConicSettings),
+    /// (N.4): Newton on the unfrozen problem, falling back to F.1 with `newton` on failure
+    NewtonUnfrozen(NewtonSettings),
 }
 
 /// Settings of the fixed point.
@@ -43,6 +45,11 @@ pub struct StepReport {
     /// unknowns of the step problem: multipliers λ (exact constraint) and friction forces t
     pub multipliers: usize,
     pub friction_unknowns: usize,
+    /// `newton-unfrozen` only: the unfrozen Newton solved the step (no fixed point)
+    pub unfrozen: bool,
+    /// `newton-unfrozen` only: it failed and the step fell back to F.1 (why, in `fallback_reason`)
+    pub fallback: bool,
+    pub fallback_reason: String,
 }
 
 /// Why the step failed.
@@ -65,6 +72,8 @@ fn inner_solve(
     match inner {
         Inner::Newton(set) => newton::solve(step, s, lambda0, t0, set).map_err(|f| ("newton", f.iterations, f.residual, f.reason)),
         Inner::Conic(set) => conic::solve(step, s, set).map_err(|f| ("conic", f.iterations, f.residual, f.reason)),
+        // inside the fixed point (frictionless steps, fallback) the frozen Newton is used
+        Inner::NewtonUnfrozen(set) => newton::solve(step, s, lambda0, t0, set).map_err(|f| ("newton", f.iterations, f.residual, f.reason)),
     }
 }
 
@@ -115,6 +124,26 @@ pub fn solve(
         report.inner_residual = sol.residual;
         return Ok((sol, s, report));
     };
+    if let Inner::NewtonUnfrozen(set) = inner {
+        match newton::solve_unfrozen(step, mu, p_tau_hat, lambda0, t0, set) {
+            Ok(sol) => {
+                let s = friction_bound(step, mu, p_tau_hat, &sol.y);
+                if let Some(tr) = trace.as_deref_mut() {
+                    tr.push(sol.y.clone());
+                }
+                report.inner_iterations = sol.iterations;
+                report.inner_residual = sol.residual;
+                report.fixed_point_converged = true;
+                report.unfrozen = true;
+                return Ok((sol, s, report));
+            }
+            Err(f) => {
+                report.fallback = true;
+                report.fallback_reason = format!("{} (relative residual {:.2e})", f.reason, f.residual);
+                report.inner_iterations = f.iterations;
+            }
+        }
+    }
     let mut s = friction_bound(step, mu, p_tau_hat, y0);
     let mut y_prev = y0.to_vec();
     let (mut lam, mut tf) = (lambda0.to_vec(), t0.to_vec());

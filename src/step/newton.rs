@@ -13,6 +13,30 @@ use faer::Mat;
 
 use super::{ContactSolution, NodeStatus, StepData};
 use crate::linalg;
+use crate::model::laws::FrictionCoefficient;
+
+/// The friction bound the Newton solve sees.
+#[derive(Debug, Clone, Copy)]
+pub enum FrictionBound<'a> {
+    /// S_i frozen (the convex problem (S.6) of one F.1 iteration)
+    Frozen(&'a [f64]),
+    /// (N.4) S_i = μ(|v̄_i|) p̂_i, a function of the unknowns (no fixed point)
+    Law { mu: &'a FrictionCoefficient, p_hat: &'a [f64] },
+}
+
+impl FrictionBound<'_> {
+    /// (S_i, dS_i/dv̄_i) at the slip rate v̄.
+    fn at(&self, i: usize, vbar: f64) -> (f64, f64) {
+        match self {
+            FrictionBound::Frozen(s) => (s[i], 0.0),
+            FrictionBound::Law { mu, p_hat } => (mu.mu(vbar.abs()) * p_hat[i], mu.dmu(vbar.abs()) * vbar.signum() * p_hat[i]),
+        }
+    }
+    /// S_i at every node for the slip rates of `y`.
+    pub fn values(&self, step: &StepData, y: &[f64]) -> Vec<f64> {
+        (0..step.n()).map(|i| self.at(i, step.slip(i, y)).0).collect()
+    }
+}
 
 /// Settings of the Newton solve.
 #[derive(Debug, Clone, Copy)]
@@ -64,7 +88,7 @@ pub fn friction_residual(t: f64, slip: f64, s: f64, rho_t: f64, a_v: f64) -> f64
     (t - (t + rho_t * slip).clamp(-s, s)) / (rho_t * a_v)
 }
 
-fn residual(step: &StepData, s: &[f64], p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> Vec<f64> {
+fn residual(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> Vec<f64> {
     let n = step.n();
     let mut f = momentum_residual(step, y, lambda, t);
     f.reserve(2 * n);
@@ -75,19 +99,23 @@ fn residual(step: &StepData, s: &[f64], p: &Params, y: &[f64], lambda: &[f64], t
         });
     }
     for i in 0..n {
-        f.push(if step.friction { friction_residual(t[i], step.slip(i, y), s[i], p.rho_t[i], step.a_v) } else { 0.0 });
+        let vbar = step.slip(i, y);
+        f.push(if step.friction { friction_residual(t[i], vbar, s.at(i, vbar).0, p.rho_t[i], step.a_v) } else { 0.0 });
     }
     f
 }
 
 /// Active normal constraints and stick nodes at an iterate.
-fn sets(step: &StepData, s: &[f64], p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> (Vec<bool>, Vec<bool>) {
+fn sets(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> (Vec<bool>, Vec<bool>) {
     let n = step.n();
     let active = (0..n)
         .map(|i| step.beta(i).is_some_and(|beta| lambda[i] + p.rho_n[i] * (y[2 * i] - beta) > 0.0))
         .collect();
     let stick = (0..n)
-        .map(|i| step.friction && (t[i] + p.rho_t[i] * step.slip(i, y)).abs() <= s[i])
+        .map(|i| {
+            let vbar = step.slip(i, y);
+            step.friction && (t[i] + p.rho_t[i] * vbar).abs() <= s.at(i, vbar).0
+        })
         .collect();
     (active, stick)
 }
@@ -102,6 +130,34 @@ pub fn solve(
     t0: &[f64],
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
+    solve_with(step, &FrictionBound::Frozen(s), lambda0, t0, set)
+}
+
+/// (N.4) Semismooth Newton on the unfrozen Alart–Curnier system: the friction bound
+/// S_i = μ(|v̄_i|) p_τ(û_i) is a function of the unknowns inside the projection of (N.3), and
+/// the slip branch of the generalized Jacobian carries ∂t_i/∂y_τ,i = σ_i S'(v̄_i) a_v
+/// (S' = p̂ μ'(|v̄|) sgn v̄); no fixed point. Globalized by the line search on ‖F‖₂.
+pub fn solve_unfrozen(
+    step: &StepData,
+    mu: &FrictionCoefficient,
+    p_hat: &[f64],
+    lambda0: &[f64],
+    t0: &[f64],
+    set: &NewtonSettings,
+) -> Result<ContactSolution, NewtonFailure> {
+    solve_with(step, &FrictionBound::Law { mu, p_hat }, lambda0, t0, set)
+}
+
+/// Semismooth Newton for either friction bound (frozen: the convex problem of F.1; law: the
+/// unfrozen problem of N.4).
+pub fn solve_with(
+    step: &StepData,
+    bound: &FrictionBound,
+    lambda0: &[f64],
+    t0: &[f64],
+    set: &NewtonSettings,
+) -> Result<ContactSolution, NewtonFailure> {
+    let s = bound;
     let n = step.n();
     let m = 2 * n;
     let p = Params {
@@ -111,7 +167,8 @@ pub fn solve(
             .collect(),
     };
     let mut lambda: Vec<f64> = (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda0[i].max(0.0) } else { 0.0 }).collect();
-    let mut t: Vec<f64> = (0..n).map(|i| if step.friction { t0[i].clamp(-s[i], s[i]) } else { 0.0 }).collect();
+    let s_start = s.values(step, &step.y_free);
+    let mut t: Vec<f64> = (0..n).map(|i| if step.friction { t0[i].clamp(-s_start[i], s_start[i]) } else { 0.0 }).collect();
     let mut y = step.response(&step.forces(&step.y_free, &lambda, &t));
 
     let mut f = residual(step, s, &p, &y, &lambda, &t);
@@ -166,8 +223,13 @@ pub fn solve(
                     prescribed[jt] = true;
                     dy[jt] = f[m + n + i] * 1.0; // F_t = y_stick − y on the stick set
                 } else {
-                    let sigma = (t[i] + p.rho_t[i] * step.slip(i, &y)).signum();
-                    dm[jt] = s[i] * sigma - t[i];
+                    // slip: t_new = σ S(v̄); with the unfrozen bound (N.4) S varies with y_τ,
+                    // which adds ω σ S'(v̄) a_v to the column of Δy_τ
+                    let vbar = step.slip(i, &y);
+                    let sigma = (t[i] + p.rho_t[i] * vbar).signum();
+                    let (si, dsi) = s.at(i, vbar);
+                    dm[jt] = si * sigma - t[i];
+                    g[jt] = sigma * dsi * step.a_v;
                 }
             }
         }

@@ -1,0 +1,360 @@
+//! The contact and geometry charts of plots/ (issue 6, item 2): force histories with the
+//! Coulomb→Tresca reference, the space–time contact-status map along Γ3, normal-stress
+//! profiles along Γ3 and the deformed mesh.
+//!
+//! Every function returns the SVG text or a plotting error message; the caller names the file.
+//! Odd data never fails a chart: non-finite values are skipped and empty data gives empty axes.
+
+use plotters::prelude::*;
+
+use super::ChartRow;
+use super::plots::{self, Options, Series, SeriesLabelPosition};
+use crate::mesh::Mesh;
+use crate::model::contact::ContactModel;
+use crate::scene::Bound;
+use crate::simulation::NodeRecord;
+use crate::step::NodeStatus;
+
+/// The frames the writer kept: (step, t, one record per contact node).
+pub type Frame = (usize, f64, Vec<NodeRecord>);
+
+/// Status maps with more cells than this draw every k-th frame only (keeps the SVG small).
+const MAX_CELLS: usize = 200_000;
+
+/// p(g), when the bound is finite and the compliance law is not zero (else no reference line).
+pub fn p_at_bound(c: &ContactModel) -> Option<f64> {
+    match c.bound {
+        Bound::Finite(g) if !c.compliance.is_zero() => Some(c.compliance.p(g)).filter(|p| p.is_finite() && *p > 0.0),
+        _ => None,
+    }
+}
+
+/// Where each contact node lies along Γ3: x when Γ3 is horizontal, else the arc length.
+#[derive(Debug, Clone)]
+pub struct Along {
+    /// position of contact node i
+    pub s: Vec<f64>,
+    /// contact-node indices sorted by position
+    pub order: Vec<usize>,
+    /// axis description
+    pub label: &'static str,
+}
+
+impl Along {
+    /// Positions of the contact nodes of `c` on `mesh`; `sides` are the Γ3 side names.
+    pub fn of(mesh: &Mesh, c: &ContactModel, sides: &[String]) -> Along {
+        let xy: Vec<[f64; 2]> = c.nodes.iter().map(|&v| mesh.nodes[v]).collect();
+        let (ylo, yhi) = xy.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[1]), b.max(p[1])));
+        let horizontal = yhi - ylo <= 1e-9 * mesh.bbox_diameter().max(f64::MIN_POSITIVE);
+        let (s, label) = if horizontal {
+            (xy.iter().map(|p| p[0]).collect(), "x along Γ3 [m]")
+        } else {
+            (arc_length(mesh, sides, &c.nodes), "arc length along Γ3 [m]")
+        };
+        let mut order: Vec<usize> = (0..s.len()).collect();
+        order.sort_by(|&a, &b| s[a].total_cmp(&s[b]));
+        Along { s, order, label }
+    }
+}
+
+/// Arc length of `nodes` along the chains formed by the edges of `sides` (each chain walked
+/// from its leftmost end; chains laid end to end). Nodes on no edge fall back to x.
+fn arc_length(mesh: &Mesh, sides: &[String], nodes: &[usize]) -> Vec<f64> {
+    let n = mesh.nodes.len();
+    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for side in sides.iter().filter_map(|name| mesh.side(name)) {
+        for &[a, b] in &side.edges {
+            if a < n && b < n {
+                adj[a].push(b);
+                adj[b].push(a);
+            }
+        }
+    }
+    let key = |v: usize| (mesh.nodes[v][0], mesh.nodes[v][1]);
+    let mut starts: Vec<usize> = (0..n).filter(|&v| !adj[v].is_empty()).collect();
+    // chain ends first (degree ≠ 2), leftmost first; then any node of a closed loop
+    starts.sort_by(|&a, &b| {
+        (adj[a].len() == 2).cmp(&(adj[b].len() == 2)).then(key(a).partial_cmp(&key(b)).unwrap_or(std::cmp::Ordering::Equal))
+    });
+    let mut arc = vec![f64::NAN; n];
+    let mut total = 0.0;
+    for start in starts {
+        if !arc[start].is_nan() {
+            continue;
+        }
+        let mut cur = start;
+        arc[cur] = total;
+        while let Some(&next) = adj[cur].iter().find(|&&w| arc[w].is_nan()) {
+            let (p, q) = (mesh.nodes[cur], mesh.nodes[next]);
+            total += (q[0] - p[0]).hypot(q[1] - p[1]);
+            arc[next] = total;
+            cur = next;
+        }
+    }
+    nodes.iter().map(|&v| if arc[v].is_nan() { mesh.nodes[v][0] } else { arc[v] }).collect()
+}
+
+/// The contact-status categories of the status map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Category {
+    Separated,
+    ComplianceStick,
+    ComplianceSlip,
+    ConstraintStick,
+    ConstraintSlip,
+}
+
+impl Category {
+    pub const ALL: [Category; 5] =
+        [Category::Separated, Category::ComplianceStick, Category::ComplianceSlip, Category::ConstraintStick, Category::ConstraintSlip];
+
+    /// The category of a node record: separated, else by the constraint (λ > 0) and stick/slip.
+    pub fn of(r: &NodeRecord) -> Category {
+        match (r.status, r.lambda > 0.0) {
+            (NodeStatus::Separated, _) => Category::Separated,
+            (NodeStatus::Stick, false) => Category::ComplianceStick,
+            (NodeStatus::Slip, false) => Category::ComplianceSlip,
+            (NodeStatus::Stick, true) => Category::ConstraintStick,
+            (NodeStatus::Slip, true) => Category::ConstraintSlip,
+        }
+    }
+
+    /// The legend text.
+    pub fn label(self) -> &'static str {
+        match self {
+            Category::Separated => "separated",
+            Category::ComplianceStick => "compliance & stick",
+            Category::ComplianceSlip => "compliance & slip",
+            Category::ConstraintStick => "constraint (λ > 0) & stick",
+            Category::ConstraintSlip => "constraint (λ > 0) & slip",
+        }
+    }
+
+    fn color(self) -> RGBColor {
+        match self {
+            Category::Separated => RGBColor(235, 235, 235),
+            Category::ComplianceStick => RGBColor(158, 202, 225),
+            Category::ComplianceSlip => RGBColor(33, 113, 181),
+            Category::ConstraintStick => RGBColor(253, 174, 107),
+            Category::ConstraintSlip => RGBColor(217, 72, 1),
+        }
+    }
+}
+
+/// Cell boundaries around sorted centres: midpoints inside, half a spacing beyond the ends.
+fn cell_edges(centres: &[f64], lone_width: f64) -> Vec<f64> {
+    match centres.len() {
+        0 => Vec::new(),
+        1 => vec![centres[0] - 0.5 * lone_width, centres[0] + 0.5 * lone_width],
+        n => {
+            let mut e = Vec::with_capacity(n + 1);
+            e.push(centres[0] - 0.5 * (centres[1] - centres[0]));
+            e.extend(centres.windows(2).map(|w| 0.5 * (w[0] + w[1])));
+            e.push(centres[n - 1] + 0.5 * (centres[n - 1] - centres[n - 2]));
+            e
+        }
+    }
+}
+
+/// Normal and tangential contact force against t, with p(g)·|Γ3|: above it the constraint
+/// carries load and the friction bound is capped at μ p(g) (the Coulomb→Tresca switch).
+pub fn forces(rows: &[ChartRow], reference: Option<f64>) -> Result<String, String> {
+    let hist = |f: fn(&ChartRow) -> f64| rows.iter().map(|r| (r.t, f(r))).collect();
+    let series = [
+        Series { name: "normal force Σ ω (q + λ)".into(), points: hist(|r| r.normal_force), secondary: false },
+        Series { name: "tangential force −Σ ω t".into(), points: hist(|r| r.tangential_force), secondary: false },
+    ];
+    let hlines: Vec<(String, f64)> =
+        reference.filter(|r| r.is_finite()).map(|r| (format!("p(g)·|Γ3| = {r:.4} N/m"), r)).into_iter().collect();
+    let title = if hlines.is_empty() {
+        "Contact forces on Γ3"
+    } else {
+        "Contact forces on Γ3 (above p(g)·|Γ3|: constraint active, friction capped at μ p(g): Coulomb→Tresca)"
+    };
+    let opts = Options { markers: false, legend: SeriesLabelPosition::UpperRight, headroom: 0.3 };
+    plots::line_chart_with(title, "t [s]", "force per unit thickness [N/m]", None, &series, &hlines, &opts)
+}
+
+/// Normal stress q + λ along Γ3 at about five frames spread over the contact phase, with p(g),
+/// to show where the constraint lifts the stress above the compliance bound.
+pub fn normal_stress(frames: &[Frame], along: &Along, p_g: Option<f64>) -> Result<String, String> {
+    let loaded: Vec<&Frame> = frames.iter().filter(|f| f.2.iter().any(|r| r.p + r.lambda > 0.0)).collect();
+    let pool: Vec<&Frame> = if loaded.len() >= 5 { loaded } else { frames.iter().collect() };
+    let mut picks: Vec<usize> = (0..5).map(|j| (j * pool.len().saturating_sub(1) + 2) / 4).filter(|&k| k < pool.len()).collect();
+    picks.dedup();
+    let series: Vec<Series> = picks
+        .iter()
+        .map(|&k| {
+            let (_, t, recs) = pool[k];
+            let points = along.order.iter().filter_map(|&i| Some((along.s[i], recs.get(i).map(|r| r.p + r.lambda)?))).collect();
+            Series { name: format!("t = {t:.4} s"), points, secondary: false }
+        })
+        .collect();
+    let hlines: Vec<(String, f64)> = p_g.map(|p| (format!("p(g) = {p:.4} Pa (compliance bound)"), p)).into_iter().collect();
+    let opts = Options { markers: true, legend: SeriesLabelPosition::UpperRight, headroom: 0.35 };
+    plots::line_chart_with(
+        "Normal stress q + λ along Γ3 (frames with contact load)",
+        along.label,
+        "q + λ [Pa]",
+        None,
+        &series,
+        &hlines,
+        &opts,
+    )
+}
+
+/// The colour key of the status map with the number of cells of each category.
+fn draw_status_legend(
+    area: &DrawingArea<SVGBackend, plotters::coord::Shift>,
+    counts: &[usize; 5],
+    nodes: usize,
+    frames: usize,
+) -> Result<(), DrawingAreaErrorKind<std::io::Error>> {
+    let font = ("sans-serif", 14);
+    area.draw(&Text::new("status (cells)", (10, 60), font))?;
+    for (k, cat) in Category::ALL.iter().enumerate() {
+        let y = 90 + 26 * k as i32;
+        area.draw(&Rectangle::new([(10, y), (28, y + 16)], cat.color().filled()))?;
+        area.draw(&Rectangle::new([(10, y), (28, y + 16)], BLACK.stroke_width(1)))?;
+        area.draw(&Text::new(format!("{} ({})", cat.label(), counts[k]), (36, y + 2), font))?;
+    }
+    area.draw(&Text::new(format!("{nodes} nodes × {frames} frames"), (10, 90 + 26 * 5 + 10), font))
+}
+
+/// Space–time map of the contact status along Γ3 (one row per frame), so the spread of
+/// separation, compliance, active constraint, stick and slip over the run is seen at once.
+pub fn contact_status(frames: &[Frame], along: &Along) -> Result<String, String> {
+    let n = along.order.len();
+    let stride = (frames.len() * n).div_ceil(MAX_CELLS).max(1);
+    let rows: Vec<&Frame> = frames.iter().step_by(stride).filter(|f| f.1.is_finite()).collect();
+    let s_sorted: Vec<f64> = along.order.iter().map(|&i| along.s[i]).collect();
+    let ts: Vec<f64> = rows.iter().map(|f| f.1).collect();
+    let xe = cell_edges(&s_sorted, 1.0);
+    let te = cell_edges(&ts, 1.0);
+    let span = |e: &[f64]| if e.len() >= 2 && e[0] < e[e.len() - 1] { (e[0], e[e.len() - 1]) } else { (0.0, 1.0) };
+    let ((x0, x1), (t0, t1)) = (span(&xe), span(&te));
+    let mut counts = [0usize; 5];
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1100, 600)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let (left, legend) = root.split_horizontally(800);
+        let title =
+            if stride > 1 { format!("Contact status along Γ3 (one frame in {stride})") } else { "Contact status along Γ3".to_string() };
+        let mut chart = ChartBuilder::on(&left)
+            .caption(title, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(x0..x1, t0..t1)
+            .map_err(|e| e.to_string())?;
+        chart.configure_mesh().disable_mesh().x_desc(along.label).y_desc("t [s]").draw().map_err(|e| e.to_string())?;
+        for cat in Category::ALL {
+            let mut cells = Vec::new();
+            for (row, (_, _, recs)) in rows.iter().enumerate() {
+                for (col, &i) in along.order.iter().enumerate() {
+                    if recs.get(i).is_some_and(|r| Category::of(r) == cat) {
+                        cells.push(Rectangle::new([(xe[col], te[row]), (xe[col + 1], te[row + 1])], cat.color().filled()));
+                    }
+                }
+            }
+            counts[cat as usize] = cells.len();
+            chart.draw_series(cells).map_err(|e| e.to_string())?;
+        }
+        draw_status_legend(&legend, &counts, n, rows.len()).map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}
+
+type Chart2d<'a, 'b> =
+    ChartContext<'a, SVGBackend<'b>, Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>>;
+
+/// The axes of the deformed-mesh chart (built twice: once to measure the plotting area).
+fn deformed_frame<'a, 'b>(
+    area: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    title: &str,
+    x: std::ops::Range<f64>,
+    y: std::ops::Range<f64>,
+) -> Result<Chart2d<'a, 'b>, String> {
+    ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x, y)
+        .map_err(|e| e.to_string())
+}
+
+/// A mesh edge (lower node id first).
+type Edge = (usize, usize);
+
+/// The edges of a triangulation, each once, and the boundary edges (those of one triangle).
+fn mesh_edges(mesh: &Mesh) -> (Vec<Edge>, Vec<Edge>) {
+    let mut edges: Vec<Edge> =
+        mesh.triangles.iter().flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])))).collect();
+    edges.sort_unstable();
+    let (mut unique, mut outline) = (Vec::with_capacity(edges.len() / 2 + 1), Vec::new());
+    for (k, &e) in edges.iter().enumerate() {
+        if k > 0 && edges[k - 1] == e {
+            continue;
+        }
+        unique.push(e);
+        if edges.get(k + 1) != Some(&e) {
+            outline.push(e);
+        }
+    }
+    (unique, outline)
+}
+
+/// The deformed mesh x + s·u at time `t` over the grey undeformed outline, s chosen so the
+/// largest displacement is 10% of the domain size, to see the final shape at a glance.
+pub fn deformed(mesh: &Mesh, u: &[[f64; 2]], t: f64) -> Result<String, String> {
+    let (unique, outline) = mesh_edges(mesh);
+    let finite = |d: &[f64; 2]| d[0].is_finite() && d[1].is_finite();
+    let u_max = u.iter().filter(|d| finite(d)).map(|d| d[0].hypot(d[1])).fold(0.0, f64::max);
+    let size = mesh.bbox_diameter();
+    let scale = if u_max > 0.0 && size.is_finite() && size > 0.0 { 0.1 * size / u_max } else { 1.0 };
+    let moved: Vec<Option<(f64, f64)>> = mesh
+        .nodes
+        .iter()
+        .enumerate()
+        .map(|(v, x)| {
+            let d = u.get(v).copied().unwrap_or([0.0, 0.0]);
+            let p = (x[0] + scale * d[0], x[1] + scale * d[1]);
+            (p.0.is_finite() && p.1.is_finite()).then_some(p)
+        })
+        .collect();
+    let pts = mesh.nodes.iter().map(|x| (x[0], x[1])).chain(moved.iter().flatten().copied());
+    let (xs, ys): (Vec<f64>, Vec<f64>) = pts.unzip();
+    let ((mut x0, mut x1), (mut y0, mut y1)) = (plots::range(xs.into_iter()), plots::range(ys.into_iter()));
+    // equal scales on both axes: widen the narrower range to the plotting area's aspect
+    let (w, h) = (960u32, ((960.0 * (y1 - y0) / (x1 - x0)) as u32).clamp(360, 900));
+    let title = format!("Deformed mesh at t = {t:.4} s, displacement × {scale:.3} (largest |u| = {u_max:.3e} m); grey: undeformed outline");
+    let (pw, ph) = {
+        let mut scratch = String::new();
+        let area = SVGBackend::with_string(&mut scratch, (w, h)).into_drawing_area();
+        let dims = deformed_frame(&area, &title, 0.0..1.0, 0.0..1.0)?.plotting_area().dim_in_pixel();
+        (f64::from(dims.0.max(1)), f64::from(dims.1.max(1)))
+    };
+    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    let per_px = ((x1 - x0) / pw).max((y1 - y0) / ph);
+    if per_px.is_finite() && per_px > 0.0 {
+        (x0, x1, y0, y1) = (cx - 0.5 * per_px * pw, cx + 0.5 * per_px * pw, cy - 0.5 * per_px * ph, cy + 0.5 * per_px * ph);
+    }
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let mut chart = deformed_frame(&root, &title, x0..x1, y0..y1)?;
+        chart.configure_mesh().disable_mesh().x_desc("x [m]").y_desc("y [m]").draw().map_err(|e| e.to_string())?;
+        let grey = RGBColor(160, 160, 160).stroke_width(2);
+        let node = |v: usize| (mesh.nodes[v][0], mesh.nodes[v][1]);
+        chart.draw_series(outline.iter().map(|&(a, b)| PathElement::new(vec![node(a), node(b)], grey))).map_err(|e| e.to_string())?;
+        let blue = plots::PALETTE[0].stroke_width(1);
+        let drawn = unique.iter().filter_map(|&(a, b)| Some(PathElement::new(vec![moved[a]?, moved[b]?], blue)));
+        chart.draw_series(drawn).map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}

@@ -1,0 +1,407 @@
+//! The charts `run` writes into plots/ (issue 6, item 2): forces, contact status map, normal
+//! stress profiles and the deformed mesh; well-formed SVG with the series each one claims.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use dyncontact::output::contact_charts::{self, Along, Category};
+use dyncontact::output::{ChartRow, plots};
+use dyncontact::problem::Problem;
+use dyncontact::run::{RunOptions, run};
+use dyncontact::scene::Scene;
+use dyncontact::simulation::NodeRecord;
+use dyncontact::step::NodeStatus;
+
+const CONTACT_CHARTS: [&str; 3] = ["forces.svg", "contact_status.svg", "normal_stress.svg"];
+
+/// What the shortened impact_friction run produced.
+struct Fixture {
+    out: PathBuf,
+    triangles: usize,
+    contact_nodes: usize,
+}
+
+fn scene_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes")
+}
+
+/// Run a fixture scene (optionally shortened) into a fresh folder under the target tmpdir.
+fn run_scene(name: &str, end: Option<f64>, every: i64) -> (PathBuf, Problem) {
+    let mut scene = Scene::from_file(&scene_dir().join(format!("{name}.toml"))).expect("scene");
+    if let Some(end) = end {
+        scene.time.end = end;
+    }
+    scene.output.every = every;
+    let problem = Problem::new(scene, &scene_dir()).expect("problem");
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("charts_{name}"));
+    let _ = std::fs::remove_dir_all(&out);
+    run(&problem, &RunOptions { out: out.clone(), progress: false, ..RunOptions::default() }).expect("run");
+    (out, problem)
+}
+
+/// impact_friction to t = 0.1 with a frame every 10 steps, run once for all tests.
+fn impact() -> &'static Fixture {
+    static RUN: OnceLock<Fixture> = OnceLock::new();
+    RUN.get_or_init(|| {
+        let (out, problem) = run_scene("impact_friction", Some(0.1), 10);
+        let contact_nodes = problem.contact.as_ref().expect("contact").n();
+        Fixture { out, triangles: problem.mesh.triangles.len(), contact_nodes }
+    })
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Well-formedness: every `<...>` token is balanced (open/close names match, one root), with
+/// `<?xml ...?>`, comments and declarations ignored, and `&` only as an entity.
+fn check_xml(text: &str) -> Result<(), String> {
+    let mut stack: Vec<&str> = Vec::new();
+    let mut roots = 0;
+    let mut rest = text;
+    while let Some(start) = rest.find('<') {
+        check_text(&rest[..start])?;
+        if stack.is_empty() && !rest[..start].trim().is_empty() {
+            return Err(format!("text outside the root: {:?}", &rest[..start.min(40)]));
+        }
+        let tail = &rest[start..];
+        if let Some(body) = tail.strip_prefix("<!--") {
+            let end = body.find("-->").ok_or("unterminated comment")?;
+            rest = &body[end + 3..];
+            continue;
+        }
+        // the end of the tag, skipping '>' inside quoted attribute values
+        let mut quote = None;
+        let end = tail
+            .char_indices()
+            .skip(1)
+            .find(|&(_, ch)| match (quote, ch) {
+                (None, '"' | '\'') => {
+                    quote = Some(ch);
+                    false
+                }
+                (Some(q), c) if c == q => {
+                    quote = None;
+                    false
+                }
+                (None, '>') => true,
+                _ => false,
+            })
+            .map(|(i, _)| i)
+            .ok_or_else(|| format!("unterminated tag at {:?}", &tail[..tail.len().min(40)]))?;
+        let tag = &tail[1..end];
+        rest = &tail[end + 1..];
+        if tag.starts_with('?') || tag.starts_with('!') {
+            continue;
+        }
+        if let Some(name) = tag.strip_prefix('/') {
+            let open = stack.pop().ok_or_else(|| format!("</{name}> closes nothing"))?;
+            if open != name.trim() {
+                return Err(format!("<{open}> closed by </{}>", name.trim()));
+            }
+            continue;
+        }
+        let name = tag.split(|c: char| c.is_whitespace() || c == '/').next().unwrap_or("");
+        if name.is_empty() {
+            return Err(format!("empty tag name in <{tag}>"));
+        }
+        if stack.is_empty() {
+            roots += 1;
+        }
+        if !tag.ends_with('/') {
+            stack.push(name);
+        }
+    }
+    check_text(rest)?;
+    if !stack.is_empty() {
+        return Err(format!("unclosed tags: {stack:?}"));
+    }
+    if !rest.trim().is_empty() {
+        return Err("text after the root".into());
+    }
+    if roots != 1 {
+        return Err(format!("{roots} root elements"));
+    }
+    Ok(())
+}
+
+/// `&` in text must start an entity.
+fn check_text(s: &str) -> Result<(), String> {
+    for (i, _) in s.match_indices('&') {
+        let ent = s[i + 1..].split(';').next().unwrap_or("");
+        let ok = matches!(ent, "amp" | "lt" | "gt" | "quot" | "apos") || ent.starts_with('#') && s[i + 1..].contains(';');
+        if !ok {
+            return Err(format!("bare & in {:?}", &s[i..s.len().min(i + 20)]));
+        }
+    }
+    Ok(())
+}
+
+/// The `points` of every polyline, as point counts.
+fn polylines(svg: &str) -> Vec<usize> {
+    svg.split("<polyline")
+        .skip(1)
+        .map(|t| t.split("points=\"").nth(1).and_then(|p| p.split('"').next()).map_or(0, |p| p.split_whitespace().count()))
+        .collect()
+}
+
+/// Long horizontal black 2-point polylines (x axis, reference lines): their y in pixels.
+fn horizontal_rules(svg: &str) -> Vec<f64> {
+    svg.split("<polyline")
+        .skip(1)
+        .filter(|t| t.contains("stroke=\"#000000\""))
+        .filter_map(|t| {
+            let pts: Vec<(f64, f64)> = t
+                .split("points=\"")
+                .nth(1)?
+                .split('"')
+                .next()?
+                .split_whitespace()
+                .filter_map(|p| p.split_once(',').and_then(|(x, y)| Some((x.parse().ok()?, y.parse().ok()?))))
+                .collect();
+            (pts.len() == 2 && pts[0].1 == pts[1].1 && (pts[1].0 - pts[0].0).abs() > 400.0).then_some(pts[0].1)
+        })
+        .collect()
+}
+
+/// A reference line: a long horizontal rule above the x axis (the lowest rule).
+fn has_reference_line(svg: &str) -> bool {
+    let rules = horizontal_rules(svg);
+    let axis = rules.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    rules.iter().any(|&y| y < axis)
+}
+
+/// The text contents of the `<text>` elements (entities unescaped).
+fn texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| t.split_once('>').and_then(|(_, b)| b.split("</text>").next()))
+        .map(|s| s.trim().replace("&lt;", "<").replace("&gt;", ">").replace("&quot;", "\"").replace("&apos;", "'").replace("&amp;", "&"))
+        .collect()
+}
+
+fn svg(out: &Path, name: &str) -> String {
+    let text = read(&out.join("plots").join(name));
+    if let Err(e) = check_xml(&text) {
+        panic!("plots/{name} is not well-formed: {e}");
+    }
+    text
+}
+
+/// contact.csv rows: (step, category) per node row, from the status and λ columns.
+fn contact_categories(out: &Path) -> (BTreeSet<usize>, Vec<&'static str>) {
+    let text = read(&out.join("contact.csv"));
+    let mut steps = BTreeSet::new();
+    let mut cats = Vec::new();
+    for line in text.lines().skip(1) {
+        let c: Vec<&str> = line.split(',').collect();
+        steps.insert(c[0].parse::<usize>().expect("step"));
+        let lambda: f64 = c[9].parse().expect("lambda");
+        let status = match c[11] {
+            "stick" => NodeStatus::Stick,
+            "slip" => NodeStatus::Slip,
+            _ => NodeStatus::Separated,
+        };
+        let rec = NodeRecord { u_n: 0.0, u_t: 0.0, v_t: 0.0, p: 0.0, lambda, friction: 0.0, bound: 0.0, status };
+        cats.push(Category::of(&rec).label());
+    }
+    (steps, cats)
+}
+
+/// The well-formedness check accepts plotters' SVG and rejects unbalanced or mismatched tags
+/// and bare ampersands.
+#[test]
+fn xml_check_rejects_malformed_documents() {
+    assert!(check_xml("<?xml version=\"1.0\"?><!-- c --><svg a=\"x>y\"><g><rect/></g><text>a &amp; b</text></svg>").is_ok());
+    assert!(check_xml("<svg><g></svg>").is_err());
+    assert!(check_xml("<svg><g></g>").is_err());
+    assert!(check_xml("<svg></svg><svg></svg>").is_err());
+    assert!(check_xml("<svg><text>a & b</text></svg>").is_err());
+}
+
+/// forces.svg draws the normal and tangential force histories (one point per step) and the
+/// labelled p(g)·|Γ3| reference line of the Coulomb→Tresca switch.
+#[test]
+fn forces_chart_has_both_histories_and_the_reference_line() {
+    let f = impact();
+    let svg = svg(&f.out, "forces.svg");
+    let lines = polylines(&svg);
+    let steps = read(&f.out.join("history.csv")).lines().count() - 1;
+    let long = lines.iter().filter(|&&n| n >= steps).count();
+    let labels = texts(&svg);
+    let reference = labels.iter().find(|t| t.starts_with("p(g)·|Γ3|"));
+    println!("forces.svg: {} polylines, {long} with ≥ {steps} points; reference label {reference:?}", lines.len());
+    assert!(long >= 2, "expected the two force histories, polylines: {lines:?}");
+    assert!(has_reference_line(&svg), "no reference line: rules at {:?}", horizontal_rules(&svg));
+    // p(g)·|Γ3| = c_ν g · L = 2000 · 0.01 · 1.0
+    let reference = reference.expect("reference line label");
+    assert!(reference.contains("= 20.0000 N/m"), "{reference}");
+    assert!(labels.iter().any(|t| t.starts_with("normal force")) && labels.iter().any(|t| t.starts_with("tangential force")));
+}
+
+/// contact_status.svg has a filled cell per (frame, contact node) and a legend entry for each
+/// status category present in contact.csv.
+#[test]
+fn status_map_has_a_cell_per_frame_and_node_and_a_legend() {
+    let f = impact();
+    let svg = svg(&f.out, "contact_status.svg");
+    let (steps, cats) = contact_categories(&f.out);
+    let rects = svg.matches("<rect").count();
+    let present: BTreeSet<&str> = cats.iter().copied().collect();
+    let labels = texts(&svg);
+    println!(
+        "contact_status.svg: {rects} rects for {} frames × {} nodes = {}; categories present {present:?}",
+        steps.len(),
+        f.contact_nodes,
+        steps.len() * f.contact_nodes
+    );
+    for cat in Category::ALL {
+        println!("  {:28} {} cells", cat.label(), cats.iter().filter(|&&c| c == cat.label()).count());
+    }
+    assert_eq!(cats.len(), steps.len() * f.contact_nodes, "contact.csv rows");
+    assert!(rects >= steps.len() * f.contact_nodes, "{rects} rects");
+    for cat in &present {
+        let n = cats.iter().filter(|&c| c == cat).count();
+        let want = format!("{cat} ({n})");
+        assert!(labels.contains(&want), "no legend entry {want:?} in {labels:?}");
+    }
+    assert!(present.len() >= 3, "impact_friction should show several regimes by t = 0.1: {present:?}");
+}
+
+/// normal_stress.svg draws q + λ along Γ3 at five frames (a point per contact node each),
+/// labelled with t, and the p(g) line.
+#[test]
+fn normal_stress_has_five_profiles_and_p_of_g() {
+    let f = impact();
+    let svg = svg(&f.out, "normal_stress.svg");
+    let lines = polylines(&svg);
+    let profiles = lines.iter().filter(|&&n| n >= f.contact_nodes).count();
+    let labels = texts(&svg);
+    let times: Vec<&String> = labels.iter().filter(|t| t.starts_with("t = ")).collect();
+    println!("normal_stress.svg: {} polylines, {profiles} with ≥ {} points; legend {times:?}", lines.len(), f.contact_nodes);
+    assert!(profiles >= 5, "polylines: {lines:?}");
+    assert_eq!(times.len(), 5);
+    assert!(labels.iter().any(|t| t.starts_with("p(g) = 20.0000")), "no p(g) line label");
+    assert!(has_reference_line(&svg), "no p(g) line: rules at {:?}", horizontal_rules(&svg));
+}
+
+/// deformed.svg draws at least one edge per triangle of the deformed mesh, the grey undeformed
+/// outline, and says the displacement scale in the title.
+#[test]
+fn deformed_mesh_has_every_edge_and_the_outline() {
+    let f = impact();
+    let svg = svg(&f.out, "deformed.svg");
+    let edges = svg.matches("<polyline").count() + svg.matches("<line").count();
+    let deformed = svg.split("<polyline").filter(|t| t.contains("stroke=\"#1F77B4\"")).count();
+    let outline = svg.split("<polyline").filter(|t| t.contains("stroke=\"#A0A0A0\"")).count();
+    let title = texts(&svg).into_iter().find(|t| t.starts_with("Deformed mesh")).expect("title");
+    println!("deformed.svg: {edges} lines ({deformed} deformed, {outline} outline) for {} triangles; {title}", f.triangles);
+    assert!(deformed >= f.triangles, "{deformed} deformed edges for {} triangles", f.triangles);
+    // 16 × 8 cells: 48 boundary edges
+    assert_eq!(outline, 48, "outline edges");
+    assert!(title.contains("displacement ×"), "{title}");
+}
+
+/// Every chart of the contact run is well-formed SVG, and energy.svg keeps its eight series.
+#[test]
+fn every_chart_is_well_formed() {
+    let f = impact();
+    for name in ["energy.svg", "deformed.svg"].into_iter().chain(CONTACT_CHARTS) {
+        let text = svg(&f.out, name);
+        println!(
+            "{name}: {} bytes, {} polylines, {} rects, {} texts",
+            text.len(),
+            polylines(&text).len(),
+            text.matches("<rect").count(),
+            texts(&text).len()
+        );
+    }
+    assert!(polylines(&read(&f.out.join("plots/energy.svg"))).len() >= 8);
+}
+
+/// A scene without contact writes energy.svg and deformed.svg and none of the contact charts.
+#[test]
+fn no_contact_scene_writes_only_energy_and_deformed() {
+    let (out, problem) = run_scene("gmsh_square", None, 5);
+    assert!(problem.contact.is_none());
+    let energy = svg(&out, "energy.svg");
+    let deformed = svg(&out, "deformed.svg");
+    let edges = deformed.split("<polyline").filter(|t| t.contains("stroke=\"#1F77B4\"")).count();
+    println!(
+        "gmsh_square: energy.svg {} polylines, deformed.svg {edges} edges for {} triangles",
+        polylines(&energy).len(),
+        problem.mesh.triangles.len()
+    );
+    assert!(polylines(&energy).len() >= 8);
+    assert!(edges >= problem.mesh.triangles.len());
+    for name in CONTACT_CHARTS {
+        assert!(!out.join("plots").join(name).exists(), "{name} written without contact");
+    }
+}
+
+/// Odd data never fails a chart: empty histories and frames, non-finite or huge values and a
+/// non-finite reference give valid SVG.
+#[test]
+fn charts_accept_empty_and_non_finite_data() {
+    let nan = f64::NAN;
+    let row = |t: f64, v: f64| ChartRow {
+        t,
+        kinetic: v,
+        elastic: v,
+        compliance: v,
+        work: v,
+        viscous: v,
+        friction: v,
+        constraint: v,
+        residual: v,
+        normal_force: v,
+        tangential_force: v,
+    };
+    let along = Along { s: vec![0.0, 0.5, 1.0], order: vec![0, 1, 2], label: "x along Γ3 [m]" };
+    let rec = |p: f64, lambda: f64, status| NodeRecord { u_n: 0.0, u_t: 0.0, v_t: 0.0, p, lambda, friction: 0.0, bound: 0.0, status };
+    let frames = vec![
+        (0, 0.0, vec![rec(nan, 0.0, NodeStatus::Separated), rec(1.0, nan, NodeStatus::Stick), rec(f64::INFINITY, 2.0, NodeStatus::Slip)]),
+        // a short frame (fewer records than nodes)
+        (1, 0.1, vec![rec(1.0, 0.0, NodeStatus::Slip)]),
+    ];
+    let outputs = [
+        contact_charts::forces(&[], Some(nan)),
+        contact_charts::forces(&[row(0.0, nan), row(nan, 1.0), row(0.1, f64::INFINITY), row(0.2, 1e308), row(0.3, -1e308)], Some(1.0)),
+        contact_charts::contact_status(&[], &along),
+        contact_charts::contact_status(&frames, &along),
+        contact_charts::normal_stress(&[], &along, None),
+        contact_charts::normal_stress(&frames, &along, Some(nan)),
+        plots::line_chart("empty", "x", "y", Some("z"), &[], &[]),
+    ];
+    for (k, o) in outputs.into_iter().enumerate() {
+        let text = o.unwrap_or_else(|e| panic!("chart {k} failed: {e}"));
+        check_xml(&text).unwrap_or_else(|e| panic!("chart {k}: {e}"));
+    }
+    let mesh = dyncontact::mesh::Mesh::rectangle(1.0, 1.0, 2, 2);
+    let u = vec![[nan, 0.0]; mesh.nodes.len()];
+    let text = contact_charts::deformed(&mesh, &u, nan).expect("deformed with NaN displacement");
+    check_xml(&text).expect("deformed");
+    let text = contact_charts::deformed(&mesh, &[], 0.0).expect("deformed without displacement");
+    check_xml(&text).expect("deformed");
+}
+
+/// On a Γ3 that is not horizontal the status and stress charts use the arc length along Γ3,
+/// walked from its leftmost end (here bottom then right side of the 1 × 0.5 block).
+#[test]
+fn positions_follow_the_arc_length_on_a_bent_contact_boundary() {
+    let mut scene = Scene::from_file(&scene_dir().join("impact_friction.toml")).expect("scene");
+    scene.boundary.contact = vec!["bottom".into(), "right".into()];
+    let problem = Problem::new(scene, &scene_dir()).expect("problem");
+    let c = problem.contact.as_ref().expect("contact");
+    let along = Along::of(&problem.mesh, c, &problem.scene.boundary.contact);
+    let at = |x: f64, y: f64| {
+        let i = c.nodes.iter().position(|&v| problem.mesh.nodes[v] == [x, y]).expect("node");
+        along.s[i]
+    };
+    println!("{} nodes; s(0,0) = {}, s(1,0) = {}, s(1,0.5) = {}", c.n(), at(0.0, 0.0), at(1.0, 0.0), at(1.0, 0.5));
+    assert_eq!(along.label, "arc length along Γ3 [m]");
+    assert!((at(0.0, 0.0)).abs() < 1e-12 && (at(1.0, 0.0) - 1.0).abs() < 1e-12 && (at(1.0, 0.5) - 1.5).abs() < 1e-12);
+    let sorted: Vec<f64> = along.order.iter().map(|&i| along.s[i]).collect();
+    assert!(sorted.windows(2).all(|w| w[1] > w[0]), "positions not distinct: {sorted:?}");
+}
