@@ -15,6 +15,7 @@
 //! - [`output`]: history.csv, contact.csv, summary.json, VTU frames, SVG plots
 //! - [`linalg`]: thin wrappers over faer
 
+pub mod bench;
 pub mod checkpoint;
 pub mod energy;
 pub mod error;
@@ -29,6 +30,7 @@ pub mod run;
 pub mod scene;
 pub mod scheme;
 pub mod simulation;
+pub mod stability;
 pub mod step;
 pub mod study;
 

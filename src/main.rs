@@ -72,6 +72,26 @@ enum StudyKind {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Work–precision benchmark: error against a fine reference vs wall time, for schemes ×
+    /// inner solvers × masses × refinement levels; the linear-algebra floor; F.1 vs N.4.
+    Bench {
+        /// output folder (default: target/bench)
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// a small configuration (smoke test)
+        #[arg(long)]
+        quick: bool,
+    },
+    /// Stability map: sweeps of k, ε, the friction decay, the impact speed and θ per scheme,
+    /// each run classified (converged, fixed point failed, Newton failed, energy grew, error).
+    Stability {
+        /// output folder (default: target/stability)
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// a small sweep (smoke test)
+        #[arg(long)]
+        quick: bool,
+    },
 }
 
 /// println! that never panics: a closed stdout (`dyncontact run | head -1`) is ignored.
@@ -151,6 +171,14 @@ fn main() -> ExitCode {
             say!("written {}", out.join("study").display());
             Ok(())
         }),
+        Command::Study { study: StudyKind::Bench { out, quick } } => {
+            let out = out.clone().unwrap_or_else(|| PathBuf::from("target/bench"));
+            dyncontact::bench::run(&out, &dyncontact::bench::BenchOptions { quick: *quick }).map(|report| say!("{report}"))
+        }
+        Command::Study { study: StudyKind::Stability { out, quick } } => {
+            let out = out.clone().unwrap_or_else(|| PathBuf::from("target/stability"));
+            dyncontact::stability::run(&out, &dyncontact::stability::StabilityOptions { quick: *quick }).map(|report| say!("{report}"))
+        }
         Command::ExportOperators { scene, out } => load(Some(scene)).and_then(|(s, dir)| {
             let problem = Problem::new(s, &dir)?;
             dyncontact::output::export::export_operators(&problem, out)?;

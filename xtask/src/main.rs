@@ -50,7 +50,9 @@ fn main() -> ExitCode {
         Some("verify") => verify(&root, args.iter().any(|a| a == "--no-crosscheck")),
         Some("crosscheck") => crosscheck::run(&root).map(|r| println!("{r}")),
         Some("trace") => trace_only(&root),
-        _ => Err("usage: cargo xtask <verify [--no-crosscheck] | crosscheck | trace>".to_string()),
+        Some("bench") => study(&root, "bench", &args[1..]),
+        Some("stability") => study(&root, "stability", &args[1..]),
+        _ => Err("usage: cargo xtask <verify [--no-crosscheck] | crosscheck | trace | bench [--quick] | stability [--quick]>".to_string()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -59,6 +61,28 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// `bench` and `stability`: build the release binary (numerics at full speed) and run its
+/// `study` subcommand, writing under target/<what>.
+fn study(root: &Path, what: &str, extra: &[String]) -> Result<(), String> {
+    let st = Command::new(env!("CARGO"))
+        .args(["build", "--release", "-p", "dyncontact", "--bin", "dyncontact"])
+        .current_dir(root)
+        .status()
+        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    if !st.success() {
+        return Err("the release build failed".into());
+    }
+    let out = root.join("target").join(what);
+    let st = Command::new(root.join("target/release/dyncontact"))
+        .args(["study", what, "--out"])
+        .arg(&out)
+        .args(extra)
+        .current_dir(root)
+        .status()
+        .map_err(|e| format!("cannot run dyncontact: {e}"))?;
+    if st.success() { Ok(()) } else { Err(format!("dyncontact study {what} failed")) }
 }
 
 /// A test binary built by cargo: the source file of its target and the executable.
