@@ -32,6 +32,7 @@ pub mod scheme;
 pub mod simulation;
 pub mod stability;
 pub mod step;
+pub mod variational;
 pub mod study;
 
 pub use error::{Error, Result};

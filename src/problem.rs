@@ -32,10 +32,8 @@ impl Problem {
     /// Build from a scene; `scene_dir` resolves a relative Gmsh path.
     pub fn new(scene: Scene, scene_dir: &Path) -> Result<Problem> {
         let mesh = build_mesh(&scene, scene_dir)?;
-        let names = mesh.side_names();
-        let side_err = |key: String, s: &str| {
-            Error::scene(key, format!("no side named \"{s}\"; the mesh has {}", names.join(", ")))
-        };
+        let names = mesh.side_list();
+        let side_err = |key: String, s: &str| Error::scene(key, format!("no side named {s:?}; the mesh has {names}"));
         for (i, s) in scene.boundary.dirichlet.iter().enumerate() {
             if mesh.side(s).is_none() {
                 return Err(side_err(format!("boundary.dirichlet[{i}]"), s));
@@ -66,6 +64,14 @@ impl Problem {
             let f2 = VecExpr::parse(&tr.value, &["x", "y", "t"], &path)?;
             let edges = mesh.side(&tr.side).map(|s| s.edges.clone()).unwrap_or_default();
             surface.push((edges, f2, path));
+        }
+        // f3 on Γ3 (every contact side), for manufactured solutions with contact
+        let f3 = VecExpr::parse(&scene.loads.contact_surface, &["x", "y", "t"], "loads.contact_surface")?;
+        if !f3.is_zero() {
+            for side in &scene.boundary.contact {
+                let edges = mesh.side(side).map(|s| s.edges.clone()).unwrap_or_default();
+                surface.push((edges, f3.clone(), "loads.contact_surface".into()));
+            }
         }
         let loads = LoadVector::new(&mesh, &dofs, &body, &surface);
         loads.check_finite(0.0)?;
@@ -124,7 +130,7 @@ fn build_mesh(scene: &Scene, scene_dir: &Path) -> Result<Mesh> {
             let file = d.file.as_deref().unwrap_or("");
             let path: PathBuf = if Path::new(file).is_absolute() { file.into() } else { scene_dir.join(file) };
             if !path.exists() {
-                return Err(Error::scene("domain.file", format!("mesh file {} does not exist", path.display())));
+                return Err(Error::scene("domain.file", format!("mesh file {:?} does not exist", path.display().to_string())));
             }
             mesh::gmsh::read(&path)?
         }

@@ -164,3 +164,14 @@ impl ManufacturedKV {
         )
     }
 }
+
+/// (B.4) Hertz contact of a rigid cylinder of radius R pressed with P per unit length on an
+/// elastic half-space in plane strain (E* = E/(1 − ν²)): half-width a = sqrt(4PR/(π E*)) and
+/// pressure p(s) = p0 sqrt(1 − s²/a²), p0 = 2P/(π a), at distance s from the centre.
+/// Returns (a, p(s)).
+pub fn hertz_pressure(load: f64, radius: f64, young: f64, poisson: f64, s: f64) -> (f64, f64) {
+    let e_star = young / (1.0 - poisson * poisson);
+    let a = (4.0 * load * radius / (std::f64::consts::PI * e_star)).sqrt();
+    let p0 = 2.0 * load / (std::f64::consts::PI * a);
+    (a, p0 * (1.0 - (s / a).powi(2)).max(0.0).sqrt())
+}

@@ -111,13 +111,17 @@ fn zero_pair() -> [String; 2] {
 pub struct Loads {
     #[serde(default = "zero_pair", deserialize_with = "pair")]
     pub body: [String; 2],
+    /// f3: a known surface load on Γ3 (all contact sides), on top of the contact forces —
+    /// for manufactured solutions with contact (model.md §7.5)
+    #[serde(default = "zero_pair", deserialize_with = "pair")]
+    pub contact_surface: [String; 2],
     #[serde(default)]
     pub traction: Vec<Traction>,
 }
 
 impl Default for Loads {
     fn default() -> Self {
-        Loads { body: zero_pair(), traction: Vec::new() }
+        Loads { body: zero_pair(), contact_surface: zero_pair(), traction: Vec::new() }
     }
 }
 
@@ -509,6 +513,10 @@ impl Scene {
         }
         // loads and initial data
         VecExpr::parse(&self.loads.body, &["x", "y", "t"], "loads.body")?;
+        let f3 = VecExpr::parse(&self.loads.contact_surface, &["x", "y", "t"], "loads.contact_surface")?;
+        if !f3.is_zero() && self.boundary.contact.is_empty() {
+            return e("loads.contact_surface", "acts on Γ3 but boundary.contact is empty".into());
+        }
         for (i, tr) in self.loads.traction.iter().enumerate() {
             let p = format!("loads.traction[{i}]");
             VecExpr::parse(&tr.value, &["x", "y", "t"], &format!("{p}.value"))?;

@@ -46,6 +46,8 @@ fn b1_bar_impact_matches_closed_form() {
         last.energy.constraint_dissipation,
         0.5 * rho * length * height * v0 * v0
     );
+    common::measured("analytic::b1_bar_impact_matches_closed_form", "B.1 mean contact force, relative error", mean / expected - 1.0, "|·| ≤ 1e-2");
+    common::measured("analytic::b1_bar_impact_matches_closed_form", "B.1 exit speed / v0 − 1", v_exit / v0 - 1.0, "|·| ≤ 1e-2");
     assert!((mean / expected - 1.0).abs() <= 0.01, "mean contact force off by more than 1%");
     assert!((release - 2.0 * length / c).abs() <= 2.0 * h / c + 2.0 * p.k, "release time {release}");
     assert!((v_exit / v0 - 1.0).abs() <= 0.01, "exit speed {v_exit}");
@@ -70,6 +72,7 @@ fn b1_impact_dissipation_falls_with_h_not_with_k() {
     let by_k: Vec<f64> = [5e-3, 2.5e-3, 1.25e-3].iter().map(|&k| run(100, k)).collect();
     println!("B.1 impact dissipation, h = 1/50, 1/100, 1/200 at c k/h = 0.25: {by_h:?}, orders {orders:?}");
     println!("B.1 impact dissipation at h = 1/100, k = 5e-3, 2.5e-3, 1.25e-3: {by_k:?}");
+    common::measured("analytic::b1_impact_dissipation_falls_with_h_not_with_k", "B.1 impact dissipation order in h", orders[orders.len() - 1], "1 ± 0.1");
     assert!(orders.iter().all(|o| (o - 1.0).abs() <= 0.1), "impact dissipation is not O(h): {orders:?}");
     assert!(by_k[2] >= by_k[0], "at fixed h the dissipation now falls with k — update the documentation: {by_k:?}");
 }
@@ -103,6 +106,7 @@ fn b2_compliant_layer_penetration_matches_closed_form() {
         l.t_star().unwrap_or(f64::NAN),
         l.impedance() * l.v0
     );
+    common::measured("analytic::b2_compliant_layer_penetration_matches_closed_form", "B.2 penetration error / g", worst / l.g, "≤ 5e-3");
     assert!(worst <= 5e-3 * l.g, "penetration off the closed form by {worst:.3e}");
     assert!((mean / (l.impedance() * l.v0) - 1.0).abs() <= 0.01, "mean reaction {mean}");
 }
@@ -128,6 +132,7 @@ fn b2_penalty_overshoot_matches_closed_form() {
         }
         let e_inf = l.penalty_overshoot_limit(eps);
         println!("B.2 penalty ε = {eps:e}: peak overshoot {peak:.5e}, e_∞ = {e_inf:.5e} ({:+.3}%), worst |δ_h − δ_ε| = {worst:.3e}", 100.0 * (peak / e_inf - 1.0));
+        common::measured("analytic::b2_penalty_overshoot_matches_closed_form", &format!("B.2 penalty overshoot / e_∞ − 1 (ε = {eps:e})"), peak / e_inf - 1.0, "|·| ≤ 2e-2");
         assert!((peak / e_inf - 1.0).abs() <= 0.02, "overshoot {peak:.4e} vs e_∞ {e_inf:.4e}");
         assert!(worst <= 5e-3 * l.g + 0.02 * e_inf, "penetration history off by {worst:.3e}");
         over.push(peak);
@@ -173,6 +178,7 @@ fn b3_sliding_block_matches_closed_form() {
     let v_end = mean_velocity_x(&sim);
     let exact_end = sliding_block_velocity(m, n, ft, a, b, alpha, p.time(sim.n) - t0);
     println!("B.3: worst |v_h − v| = {worst:.3e}; at the end v_h = {v_end:.5}, closed form {exact_end:.5}");
+    common::measured("analytic::b3_sliding_block_matches_closed_form", "B.3 sliding velocity error (absolute)", worst, "≤ 3e-3");
     assert!(worst <= 3e-3, "sliding velocity off the closed form by {worst:.3e}");
 }
 
@@ -199,4 +205,39 @@ fn b3_block_sticks_below_the_static_threshold() {
     assert_eq!(sliding_block_velocity(2.0, 10.0, 5.5, 0.6, 0.3, 20.0, 0.1), 0.0);
     assert!(worst <= 1e-4, "the block moved: {worst:.3e}");
     assert_eq!(last.stick_nodes, last.nodes.len());
+}
+
+/// (B.4) Hertz: a rigid cylinder (R = 10) indenting an elastic block, Signorini, quasi-static
+/// (fixtures/scenes/hertz.toml). At the end the total contact force equals the load P = 7.77
+/// (0.1%: the kinetic energy is ~1e-9 of the elastic, equilibrium), the contact zone's
+/// half-width is within one cell of a = 0.300, and the nodal pressure q + λ is within 5% of p0
+/// of p0 sqrt(1 − s²/a²) at every node — the finite depth (6.7 a, not a half-space) and
+/// h = a/9.6 allow a few percent (measured 2%).
+#[test]
+fn b4_hertz_pressure_matches_closed_form() {
+    let p = problem(fixture("hertz"));
+    let recs = records(&p);
+    let last = recs.last().expect("records");
+    let c = p.contact.as_ref().expect("contact");
+    let (load, radius, h) = (7.77, 10.0, 4.0 / 128.0);
+    let (a, p0) = (dyncontact::reference::hertz_pressure(load, radius, 1000.0, 0.3, 0.0).0, dyncontact::reference::hertz_pressure(load, radius, 1000.0, 0.3, 0.0).1);
+    let (mut worst, mut half_width): (f64, f64) = (0.0, 0.0);
+    for (i, n) in last.nodes.iter().enumerate() {
+        let s = p.mesh.nodes[c.nodes[i]][0] - 2.0;
+        let (_, exact) = dyncontact::reference::hertz_pressure(load, radius, 1000.0, 0.3, s);
+        worst = worst.max((n.p + n.lambda - exact).abs());
+        if n.p + n.lambda > 0.0 {
+            half_width = half_width.max(s.abs());
+        }
+    }
+    println!(
+        "B.4: total force {:.5} (P = {load}), half-width {half_width:.4} (a = {a:.4}, h = {h:.4}), worst |p_h − p| = {worst:.4} ({:.2}% of p0 = {p0:.3}), kinetic/elastic {:.1e}",
+        last.normal_force,
+        100.0 * worst / p0,
+        last.energy.kinetic / last.energy.elastic
+    );
+    common::measured("analytic::b4_hertz_pressure_matches_closed_form", "B.4 pressure error / p0", worst / p0, "≤ 5e-2");
+    assert!((last.normal_force / load - 1.0).abs() <= 1e-3, "total force {}", last.normal_force);
+    assert!(half_width <= a && half_width >= a - h, "contact half-width {half_width} vs a = {a}");
+    assert!(worst <= 0.05 * p0, "pressure off by {worst:.4} ({:.2}% of p0)", 100.0 * worst / p0);
 }

@@ -106,6 +106,7 @@ fn r1_r2_bar_impact_chatter_and_remedies() {
         if v != Variant::BackwardEuler {
             assert!(m.residual <= 1e-12, "{v:?}: (E.1) defect {:.3e}", m.residual);
         }
+        common::measured("chatter::r1_r2_bar_impact_chatter_and_remedies", &format!("B.1 force error, {v:?}"), m.force_error, "reported");
         errs.push(m.force_error);
     }
     assert!(errs[1] < errs[0] && errs[2] < errs[0], "the remedies do not reduce the force error: {errs:?}");

@@ -121,6 +121,8 @@ fn s6_twins_newton_and_conic_agree() {
         let p = problem(s);
         let (v, f) = twins_on(&p, steps);
         println!("{name}: worst relative difference: velocity {v:.3e}, force {f:.3e}");
+        common::measured("contact::s6_twins_newton_and_conic_agree", &format!("twins: velocity difference ({name})"), v, "≤ 1e-5");
+        common::measured("contact::s6_twins_newton_and_conic_agree", &format!("twins: force difference ({name})"), f, "≤ 1e-5");
         assert!(v <= 1e-5 && f <= 1e-5, "{name}: the twins disagree: velocity {v:.3e}, force {f:.3e}");
     }
 }
@@ -157,6 +159,7 @@ fn n2_n3_alart_curnier_parameters_do_not_change_the_solution() {
         sim.step().expect("step");
     }
     println!("worst relative change under rescaling: {worst:.3e}");
+    common::measured("contact::n2_n3_alart_curnier_parameters_do_not_change_the_solution", "change under r ×10, ×0.1", worst, "≤ 1e-9");
     assert!(worst <= 1e-9, "rescaled Alart–Curnier parameters changed the solution by {worst:.3e}");
 }
 

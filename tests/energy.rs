@@ -52,6 +52,7 @@ fn e1_energy_balance_without_contact() {
     let worst = recs.iter().map(|r| r.energy.residual.abs() / r.energy_scale).fold(0.0, f64::max);
     let last = recs.last().expect("records");
     println!("max relative (E.1) defect {worst:.3e}; final work {:.4e}, viscous {:.4e}", last.energy.external_work, last.energy.viscous_dissipation);
+    common::measured("energy::e1_energy_balance_without_contact", "E.1 largest relative defect (no contact)", worst, "≤ 1e-12");
     assert!(last.energy.viscous_dissipation > 0.0 && last.energy.external_work.abs() > 0.0, "the scene must exercise both terms");
     assert!(worst <= 1e-12, "relative (E.1) defect {worst:.3e} > 1e-12");
 }
@@ -95,6 +96,7 @@ fn check_contact_balance(name: &str, end: Option<f64>) {
         "{name}: max relative (E.1) defect {worst:.3e}; friction {:.4e}, constraint {:.4e}, viscous {:.4e}",
         last.energy.friction_dissipation, last.energy.constraint_dissipation, last.energy.viscous_dissipation
     );
+    common::measured("energy", &format!("E.1 largest relative defect ({name})"), worst, "≤ 1e-9");
     assert!(worst <= 1e-9, "{name}: relative (E.1) defect {worst:.3e} > 1e-9");
 }
 
@@ -131,6 +133,7 @@ fn e1_energy_balance_penalty() {
     let recs = records(&p);
     let worst = recs.iter().map(|r| r.energy.residual.abs() / r.energy_scale).fold(0.0, f64::max);
     println!("penalty: max relative (E.1) defect {worst:.3e}");
+    common::measured("energy::e1_energy_balance_penalty", "E.1 largest relative defect (penalty)", worst, "≤ 1e-9");
     assert!(recs.iter().all(|r| r.energy.constraint_dissipation == 0.0), "P_ε has no constraint dissipation");
     assert!(worst <= 1e-9, "relative (E.1) defect {worst:.3e}");
 }

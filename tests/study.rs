@@ -28,6 +28,8 @@ fn e0_penalty_study_penetration_and_error_fall_with_eps() {
         println!("ε = {:.0e}: e_V {:.4e}, e_H {:.4e}, δ {:.4e}, {:.2} s", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s);
     }
     println!("slopes: e_V {:.3}, e_H {:.3}, δ {:.3}", st.slope_e_v, st.slope_e_h, st.slope_delta);
+    common::measured("study::e0_penalty_study_penetration_and_error_fall_with_eps", "E.0 log–log slope of δ(ε)", st.slope_delta, "≥ 0.5");
+    common::measured("study::e0_penalty_study_penetration_and_error_fall_with_eps", "log–log slope of e_V(ε)", st.slope_e_v, "reported (model.md: ½ to 1)");
     assert!(st.slope_delta >= 0.5, "δ falls slower than ε^½: slope {}", st.slope_delta);
     for w in st.rows.windows(2) {
         assert!(w[1].e_v < w[0].e_v, "e_V does not decrease from ε = {} to {}: {} → {}", w[0].eps, w[1].eps, w[0].e_v, w[1].e_v);

@@ -75,6 +75,7 @@ fn n4_unfrozen_newton_agrees_with_f1_under_ck() {
             "{name}: {} steps, differing {}, fallbacks {}, worst agreeing |Δy| {:.2e}, |Δr| {:.2e}; Newton iterations F.1 {} vs unfrozen {}",
             a.steps, a.differing, a.fallbacks, a.worst_v, a.worst_f, a.newton_f1, a.newton_unfrozen
         );
+        common::measured("unfrozen::n4_unfrozen_newton_agrees_with_f1_under_ck", &format!("N.4 vs F.1 velocity difference ({name})"), a.worst_v, "≤ 1e-6");
         assert_eq!(a.differing, 0, "{name}: the unfrozen Newton and F.1 disagree on some step");
         assert!(a.newton_unfrozen < a.newton_f1, "{name}: the unfrozen Newton is not cheaper in iterations");
     }

@@ -40,7 +40,7 @@ impl<'a> Cursor<'a> {
                     self.file,
                     format!(
                         "unexpected end of file in ${0}: the file is truncated or $End{0} is missing; save the mesh again",
-                        self.section
+                        self.section.escape_debug()
                     ),
                 )
             });
@@ -51,13 +51,13 @@ impl<'a> Cursor<'a> {
     fn nums<T: std::str::FromStr>(&mut self, what: &str) -> Result<Vec<T>> {
         let line = self.next_line()?;
         line.split_whitespace()
-            .map(|w| w.parse::<T>().map_err(|_| self.err(format!("cannot read {what} from \"{w}\""))))
+            .map(|w| w.parse::<T>().map_err(|_| self.err(format!("cannot read {what} from {w:?}"))))
             .collect()
     }
     fn expect(&mut self, tag: &str) -> Result<()> {
         let l = self.next_line()?;
         if l.trim() != tag {
-            return Err(self.err(format!("expected {tag}, found \"{}\"", l.trim())));
+            return Err(self.err(format!("expected {tag}, found {:?}", l.trim())));
         }
         Ok(())
     }
@@ -95,7 +95,7 @@ pub fn parse(text: &str, file: &str) -> Result<Mesh> {
                     }
                     _ => {
                         return Err(c.err(format!(
-                            "the $MeshFormat line should read \"4.1 0 8\" or \"2.2 0 8\" (version, 0 = ASCII, 8), found \"{}\"",
+                            "the $MeshFormat line should read \"4.1 0 8\" or \"2.2 0 8\" (version, 0 = ASCII, 8), found {:?}",
                             f.trim()
                         )));
                     }
@@ -110,7 +110,7 @@ pub fn parse(text: &str, file: &str) -> Result<Mesh> {
                 for _ in 0..n.first().copied().unwrap_or(0) {
                     let l = c.next_line()?;
                     // dim tag "name": the name may contain spaces, the separators may be runs
-                    let bad = || c.err(format!("a physical name line should read: dim tag \"name\", found \"{}\"", l.trim()));
+                    let bad = || c.err(format!("a physical name line should read: dim tag \"name\", found {:?}", l.trim()));
                     let (dim, rest) = l.trim().split_once(char::is_whitespace).ok_or_else(bad)?;
                     let (tag, name) = rest.trim_start().split_once(char::is_whitespace).ok_or_else(bad)?;
                     let dim: i64 = dim.parse().map_err(|_| bad())?;
@@ -144,7 +144,7 @@ pub fn parse(text: &str, file: &str) -> Result<Mesh> {
                     }
                 }
             }
-            other => return Err(c.err(format!("unexpected line \"{other}\" outside a section"))),
+            other => return Err(c.err(format!("unexpected line {other:?} outside a section"))),
         }
         c.section.clear();
     }
@@ -349,6 +349,9 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
     // orientation: all clockwise (surface normal -z) is flipped; a mix means a folded mesh
     let signs: Vec<f64> = (0..mesh.triangles.len()).map(|t| mesh.signed_area(t)).collect();
     let scale = 1e-14 * mesh.bbox_diameter().powi(2);
+    if let Some(t) = signs.iter().position(|a| !a.is_finite()) {
+        return Err(Error::mesh(file, format!("the area of triangle {} overflows: the coordinates are too large; give them in metres", tags[t])));
+    }
     if let Some(t) = signs.iter().position(|a| a.abs() <= scale) {
         return Err(Error::mesh(file, format!("triangle {} has zero area (degenerate); remove or fix it", tags[t])));
     }
@@ -424,7 +427,7 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
                 return Err(Error::mesh(
                     file,
                     format!(
-                        "side \"{name}\": line element {tag} (nodes {ta} {tb}) is not an edge of any triangle; \
+                        "side {name:?}: line element {tag} (nodes {ta} {tb}) is not an edge of any triangle; \
                          the curve mesh and the surface mesh do not conform — mesh the curve as part of the surface boundary"
                     ),
                 ));
@@ -433,7 +436,7 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
                 return Err(Error::mesh(
                     file,
                     format!(
-                        "side \"{name}\": line element {tag} (nodes {ta} {tb}) is an interior edge (shared by {n} triangles); \
+                        "side {name:?}: line element {tag} (nodes {ta} {tb}) is an interior edge (shared by {n} triangles); \
                          a side must lie on the boundary: put only boundary curves in the physical group"
                     ),
                 ));

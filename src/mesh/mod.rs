@@ -76,6 +76,12 @@ impl Mesh {
         self.sides.iter().map(|s| s.name.clone()).collect()
     }
 
+    /// The side names for messages: comma-separated, control characters escaped (a physical
+    /// name read from a file may hold any character but a newline).
+    pub fn side_list(&self) -> String {
+        self.sides.iter().map(|s| s.name.escape_debug().to_string()).collect::<Vec<_>>().join(", ")
+    }
+
     /// Signed area of triangle `t` (positive when counterclockwise).
     pub fn signed_area(&self, t: usize) -> f64 {
         let [a, b, c] = self.triangles[t];
@@ -113,7 +119,7 @@ impl Mesh {
                     return Err(Error::mesh(
                         &self.source,
                         format!(
-                            "edge ({a}, {b}) of side \"{}\" is {} — a side edge must be on the boundary of exactly one triangle",
+                            "edge ({a}, {b}) of side {:?} is {} — a side edge must be on the boundary of exactly one triangle",
                             side.name,
                             if tris.is_empty() { "not an edge of any triangle".to_string() } else { format!("shared by {} triangles (interior)", tris.len()) }
                         ),
@@ -153,7 +159,7 @@ impl Mesh {
         let mut acc: HashMap<usize, ([f64; 2], f64)> = HashMap::new();
         for name in names {
             let side = self.side(name).ok_or_else(|| {
-                Error::mesh(&self.source, format!("no side named \"{name}\"; the mesh has {}", self.side_names().join(", ")))
+                Error::mesh(&self.source, format!("no side named {name:?}; the mesh has {}", self.side_list()))
             })?;
             for (&[a, b], (n, len)) in side.edges.iter().zip(self.edge_geometry(side)?) {
                 for v in [a, b] {
@@ -188,7 +194,7 @@ impl Mesh {
         let mut on = vec![false; self.nodes.len()];
         for name in names {
             let side = self.side(name).ok_or_else(|| {
-                Error::mesh(&self.source, format!("no side named \"{name}\"; the mesh has {}", self.side_names().join(", ")))
+                Error::mesh(&self.source, format!("no side named {name:?}; the mesh has {}", self.side_list()))
             })?;
             for e in &side.edges {
                 on[e[0]] = true;
@@ -215,6 +221,9 @@ impl Mesh {
                 used[v] = true;
             }
             let a = self.signed_area(t);
+            if !a.is_finite() {
+                return Err(Error::mesh(&self.source, format!("the area of triangle {t} overflows: the coordinates are too large; give them in metres")));
+            }
             if !(a > 1e-14 * scale) {
                 return Err(Error::mesh(
                     &self.source,

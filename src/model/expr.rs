@@ -23,6 +23,11 @@ pub struct Expr {
 }
 
 const MAX_STACK: usize = 64;
+/// Limits that keep the recursive parser, the folding and the compilation within a thread's
+/// stack: nesting (parentheses, function calls, unary operators, powers) and length in tokens,
+/// since a long chain `x + x + ...` is a deep tree too.
+const MAX_NESTING: usize = 64;
+const MAX_TOKENS: usize = 2000;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Instr {
@@ -191,7 +196,8 @@ fn lex(src: &str) -> std::result::Result<Vec<(Tok, usize)>, String> {
     let mut i = 0;
     let mut out = Vec::new();
     while i < b.len() {
-        let c = b[i] as char;
+        // i is always at a char boundary: only ASCII characters are consumed below
+        let Some(c) = src[i..].chars().next() else { break };
         let col = i + 1;
         if c.is_ascii_whitespace() {
             i += 1;
@@ -230,15 +236,16 @@ fn lex(src: &str) -> std::result::Result<Vec<(Tok, usize)>, String> {
             out.push((Tok::Ident(src[start..i].to_string()), col));
             continue;
         }
-        let two = if i + 1 < b.len() { &src[i..i + 2] } else { "" };
+        // bytes, not a str slice: the next character may be multi-byte
+        let two = if i + 1 < b.len() { &b[i..i + 2] } else { &b[..0] };
         let op2: Option<&'static str> = match two {
-            "<=" => Some("<="),
-            ">=" => Some(">="),
-            "==" => Some("=="),
-            "!=" => Some("!="),
-            "&&" => Some("&&"),
-            "||" => Some("||"),
-            "**" => Some("^"),
+            b"<=" => Some("<="),
+            b">=" => Some(">="),
+            b"==" => Some("=="),
+            b"!=" => Some("!="),
+            b"&&" => Some("&&"),
+            b"||" => Some("||"),
+            b"**" => Some("^"),
             _ => None,
         };
         if let Some(op) = op2 {
@@ -258,7 +265,7 @@ fn lex(src: &str) -> std::result::Result<Vec<(Tok, usize)>, String> {
             '(' => Tok::LParen,
             ')' => Tok::RParen,
             ',' => Tok::Comma,
-            _ => return Err(format!("unexpected character `{c}` at column {col}")),
+            _ => return Err(format!("unexpected character `{}` at column {col}", c.escape_debug())),
         };
         out.push((tok, col));
         i += c.len_utf8();
@@ -288,6 +295,8 @@ struct Parser<'a> {
     toks: Vec<(Tok, usize)>,
     pos: usize,
     vars: &'a [&'a str],
+    /// current recursion depth of `unary` (every nesting goes through it)
+    depth: usize,
 }
 
 impl Parser<'_> {
@@ -376,6 +385,15 @@ impl Parser<'_> {
         }
     }
     fn unary(&mut self) -> std::result::Result<Ast, String> {
+        if self.depth >= MAX_NESTING {
+            return Err(format!("the expression nests deeper than {MAX_NESTING} levels at column {}", self.col()));
+        }
+        self.depth += 1;
+        let a = self.unary_inner();
+        self.depth -= 1;
+        a
+    }
+    fn unary_inner(&mut self) -> std::result::Result<Ast, String> {
         match self.peek() {
             Tok::Op("-") => {
                 self.next();
@@ -643,15 +661,24 @@ impl Expr {
     /// Parse `source`; `vars` lists the variables allowed (a subset of x, y, t); `path` is the
     /// scene key path used in error messages.
     pub fn parse(source: &str, vars: &[&str], path: &str) -> Result<Expr> {
+        // the source is quoted with escapes (a "\n" in the TOML string stays on one line) and
+        // cut when long (a 2000-token expression is not repeated in full)
+        let shown = match source.char_indices().nth(80) {
+            Some((cut, _)) => format!("{}...", &source[..cut]),
+            None => source.to_string(),
+        };
         let err = |message: String| Error::Expression {
             path: path.to_string(),
-            message: format!("cannot parse \"{source}\": {message}"),
+            message: format!("cannot parse {shown:?}: {message}"),
         };
         if source.trim().is_empty() {
             return Err(err("the expression is empty (write \"0\" for zero)".into()));
         }
         let toks = lex(source).map_err(err)?;
-        let mut p = Parser { toks, pos: 0, vars };
+        if toks.len() > MAX_TOKENS {
+            return Err(err(format!("the expression is longer than {MAX_TOKENS} tokens")));
+        }
+        let mut p = Parser { toks, pos: 0, vars, depth: 0 };
         let ast = p.expr().map_err(err)?;
         if *p.peek() != Tok::End {
             return Err(err(format!("unexpected {} at column {}", describe(p.peek()), p.col())));
@@ -852,5 +879,32 @@ mod tests {
         }
         let e = Expr::parse("t", &["x", "y"], "contact.gap").unwrap_err().to_string();
         assert!(e.contains("not allowed here"), "{e}");
+    }
+
+    /// Found by tests/fuzz_inputs.rs: a multi-byte character after an operator panicked (a str
+    /// slice inside the character), deep nesting overflowed the stack, and a newline written
+    /// as `\n` in the TOML string made a message of two lines.
+    #[test]
+    fn hostile_sources_give_one_line_errors() {
+        let deep = |open: &str, close: &str, n: usize| format!("{}x{}", open.repeat(n), close.repeat(n));
+        let cases = [
+            ("1 +é".to_string(), "unexpected character `é`"),
+            ("x*\u{feff}2".to_string(), "unexpected character `\\u{feff}`"),
+            ("1 +\n 2 $".to_string(), "unexpected character `$`"),
+            (deep("(", ")", 900), "nests deeper than 64 levels"),
+            (deep("sin(", ")", 65), "nests deeper than 64 levels"),
+            (format!("{}x", "-".repeat(1900)), "nests deeper than 64 levels"),
+            (format!("{}x", "x^".repeat(900)), "nests deeper than 64 levels"),
+            (deep("(", ")", 100_000), "longer than 2000 tokens"),
+            (format!("{}x", "x+".repeat(100_000)), "longer than 2000 tokens"),
+        ];
+        for (src, want) in cases {
+            let e = Expr::parse(&src, XYT, "loads.body[0]").unwrap_err().to_string();
+            assert!(e.contains(want) && !e.contains('\n') && e.len() < 400, "`{}` gave `{e}`, want `{want}`", &src[..src.len().min(40)]);
+        }
+        // the limits leave room for real expressions
+        assert_eq!(Expr::parse(&deep("(", ")", 60), XYT, "p").unwrap().eval(2.0, 0.0, 0.0), 2.0);
+        assert_eq!(Expr::parse(&format!("{}1", "1+".repeat(900)), XYT, "p").unwrap().as_constant(), Some(901.0));
+        assert_eq!(Expr::parse("x + y*x", XYT, "p").unwrap().eval(1.0, 2.0, 0.0), 3.0);
     }
 }

@@ -29,3 +29,15 @@ pub fn records_with(p: &Problem, settings: Settings) -> Vec<StepRecord> {
     }
     out
 }
+
+/// Record a measured number for `cargo xtask verify`'s report (target/verify/measurements.jsonl):
+/// the test, the quantity, the value and what was expected (the band asserted, or "reported").
+pub fn measured(test: &str, quantity: &str, value: f64, expected: &str) {
+    use std::io::Write;
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).parent().map(|p| p.join("verify")).unwrap_or_default();
+    let _ = std::fs::create_dir_all(&dir);
+    let line = serde_json::json!({"test": test, "quantity": quantity, "value": value, "expected": expected}).to_string();
+    if let Ok(mut f) = std::fs::OpenOptions::new().create(true).append(true).open(dir.join("measurements.jsonl")) {
+        let _ = f.write_all(format!("{line}\n").as_bytes());
+    }
+}

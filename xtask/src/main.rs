@@ -289,7 +289,10 @@ fn check_trace(root: &Path, outcomes: Option<&Outcomes>) -> Result<TraceResult, 
                     }
                 }
             }
-            "planned" => open.push(format!("{} — {}", eq.id, eq.notes)),
+            "planned" => {
+                open.push(format!("{} — {}", eq.id, eq.notes));
+                problems.push("still planned: every ID must be implemented and traced".into());
+            }
             other => problems.push(format!("status must be implemented or planned, got `{other}`")),
         }
         let result = if problems.is_empty() {
@@ -339,9 +342,53 @@ fn trace_only(root: &Path) -> Result<(), String> {
     if t.failures.is_empty() { Ok(()) } else { Err(t.failures.join("\n")) }
 }
 
+/// The measurements the tests recorded (target/verify/measurements.jsonl).
+fn measurements(root: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(root.join("target/verify/measurements.jsonl"))
+        .unwrap_or_default()
+        .lines()
+        .filter_map(|l| serde_json::from_str(l).ok())
+        .collect()
+}
+
+/// target/verify/report.md: the trace, every measured number with its expectation, the largest
+/// (E.1) residual, the twins' agreement and the snapshot status.
+fn report(root: &Path, trace: &TraceResult, outcomes: &Outcomes, crosscheck: &str) -> String {
+    let m = measurements(root);
+    let mut r = String::from("# dyncontact verification report\n\n");
+    let passed = outcomes.values().filter(|p| **p).count();
+    r.push_str(&format!("{passed} tests passed, {} failed.\n\n", outcomes.len() - passed));
+    let num = |v: &serde_json::Value| v["value"].as_f64().unwrap_or(f64::NAN);
+    let worst_e1 = m.iter().filter(|v| v["quantity"].as_str().unwrap_or("").starts_with("E.1 largest")).map(num).fold(0.0, f64::max);
+    let twins: Vec<String> = m
+        .iter()
+        .filter(|v| v["quantity"].as_str().unwrap_or("").starts_with("twins"))
+        .map(|v| format!("{}: {:.2e}", v["quantity"].as_str().unwrap_or(""), num(v)))
+        .collect();
+    let snapshots: Vec<String> = outcomes
+        .iter()
+        .filter(|((f, _), _)| f == "tests/snapshots.rs")
+        .map(|((_, n), p)| format!("{n}: {}", if *p { "matches" } else { "CHANGED" }))
+        .collect();
+    r.push_str(&format!("- largest (E.1) residual, relative to the energy scale: {worst_e1:.2e}\n"));
+    r.push_str(&format!("- twin solvers (newton vs conic), worst per-step difference: {}\n", twins.join("; ")));
+    r.push_str(&format!("- snapshots: {}\n\n", if snapshots.is_empty() { "not run".into() } else { snapshots.join("; ") }));
+    r.push_str("## Measured numbers\n\n| test | quantity | measured | expected |\n|---|---|---|---|\n");
+    let cell = |v: &serde_json::Value| v.as_str().unwrap_or("").replace('|', "\\|");
+    for v in &m {
+        r.push_str(&format!("| {} | {} | {:.4e} | {} |\n", cell(&v["test"]), cell(&v["quantity"]), num(v), cell(&v["expected"])));
+    }
+    r.push_str("\n## Cross-check against scikit-fem\n\n```\n");
+    r.push_str(crosscheck);
+    r.push_str("\n```\n\n");
+    r.push_str(&trace.markdown);
+    r
+}
+
 fn verify(root: &Path, skip_crosscheck: bool) -> Result<(), String> {
     let start = std::time::Instant::now();
     let bins = build_tests(root)?;
+    let _ = std::fs::remove_file(root.join("target/verify/measurements.jsonl"));
     let outcomes = run_tests(root, &bins)?;
     let passed = outcomes.values().filter(|p| **p).count();
     println!("\n== {passed} tests passed in {} binaries", bins.len());
@@ -349,15 +396,24 @@ fn verify(root: &Path, skip_crosscheck: bool) -> Result<(), String> {
     println!("\n{}", trace.markdown);
     let path = write_report(root, "trace.md", &trace.markdown)?;
     println!("trace written to {}", path.display());
-    let mut failures = trace.failures;
+    let mut failures = trace.failures.clone();
+    let mut cross = String::from("skipped (--no-crosscheck)");
     if skip_crosscheck {
         println!("cross-check skipped (--no-crosscheck)");
     } else {
         match crosscheck::run(root) {
-            Ok(r) => println!("\n== cross-check\n{r}"),
-            Err(e) => failures.push(format!("cross-check: {e}")),
+            Ok(r) => {
+                println!("\n== cross-check\n{r}");
+                cross = r;
+            }
+            Err(e) => {
+                cross = format!("FAILED: {e}");
+                failures.push(format!("cross-check: {e}"));
+            }
         }
     }
+    let rp = write_report(root, "report.md", &report(root, &trace, &outcomes, &cross))?;
+    println!("report written to {}", rp.display());
     println!("\n{} open (planned) IDs", trace.open.len());
     println!("verify took {:.1} s", start.elapsed().as_secs_f64());
     if failures.is_empty() {
