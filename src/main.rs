@@ -192,7 +192,7 @@ fn main() -> ExitCode {
             for l in info.lines() {
                 say!("  {l}");
             }
-            if let Some(w) = info.ck_warning() {
+            for w in info.warnings() {
                 say!("warning: {w}");
             }
             Ok(())

@@ -93,7 +93,7 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
         fixed_point_cap_hits: 0,
         max_abs_energy_residual: 0.0,
         max_relative_energy_residual: 0.0,
-        warnings: info.ck_warning().into_iter().collect(),
+        warnings: info.warnings(),
     };
     let mut first_cap: Option<usize> = None;
     let mut writer = if opts.resume {

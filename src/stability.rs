@@ -1,9 +1,37 @@
 //! Stability map (`dyncontact study stability`, run by `cargo xtask stability`).
-//! To be implemented.
+//!
+//! For each variant (midpoint, trapezoid, backward Euler, midpoint with the modified mass R.1,
+//! midpoint with velocity persistency R.2, midpoint with the unfrozen Newton N.4) one
+//! parameter is varied at a time around a base scene and every run is classified
+//! ([`RunClass`]):
+//!
+//! - the time step k, from well inside the (C.k) limit to well beyond it;
+//! - the penalty ε of Problem P_ε down to 1e-12;
+//! - the friction decay α (steeper velocity weakening);
+//! - the impact velocity (fixtures/scenes/impact_friction.toml, v0 scaled);
+//! - the relaxation θ of (F.1) at a k beyond (C.k);
+//! - the Newton iteration cap (a dedicated row that shows the inner-solver failure mode);
+//! - the penalty ε on the impact scene made elastic (no viscosity): the stiff impact where a
+//!   force rule other than the discrete gradient (the trapezoid's average) creates energy.
+//!
+//! The base scene is the academic scene on 16 × 8 cells with T = 1 s (k = 5e-4, inside this
+//! mesh's (C.k) limit 6.94e-4); the impact sweeps use impact_friction.toml (T = 0.3 s). The
+//! quick sweep (`--quick`) runs the extreme value of each sweep with T = 0.02 s. Writes `OUT/stability.csv` (one row per run) and
+//! `OUT/stability.svg` (per sweep, a grid of parameter value × variant coloured by class).
 
 use std::path::Path;
+use std::time::Instant;
 
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use crate::energy::EnergyTerms;
 use crate::error::{Error, Result};
+use crate::output::summary::ModelInfo;
+use crate::output::write_atomic;
+use crate::problem::Problem;
+use crate::scene::{Enforcement, InnerSolver, MassKind, Scene, SchemeKind};
+use crate::simulation::Simulation;
 
 /// Options of the stability sweep.
 #[derive(Debug, Clone, Default)]
@@ -12,7 +40,808 @@ pub struct StabilityOptions {
     pub quick: bool,
 }
 
+/// Horizon of the full sweep (s): the academic scene's own T = 1, so the whole stick–slip
+/// phase driven by the tangential traction (t ≥ 0.2 s) is in every run (the full sweep takes
+/// about a minute in release).
+pub const FULL_END: f64 = 1.0;
+/// Horizon of the impact sweeps (s): impact_friction.toml's own T (every contact regime).
+pub const IMPACT_END: f64 = 0.3;
+/// Horizon of the quick sweep (s).
+pub const QUICK_END: f64 = 0.02;
+/// Base time step: the academic scene's k, inside the 16 × 8 mesh's (C.k) limit 6.94e-4.
+pub const BASE_STEP: f64 = 5e-4;
+/// The time step of the relaxation sweep: beyond (C.k) (6.94e-4 on the base mesh).
+pub const BEYOND_CK_STEP: f64 = 1e-3;
+/// The (E.1) defect, relative to the energy scale, under which an energy-conserving variant
+/// (midpoint) counts as converged.
+pub const DEFECT_TOLERANCE: f64 = 1e-9;
+/// "energy grew": max_n (E^n − E^0 − W^n) / scale^n above this. The midpoint rule satisfies
+/// E^n − E^0 − W^n = −(dissipations) + Σ(E.1 defects) ≤ Σ defects; the map measured per-step
+/// defects ≤ 4e-16 of the scale with exact enforcement and ≤ 1.2e-13 with ε = 1e-9, so over
+/// ≤ 8000 steps the sum stays below 1e-9 and 1e-6 leaves three decades for rounding and solver
+/// tolerance. Backward Euler's defects are negative (it loses energy); the trapezoid's have
+/// either sign. The only gains the map found are 0.66–0.68 of the scale (trapezoid, stiff
+/// penalty impact), so any threshold between 1e-9 and 1e-2 gives the same map.
+pub const GAIN_TOLERANCE: f64 = 1e-6;
+
+/// How a run ended. The order is the precedence of the classification (a stop beats an energy
+/// gain, which beats a capped fixed point, ...).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum RunClass {
+    /// A NaN or infinity appeared (in a record, or caught by the library's non-finite guard).
+    NonFinite,
+    /// The run stopped with a failure of the inner (Newton) solver (`Error::Solver`).
+    NewtonFailed,
+    /// The run was refused with another error (invalid input, factorization).
+    ClearError,
+    /// Stored energy E = kinetic + elastic + compliance exceeded E^0 + external work by more
+    /// than [`GAIN_TOLERANCE`] of the energy scale.
+    EnergyGrew,
+    /// Completed, but some step hit max_fixed_point_iterations (F.1 did not converge).
+    FixedPointCapped,
+    /// Completed and every fixed point converged, but an energy-conserving (midpoint) variant
+    /// has an (E.1) defect above [`DEFECT_TOLERANCE`] of the energy scale.
+    EnergyDefect,
+    /// Completed, every fixed point converged, (E.1) defect ≤ 1e-9 of the energy scale for the
+    /// energy-conserving variants.
+    Converged,
+}
+
+impl RunClass {
+    pub const ALL: [RunClass; 7] = [
+        RunClass::Converged,
+        RunClass::EnergyDefect,
+        RunClass::FixedPointCapped,
+        RunClass::EnergyGrew,
+        RunClass::NewtonFailed,
+        RunClass::ClearError,
+        RunClass::NonFinite,
+    ];
+
+    /// The name used in the CSV, the chart and the report.
+    pub fn label(self) -> &'static str {
+        match self {
+            RunClass::Converged => "converged",
+            RunClass::EnergyDefect => "E.1 defect",
+            RunClass::FixedPointCapped => "fixed point capped",
+            RunClass::EnergyGrew => "energy grew",
+            RunClass::NewtonFailed => "newton failed",
+            RunClass::ClearError => "clear error",
+            RunClass::NonFinite => "non-finite",
+        }
+    }
+
+    /// Two-letter code of the printed map.
+    pub fn code(self) -> &'static str {
+        match self {
+            RunClass::Converged => "ok",
+            RunClass::EnergyDefect => "df",
+            RunClass::FixedPointCapped => "FP",
+            RunClass::EnergyGrew => "EG",
+            RunClass::NewtonFailed => "NF",
+            RunClass::ClearError => "CE",
+            RunClass::NonFinite => "NaN",
+        }
+    }
+
+    fn color(self) -> RGBColor {
+        match self {
+            RunClass::Converged => RGBColor(44, 160, 44),
+            RunClass::EnergyDefect => RGBColor(188, 189, 34),
+            RunClass::FixedPointCapped => RGBColor(255, 127, 14),
+            RunClass::EnergyGrew => RGBColor(214, 39, 40),
+            RunClass::NewtonFailed => RGBColor(148, 103, 189),
+            RunClass::ClearError => RGBColor(127, 127, 127),
+            RunClass::NonFinite => RGBColor(0, 0, 0),
+        }
+    }
+}
+
+/// A scheme with its solver options.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Variant {
+    pub name: &'static str,
+    pub scheme: SchemeKind,
+    pub mass: MassKind,
+    pub persistency: bool,
+    pub inner: InnerSolver,
+}
+
+impl Variant {
+    /// Midpoint-based variants satisfy (E.1) exactly (up to solver tolerance).
+    pub fn energy_conserving(&self) -> bool {
+        self.scheme == SchemeKind::Midpoint
+    }
+
+    /// Set the scheme and solver options on a scene.
+    pub fn apply(&self, s: &mut Scene) {
+        s.time.scheme = self.scheme;
+        s.solver.mass = self.mass;
+        s.solver.persistency = self.persistency;
+        s.solver.inner = self.inner;
+    }
+}
+
+/// The variants of the map (rows of every grid).
+pub fn variants() -> Vec<Variant> {
+    let v = |name, scheme, mass, persistency, inner| Variant { name, scheme, mass, persistency, inner };
+    vec![
+        v("midpoint", SchemeKind::Midpoint, MassKind::Lumped, false, InnerSolver::Newton),
+        v("trapezoid", SchemeKind::Trapezoid, MassKind::Lumped, false, InnerSolver::Newton),
+        v("backward-euler", SchemeKind::BackwardEuler, MassKind::Lumped, false, InnerSolver::Newton),
+        v("midpoint+modified-mass", SchemeKind::Midpoint, MassKind::Modified, false, InnerSolver::Newton),
+        v("midpoint+persistency", SchemeKind::Midpoint, MassKind::Lumped, true, InnerSolver::Newton),
+        v("midpoint+newton-unfrozen", SchemeKind::Midpoint, MassKind::Lumped, false, InnerSolver::NewtonUnfrozen),
+    ]
+}
+
+/// The variant of a given name.
+pub fn variant(name: &str) -> Option<Variant> {
+    variants().into_iter().find(|v| v.name == name)
+}
+
+/// The parameter a sweep varies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Sweep {
+    /// time.step k (base scene)
+    Step,
+    /// contact.penalty ε with enforcement = penalty (base scene)
+    Penalty,
+    /// contact.friction.decay α (base scene)
+    Decay,
+    /// the factor on the initial velocity of impact_friction.toml
+    Impact,
+    /// solver.relaxation θ at k = BEYOND_CK_STEP (base scene)
+    Relaxation,
+    /// solver.max_newton_iterations (base scene)
+    NewtonCap,
+    /// contact.penalty ε on the impact scene made elastic (no viscosity): the stiff-penalty
+    /// impact where a scheme without a discrete gradient can create energy
+    ElasticImpactPenalty,
+}
+
+impl Sweep {
+    pub const ALL: [Sweep; 7] =
+        [Sweep::Step, Sweep::Penalty, Sweep::Decay, Sweep::Impact, Sweep::Relaxation, Sweep::NewtonCap, Sweep::ElasticImpactPenalty];
+
+    /// Short name (CSV column `sweep`).
+    pub fn key(self) -> &'static str {
+        match self {
+            Sweep::Step => "step",
+            Sweep::Penalty => "penalty",
+            Sweep::Decay => "decay",
+            Sweep::Impact => "impact",
+            Sweep::Relaxation => "relaxation",
+            Sweep::NewtonCap => "newton-cap",
+            Sweep::ElasticImpactPenalty => "impact-penalty",
+        }
+    }
+
+    /// The varied parameter (scene key).
+    pub fn parameter(self) -> &'static str {
+        match self {
+            Sweep::Step => "time.step",
+            Sweep::Penalty => "contact.penalty",
+            Sweep::Decay => "contact.friction.decay",
+            Sweep::Impact => "initial.velocity factor",
+            Sweep::Relaxation => "solver.relaxation",
+            Sweep::NewtonCap => "solver.max_newton_iterations",
+            Sweep::ElasticImpactPenalty => "contact.penalty",
+        }
+    }
+
+    fn title(self) -> String {
+        match self {
+            Sweep::Step => "time step k (academic 16×8)".into(),
+            Sweep::Penalty => "penalty ε (P_ε, k = 5e-4)".into(),
+            Sweep::Decay => "friction decay α (k = 5e-4)".into(),
+            Sweep::Impact => "impact velocity × v0 (impact_friction)".into(),
+            Sweep::Relaxation => format!("relaxation θ of F.1 (k = {BEYOND_CK_STEP:.0e} > C.k)"),
+            Sweep::NewtonCap => "max Newton iterations (k = 5e-4)".into(),
+            Sweep::ElasticImpactPenalty => "penalty ε, elastic impact (impact_friction, no viscosity)".into(),
+        }
+    }
+
+    fn format_value(self, v: f64) -> String {
+        match self {
+            _ if v == 0.0 => "0".into(),
+            Sweep::Step | Sweep::Penalty | Sweep::ElasticImpactPenalty => {
+                format!("{v:.3e}").replace(".000e", "e").replace(".500e", ".5e").replace(".250e", ".25e")
+            }
+            _ => format!("{v}"),
+        }
+    }
+
+    /// The values of the full sweep.
+    pub fn values(self) -> Vec<f64> {
+        match self {
+            Sweep::Step => vec![1.25e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 4e-3],
+            // ε = 0 (the limit, Problem P) is not a valid penalty: the clear-error column
+            Sweep::Penalty => vec![1e-3, 1e-5, 1e-7, 1e-9, 1e-12, 0.0],
+            Sweep::Decay => vec![20.0, 100.0, 500.0, 2000.0],
+            Sweep::Impact => vec![0.5, 1.0, 4.0, 16.0],
+            Sweep::Relaxation => vec![1.0, 0.7, 0.4],
+            Sweep::NewtonCap => vec![50.0, 4.0, 2.0, 1.0],
+            Sweep::ElasticImpactPenalty => vec![1e-3, 1e-5, 1e-7, 1e-9, 1e-12],
+        }
+    }
+
+    /// The values of the quick sweep (the extreme ones).
+    pub fn quick_values(self) -> Vec<f64> {
+        match self {
+            Sweep::Step => vec![5e-4, 4e-3],
+            Sweep::Penalty => vec![1e-12],
+            Sweep::Decay => vec![2000.0],
+            Sweep::Impact => vec![16.0],
+            Sweep::Relaxation => vec![0.4],
+            Sweep::NewtonCap => vec![1.0],
+            Sweep::ElasticImpactPenalty => vec![1e-7],
+        }
+    }
+}
+
+/// The base scene: the embedded academic scene on 16 × 8 cells, horizon `end`, k = 5e-4.
+pub fn base_scene(end: f64) -> Scene {
+    let mut s = Scene::default_scene();
+    s.name = "stability".into();
+    s.domain.cells = Some([16, 8]);
+    s.time.end = end;
+    s.time.step = BASE_STEP;
+    s
+}
+
+const IMPACT_SCENE: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/scenes/impact_friction.toml"));
+
+/// fixtures/scenes/impact_friction.toml (embedded) with horizon `end` (its k = 5e-4).
+pub fn impact_scene(end: f64) -> Result<Scene> {
+    let mut s = Scene::from_toml(IMPACT_SCENE, "fixtures/scenes/impact_friction.toml")?;
+    s.time.end = end;
+    Ok(s)
+}
+
+/// One run of the map: a sweep, its parameter value and a variant.
+#[derive(Debug, Clone, Copy)]
+pub struct Case {
+    pub sweep: Sweep,
+    pub value: f64,
+    pub variant: Variant,
+}
+
+impl Case {
+    /// The scene of this case with horizon `end`.
+    pub fn scene(&self, end: f64) -> Result<Scene> {
+        let mut s = match self.sweep {
+            Sweep::Impact | Sweep::ElasticImpactPenalty => impact_scene(end.min(IMPACT_END))?,
+            _ => base_scene(end),
+        };
+        let v = self.value;
+        match self.sweep {
+            Sweep::Step => s.time.step = v,
+            Sweep::Penalty | Sweep::ElasticImpactPenalty => {
+                if self.sweep == Sweep::ElasticImpactPenalty {
+                    s.material.viscosity.theta = 0.0;
+                    s.material.viscosity.zeta = 0.0;
+                }
+                if let Some(c) = s.contact.as_mut() {
+                    c.enforcement = Enforcement::Penalty;
+                    c.penalty = Some(v);
+                }
+            }
+            Sweep::Decay => {
+                if let Some(c) = s.contact.as_mut() {
+                    c.friction.decay = Some(v);
+                }
+            }
+            Sweep::Impact => {
+                let [a, b] = s.initial.velocity.clone();
+                s.initial.velocity = [format!("{v}*({a})"), format!("{v}*({b})")];
+            }
+            Sweep::Relaxation => {
+                s.time.step = BEYOND_CK_STEP;
+                s.solver.relaxation = v;
+            }
+            Sweep::NewtonCap => s.solver.max_newton_iterations = v as i64,
+        }
+        self.variant.apply(&mut s);
+        Ok(s)
+    }
+}
+
+/// What one run measured.
+#[derive(Debug, Clone)]
+pub struct Measured {
+    pub class: RunClass,
+    pub steps_completed: usize,
+    pub steps_planned: usize,
+    pub k: f64,
+    /// (C.k) limit of the run's problem as `ModelInfo` gives it (None: no limit or not built)
+    pub ck_limit: Option<f64>,
+    /// the (C.k) limit for this run's scheme: `ck_limit` is derived for the midpoint slip
+    /// rate v̄ = (v^n + v^{n+1})/2; backward Euler's friction sees v^{n+1}, which doubles the
+    /// concave part of the step functional and halves the limit
+    pub ck_limit_scheme: Option<f64>,
+    /// fixed-point iterations (convex solves) per step: mean and max over completed steps
+    pub fp_mean: f64,
+    pub fp_max: usize,
+    /// steps that hit max_fixed_point_iterations
+    pub fp_capped_steps: usize,
+    /// inner (Newton) iterations: total and largest per step
+    pub newton_total: usize,
+    pub newton_max: usize,
+    /// newton-unfrozen only: steps that fell back to F.1
+    pub fallbacks: usize,
+    /// max_n |(E.1) defect_n| / scale_n
+    pub max_defect: f64,
+    /// Σ_n (E.1) defect_n / final scale: the net energy the scheme created (> 0) or destroyed
+    /// (< 0) numerically over the run
+    pub drift: f64,
+    /// max_n (E^n − E^0 − W^n) / scale_n: the largest net gain over the loads' work
+    pub max_gain: f64,
+    /// the final energy terms (t of the last completed step)
+    pub final_energy: EnergyTerms,
+    /// the final energy scale
+    pub scale: f64,
+    pub wall_time_s: f64,
+    /// the error that stopped the run, or other remarks
+    pub note: String,
+}
+
+/// The stored energy E = kinetic + elastic + compliance.
+pub fn stored(e: &EnergyTerms) -> f64 {
+    e.kinetic + e.elastic + e.compliance
+}
+
+/// The class of a run from its facts (see [`RunClass`] for the precedence).
+pub fn classify(stop: Option<&Error>, non_finite: bool, m: &Measured, energy_conserving: bool) -> RunClass {
+    if non_finite {
+        return RunClass::NonFinite;
+    }
+    match stop {
+        Some(Error::Solver(f)) if f.what.contains("non-finite") => return RunClass::NonFinite,
+        Some(Error::Solver(_)) => return RunClass::NewtonFailed,
+        Some(_) => return RunClass::ClearError,
+        None => {}
+    }
+    if m.max_gain > GAIN_TOLERANCE {
+        RunClass::EnergyGrew
+    } else if m.fp_capped_steps > 0 {
+        RunClass::FixedPointCapped
+    } else if energy_conserving && m.max_defect > DEFECT_TOLERANCE {
+        RunClass::EnergyDefect
+    } else {
+        RunClass::Converged
+    }
+}
+
+/// Run `scene` to its end (or its first error) and classify the run.
+pub fn run_scene(scene: &Scene, energy_conserving: bool) -> Measured {
+    let clock = Instant::now();
+    let mut m = Measured::empty(scene.steps(), scene.time.step);
+    let (stop, non_finite) = simulate(scene, &mut m);
+    if let Some(e) = &stop {
+        m.note = e.to_string();
+    } else if non_finite {
+        m.note = format!("a non-finite energy term reached the caller at step {}", m.steps_completed + 1);
+    }
+    if !m.max_gain.is_finite() {
+        m.max_gain = 0.0;
+    }
+    m.class = classify(stop.as_ref(), non_finite, &m, energy_conserving);
+    m.wall_time_s = clock.elapsed().as_secs_f64();
+    m
+}
+
+impl Measured {
+    /// Nothing measured yet (a run of `steps` steps of size `k`).
+    pub fn empty(steps: usize, k: f64) -> Measured {
+        Measured {
+            class: RunClass::Converged,
+            steps_completed: 0,
+            steps_planned: steps,
+            k,
+            ck_limit: None,
+            ck_limit_scheme: None,
+            fp_mean: 0.0,
+            fp_max: 0,
+            fp_capped_steps: 0,
+            newton_total: 0,
+            newton_max: 0,
+            fallbacks: 0,
+            max_defect: 0.0,
+            drift: 0.0,
+            max_gain: f64::NEG_INFINITY,
+            final_energy: EnergyTerms::default(),
+            scale: 0.0,
+            wall_time_s: 0.0,
+            note: String::new(),
+        }
+    }
+}
+
+/// The time loop of [`run_scene`]: fills `m`, returns the stopping error and whether a
+/// non-finite value reached the caller.
+fn simulate(scene: &Scene, m: &mut Measured) -> (Option<Error>, bool) {
+    if let Err(e) = scene.validate() {
+        return (Some(e), false);
+    }
+    let problem = match Problem::new(scene.clone(), Path::new(".")) {
+        Ok(p) => p,
+        Err(e) => return (Some(e), false),
+    };
+    m.ck_limit = ModelInfo::of(&problem).ck_step_limit;
+    // ModelInfo's (C.k) already carries the scheme's slip-rate factor (halved for backward Euler)
+    m.ck_limit_scheme = m.ck_limit;
+    m.steps_planned = problem.steps;
+    let mut sim = match Simulation::new(&problem) {
+        Ok(s) => s,
+        Err(e) => return (Some(e), false),
+    };
+    let e0 = stored(&sim.energy);
+    m.final_energy = sim.energy;
+    let (mut fp_sum, mut cum_defect) = (0usize, 0.0f64);
+    let mut out = (None, false);
+    for _ in 0..problem.steps {
+        let rec = match sim.step() {
+            Ok(r) => r,
+            Err(e) => {
+                out.0 = Some(e);
+                break;
+            }
+        };
+        let e = rec.energy;
+        let terms = [
+            e.kinetic,
+            e.elastic,
+            e.compliance,
+            e.external_work,
+            e.viscous_dissipation,
+            e.friction_dissipation,
+            e.constraint_dissipation,
+            e.persistency_dissipation,
+            e.residual,
+            rec.energy_scale,
+        ];
+        if terms.iter().any(|x| !x.is_finite()) {
+            out.1 = true;
+            break;
+        }
+        m.steps_completed += 1;
+        let r = &rec.report;
+        fp_sum += r.fixed_point_iterations;
+        m.fp_max = m.fp_max.max(r.fixed_point_iterations);
+        m.fp_capped_steps += usize::from(!r.fixed_point_converged);
+        m.newton_total += r.inner_iterations;
+        m.newton_max = m.newton_max.max(r.inner_iterations);
+        m.fallbacks += usize::from(r.fallback);
+        let scale = rec.energy_scale.max(f64::MIN_POSITIVE);
+        m.max_defect = m.max_defect.max(e.residual.abs() / scale);
+        cum_defect += e.residual;
+        m.max_gain = m.max_gain.max((stored(&e) - e0 - e.external_work) / scale);
+        m.final_energy = e;
+        m.scale = scale;
+    }
+    if m.steps_completed > 0 {
+        m.fp_mean = fp_sum as f64 / m.steps_completed as f64;
+        m.drift = cum_defect / m.scale;
+    }
+    out
+}
+
+/// One row of the map.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    pub case: Case,
+    pub m: Measured,
+}
+
+/// Run one case of the map (horizon [`QUICK_END`] or [`FULL_END`]).
+pub fn run_case(case: &Case, quick: bool) -> RunResult {
+    let end = if quick { QUICK_END } else { FULL_END };
+    let m = match case.scene(end) {
+        Ok(s) => run_scene(&s, case.variant.energy_conserving()),
+        Err(e) => {
+            let mut m = Measured::empty(0, f64::NAN);
+            m.class = RunClass::ClearError;
+            m.note = e.to_string();
+            m
+        }
+    };
+    RunResult { case: *case, m }
+}
+
+/// Every case of the sweep, sweep by sweep, value by value, variant by variant.
+pub fn cases(quick: bool) -> Vec<Case> {
+    let mut out = Vec::new();
+    for sweep in Sweep::ALL {
+        let values = if quick { sweep.quick_values() } else { sweep.values() };
+        for value in values {
+            for variant in variants() {
+                out.push(Case { sweep, value, variant });
+            }
+        }
+    }
+    out
+}
+
+/// Run every case (progress on stderr).
+pub fn sweep(opts: &StabilityOptions) -> Vec<RunResult> {
+    let cases = cases(opts.quick);
+    let n = cases.len();
+    cases
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let r = run_case(c, opts.quick);
+            eprintln!(
+                "[{:>3}/{n}] {:<10} {:<10} {:<24} {:<18} {:>5}/{:<5} steps {:>7.2} s",
+                i + 1,
+                c.sweep.key(),
+                c.sweep.format_value(c.value),
+                c.variant.name,
+                r.m.class.label(),
+                r.m.steps_completed,
+                r.m.steps_planned,
+                r.m.wall_time_s
+            );
+            r
+        })
+        .collect()
+}
+
+fn csv_field(s: &str) -> String {
+    let one_line = s.replace(['\n', '\r'], " ");
+    if one_line.contains([',', '"']) { format!("\"{}\"", one_line.replace('"', "\"\"")) } else { one_line }
+}
+
+fn variant_name(v: &Variant) -> (&'static str, &'static str, &'static str) {
+    let scheme = match v.scheme {
+        SchemeKind::Midpoint => "midpoint",
+        SchemeKind::Trapezoid => "trapezoid",
+        SchemeKind::BackwardEuler => "backward-euler",
+    };
+    let mass = match v.mass {
+        MassKind::Lumped => "lumped",
+        MassKind::Consistent => "consistent",
+        MassKind::Modified => "modified",
+    };
+    let inner = match v.inner {
+        InnerSolver::Newton => "newton",
+        InnerSolver::Conic => "conic",
+        InnerSolver::NewtonUnfrozen => "newton-unfrozen",
+    };
+    (scheme, mass, inner)
+}
+
+/// The CSV header of stability.csv.
+pub const CSV_HEADER: &str = "sweep,parameter,value,variant,scheme,mass,persistency,inner,class,steps_completed,steps_planned,k,\
+ck_limit,ck_limit_scheme,fp_mean,fp_max,fp_capped_steps,newton_total,newton_max_step,unfrozen_fallbacks,max_e1_defect,energy_drift,\
+max_energy_gain,wall_time_s,note";
+
+/// stability.csv: one row per run.
+pub fn csv(rows: &[RunResult]) -> String {
+    let mut s = String::from(CSV_HEADER);
+    s.push('\n');
+    for r in rows {
+        let (scheme, mass, inner) = variant_name(&r.case.variant);
+        let m = &r.m;
+        s.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{},{},{:.3e},{:.4e},{:.4e},{:.4},{}\n",
+            r.case.sweep.key(),
+            r.case.sweep.parameter(),
+            r.case.value,
+            r.case.variant.name,
+            scheme,
+            mass,
+            r.case.variant.persistency,
+            inner,
+            m.class.label(),
+            m.steps_completed,
+            m.steps_planned,
+            m.k,
+            m.ck_limit.map(|v| format!("{v:.4e}")).unwrap_or_default(),
+            m.ck_limit_scheme.map(|v| format!("{v:.4e}")).unwrap_or_default(),
+            m.fp_mean,
+            m.fp_max,
+            m.fp_capped_steps,
+            m.newton_total,
+            m.newton_max,
+            m.fallbacks,
+            m.max_defect,
+            m.drift,
+            m.max_gain,
+            m.wall_time_s,
+            csv_field(&m.note)
+        ));
+    }
+    s
+}
+
+/// The sweeps present in `rows`, in order, with their values in order.
+fn layout(rows: &[RunResult]) -> Vec<(Sweep, Vec<f64>)> {
+    let mut out: Vec<(Sweep, Vec<f64>)> = Vec::new();
+    for r in rows {
+        let pos = match out.iter().position(|(s, _)| *s == r.case.sweep) {
+            Some(p) => p,
+            None => {
+                out.push((r.case.sweep, Vec::new()));
+                out.len() - 1
+            }
+        };
+        if !out[pos].1.contains(&r.case.value) {
+            out[pos].1.push(r.case.value);
+        }
+    }
+    out
+}
+
+fn find<'a>(rows: &'a [RunResult], sweep: Sweep, value: f64, variant: &str) -> Option<&'a RunResult> {
+    rows.iter().find(|r| r.case.sweep == sweep && r.case.value == value && r.case.variant.name == variant)
+}
+
+/// stability.svg: for each sweep a grid of parameter value (x) × variant (y), cells coloured by
+/// class (annotated with the largest fixed-point count, or the step where the run stopped),
+/// a red corner on the runs whose k exceeds their scheme's (C.k) limit, and a legend.
+pub fn svg(rows: &[RunResult]) -> Result<String> {
+    let sweeps = layout(rows);
+    let names: Vec<&'static str> = variants().iter().map(|v| v.name).collect();
+    let (cols, panel_w, label_w, cell_h, head_h, foot_h) = (2usize, 680i32, 190i32, 26i32, 34i32, 40i32);
+    let panel_h = head_h + cell_h * names.len() as i32 + foot_h;
+    let panel_rows = sweeps.len().div_ceil(cols).max(1) as i32;
+    let legend_h = 130i32;
+    let (w, h) = (cols as i32 * panel_w, panel_rows * panel_h + legend_h + 40);
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, (w as u32, h as u32)).into_drawing_area();
+        let err = |e: &dyn std::fmt::Display| Error::Output(format!("stability.svg: {e}"));
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let font = |size: i32| ("sans-serif", size).into_font();
+        let centered = |size: i32| TextStyle::from(font(size)).pos(Pos::new(HPos::Center, VPos::Center));
+        let right = |size: i32| TextStyle::from(font(size)).pos(Pos::new(HPos::Right, VPos::Center));
+        root.draw(&Text::new("Stability map: class of every run (one parameter varied at a time)", (w / 2, 18), centered(20)))
+            .map_err(|e| err(&e))?;
+        for (p, (sweep, values)) in sweeps.iter().enumerate() {
+            let (x0, y0) = ((p % cols) as i32 * panel_w, 36 + (p / cols) as i32 * panel_h);
+            let grid_w = panel_w - label_w - 20;
+            let cell_w = grid_w / values.len().max(1) as i32;
+            let gx = x0 + label_w;
+            let gy = y0 + head_h;
+            root.draw(&Text::new(sweep.title(), (gx + grid_w / 2, y0 + 16), centered(15))).map_err(|e| err(&e))?;
+            for (row, name) in names.iter().enumerate() {
+                let yc = gy + row as i32 * cell_h + cell_h / 2;
+                root.draw(&Text::new(name.to_string(), (gx - 8, yc), right(12))).map_err(|e| err(&e))?;
+                for (col, &value) in values.iter().enumerate() {
+                    let cx = gx + col as i32 * cell_w;
+                    let cy = gy + row as i32 * cell_h;
+                    let Some(r) = find(rows, *sweep, value, name) else {
+                        continue;
+                    };
+                    let m = &r.m;
+                    root.draw(&Rectangle::new([(cx, cy), (cx + cell_w, cy + cell_h)], m.class.color().filled())).map_err(|e| err(&e))?;
+                    root.draw(&Rectangle::new([(cx, cy), (cx + cell_w, cy + cell_h)], WHITE.stroke_width(2))).map_err(|e| err(&e))?;
+                    let text = match m.class {
+                        RunClass::NewtonFailed | RunClass::NonFinite | RunClass::ClearError => {
+                            format!("stop {}/{}", m.steps_completed, m.steps_planned)
+                        }
+                        _ if r.case.variant.inner == InnerSolver::NewtonUnfrozen => {
+                            format!("fp ≤ {}, fb {}", m.fp_max, m.fallbacks)
+                        }
+                        _ => format!("fp ≤ {}", m.fp_max),
+                    };
+                    if m.ck_limit_scheme.is_some_and(|ck| m.k > ck) {
+                        let corner = vec![(cx + cell_w - 12, cy + 1), (cx + cell_w - 1, cy + 1), (cx + cell_w - 1, cy + 12)];
+                        root.draw(&Polygon::new(corner, RED_CORNER.filled())).map_err(|e| err(&e))?;
+                    }
+                    let color = if m.class == RunClass::NonFinite { WHITE } else { BLACK };
+                    root.draw(&Text::new(text, (cx + cell_w / 2, cy + cell_h / 2), centered(11).color(&color))).map_err(|e| err(&e))?;
+                }
+            }
+            let fy = gy + cell_h * names.len() as i32;
+            for (col, &value) in values.iter().enumerate() {
+                let xc = gx + col as i32 * cell_w + cell_w / 2;
+                root.draw(&Text::new(sweep.format_value(value), (xc, fy + 10), centered(12))).map_err(|e| err(&e))?;
+            }
+            root.draw(&Text::new(sweep.parameter(), (gx + grid_w / 2, fy + 28), centered(11))).map_err(|e| err(&e))?;
+        }
+        let ly = 36 + panel_rows * panel_h + 10;
+        root.draw(&Text::new("class", (20, ly + 8), font(14))).map_err(|e| err(&e))?;
+        for (i, class) in RunClass::ALL.iter().enumerate() {
+            let (lx, lyy) = (20 + (i as i32 % 4) * 300, ly + 26 + (i as i32 / 4) * 26);
+            let n = rows.iter().filter(|r| r.m.class == *class).count();
+            root.draw(&Rectangle::new([(lx, lyy), (lx + 18, lyy + 16)], class.color().filled())).map_err(|e| err(&e))?;
+            root.draw(&Rectangle::new([(lx, lyy), (lx + 18, lyy + 16)], BLACK.stroke_width(1))).map_err(|e| err(&e))?;
+            root.draw(&Text::new(format!("{} ({n} runs)", class.label()), (lx + 26, lyy + 2), font(13))).map_err(|e| err(&e))?;
+        }
+        let (nx, ny) = (20, ly + 26 + 2 * 26 + 4);
+        root.draw(&Polygon::new(vec![(nx, ny), (nx + 14, ny), (nx + 14, ny + 14)], RED_CORNER.filled())).map_err(|e| err(&e))?;
+        root.draw(&Text::new(
+            "k above the run's (C.k) limit (ModelInfo's, halved for backward Euler; 0 with the modified mass).   \
+             Cell text: largest fixed-point count of a step (fp ≤ N), or the steps completed when the run stopped; fb: steps where newton-unfrozen fell back to F.1.",
+            (nx + 22, ny + 1),
+            font(12),
+        ))
+        .map_err(|e| err(&e))?;
+        root.present().map_err(|e| err(&e))?;
+    }
+    Ok(out)
+}
+
+/// The printed report: per sweep a map (variant × value, class codes), then one line per run.
+pub fn report(rows: &[RunResult], wall_time_s: f64) -> String {
+    let mut s = String::new();
+    let names: Vec<&'static str> = variants().iter().map(|v| v.name).collect();
+    s.push_str(&format!("stability map: {} runs in {:.1} s\n", rows.len(), wall_time_s));
+    s.push_str("codes: ");
+    for c in RunClass::ALL {
+        s.push_str(&format!("{} = {}; ", c.code(), c.label()));
+    }
+    s.push('\n');
+    for (sweep, values) in layout(rows) {
+        s.push_str(&format!("\n{} ({})\n", sweep.title(), sweep.parameter()));
+        s.push_str(&format!("{:<26}", "variant"));
+        for v in &values {
+            s.push_str(&format!("{:>10}", sweep.format_value(*v)));
+        }
+        s.push('\n');
+        for name in &names {
+            s.push_str(&format!("{name:<26}"));
+            for v in &values {
+                let code = find(rows, sweep, *v, name).map(|r| r.m.class.code()).unwrap_or("-");
+                s.push_str(&format!("{code:>10}"));
+            }
+            s.push('\n');
+        }
+    }
+    s.push_str(&format!(
+        "\n{:<15}{:>8} {:<25}{:<19}{:>10}{:>8}{:>5}{:>6}{:>5}{:>8}{:>10}{:>11}{:>10}{:>8}\n",
+        "sweep", "value", "variant", "class", "steps", "fp mean", "max", "caps", "fb", "newton", "max E.1", "drift", "max gain", "wall s"
+    ));
+    for r in rows {
+        let m = &r.m;
+        s.push_str(&format!(
+            "{:<15}{:>8} {:<25}{:<19}{:>10}{:>8.2}{:>5}{:>6}{:>5}{:>8}{:>10.2e}{:>11.3e}{:>10.2e}{:>8.2}\n",
+            r.case.sweep.key(),
+            r.case.sweep.format_value(r.case.value),
+            r.case.variant.name,
+            m.class.label(),
+            format!("{}/{}", m.steps_completed, m.steps_planned),
+            m.fp_mean,
+            m.fp_max,
+            m.fp_capped_steps,
+            m.fallbacks,
+            m.newton_total,
+            m.max_defect,
+            m.drift,
+            m.max_gain,
+            m.wall_time_s
+        ));
+    }
+    let stopped: Vec<&RunResult> = rows.iter().filter(|r| !r.m.note.is_empty()).collect();
+    if !stopped.is_empty() {
+        s.push_str("\nwhy runs stopped:\n");
+        for r in stopped {
+            s.push_str(&format!(
+                "  {} = {} / {}: {}\n",
+                r.case.sweep.key(),
+                r.case.sweep.format_value(r.case.value),
+                r.case.variant.name,
+                r.m.note
+            ));
+        }
+    }
+    s
+}
+
+const RED_CORNER: RGBColor = RGBColor(200, 0, 0);
+
 /// Run the sweep and write its CSV and SVG files under `out`.
-pub fn run(_out: &Path, _opts: &StabilityOptions) -> Result<String> {
-    Err(Error::Output("the stability map is not implemented yet".into()))
+pub fn run(out: &Path, opts: &StabilityOptions) -> Result<String> {
+    let clock = Instant::now();
+    let rows = sweep(opts);
+    let wall = clock.elapsed().as_secs_f64();
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    write_atomic(&out.join("stability.csv"), csv(&rows).as_bytes())?;
+    write_atomic(&out.join("stability.svg"), svg(&rows)?.as_bytes())?;
+    let mut s = report(&rows, wall);
+    s.push_str(&format!("\nwritten {} and {}\n", out.join("stability.csv").display(), out.join("stability.svg").display()));
+    Ok(s)
 }

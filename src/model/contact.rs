@@ -120,17 +120,22 @@ impl ContactModel {
 
 impl ContactModel {
     /// (C.k) The largest step for which the unfrozen step problem is convex:
-    /// k ≤ 2 m_i/(ω_i p̄_τ L_μ) for every contact node, with m_i the lumped nodal mass,
-    /// p̄_τ = sup p_τ and L_μ = sup|μ'|. Returns (k_max, the limiting contact node), or None
-    /// when no bound applies (frictionless, μ constant, or p_τ ≡ 0).
-    pub fn convex_step_limit(&self, lumped_mass: &[f64]) -> Option<(f64, usize)> {
+    /// k ≤ 2 m_i/(ω_i p̄_τ L_μ) for every contact node (midpoint), with m_i the diagonal nodal
+    /// mass, p̄_τ = sup p_τ and L_μ = sup|μ'|. In general the friction term's curvature in the
+    /// contact velocity is −ω p̄ a_v L_μ against the inertia's m/k, where a_v is the scheme's
+    /// slip-rate factor (v̄ = a_v y + …: ½ for midpoint and trapezoid, 1 for backward Euler), so
+    /// k ≤ m_i/(a_v ω_i p̄_τ L_μ). Returns (k_max, the limiting contact node) — k_max = 0 when a
+    /// contact node has no mass (the modified mass) — or None when no bound applies:
+    /// frictionless, μ constant or p_τ ≡ 0 (always convex), or p_τ unbounded (g = inf or
+    /// uncapped with the penalty: no step is small enough for every state).
+    pub fn convex_step_limit(&self, masses: &[f64], a_v: f64) -> Option<(f64, usize)> {
         let mu = self.friction.as_ref()?;
         let (p_bar, l_mu) = (self.p_tau.sup(), mu.lipschitz());
-        if l_mu == 0.0 || p_bar == 0.0 {
+        if l_mu == 0.0 || p_bar == 0.0 || !p_bar.is_finite() {
             return None;
         }
         (0..self.n())
-            .map(|i| (2.0 * lumped_mass[self.dofs[i][0]] / (self.omega[i] * p_bar * l_mu), i))
+            .map(|i| (masses[self.dofs[i][0]] / (a_v * self.omega[i] * p_bar * l_mu), i))
             .min_by(|a, b| a.0.total_cmp(&b.0))
     }
 }
