@@ -1,9 +1,44 @@
 //! Work–precision benchmark (`dyncontact study bench`, run by `cargo xtask bench`).
-//! To be implemented.
+//!
+//! All runs use the academic scene (`Scene::default_scene()`: a 2×1 m Kelvin–Voigt block
+//! clamped on the left, pressed onto a compliant foundation with a penetration bound, then
+//! driven tangentially from t = 0.2 s under exponential velocity weakening), shortened to a
+//! horizon T. Three parts:
+//!
+//! 1. **Work–precision** (`work_precision.csv`, `work_precision.svg`): schemes × inner solvers ×
+//!    masses × levels of joint refinement (h and k halved together), each run's error against a
+//!    fine reference and its wall time. Two error measures, both over the whole trajectory and
+//!    computable across meshes:
+//!    - `error_force`: the relative L²(0, T) error of the total contact force per unit thickness
+//!      (F_ν, F_τ) (history rows `normal_force`, `tangential_force`). A step's force is the mean
+//!      force over its step (impulse / k) for every scheme, so it is compared with the reference
+//!      averaged over the same step: the error of the piecewise-constant force histories.
+//!    - `error_disp`: the relative L²(0, T) error of the displacement at [`PROBES`], points that
+//!      are nodes of every nested structured mesh, compared at the run's step times.
+//! 2. **The floor**: per run, the time of two sparse triangular-solve pairs with the run's own
+//!    factor of A_k (free solve + recovery solve: the least a step with contact can cost), and
+//!    time per step ÷ floor.
+//! 3. **The race** (`race.csv`, `race.svg`): `newton` (F.1, the paper's sequence of convex
+//!    problems) against `newton-unfrozen` (N.4, F.1 as fallback) on the academic friction law and
+//!    a 5× steeper one, at a k inside (C.k) and beyond it: time and linear-algebra work per step,
+//!    and the largest per-step difference of their solutions from the same state.
 
+use std::fmt::Write as _;
 use std::path::Path;
+use std::time::Instant;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::output::plots::PALETTE;
+use crate::output::{write_atomic, ModelInfo};
+use crate::problem::Problem;
+use crate::scene::{InnerSolver, MassKind, SchemeKind, Scene};
+use crate::simulation::Simulation;
+use crate::step::fixed_point::{InnerFailure, Inner};
+use crate::step::newton::NewtonSettings;
+use crate::study::loglog_slope;
 
 /// Options of the benchmark.
 #[derive(Debug, Clone, Default)]
@@ -12,7 +47,940 @@ pub struct BenchOptions {
     pub quick: bool,
 }
 
+/// The columns of work_precision.csv.
+pub const WORK_PRECISION_COLUMNS: &str = "scheme,inner,mass,cells,k,steps,wall_time_s,time_per_step_s,floor_s,ratio_to_floor,\
+error_force,error_disp,newton_iterations,fixed_point_iterations,error_normal_force,error_tangential_force,error_impulse,status";
+
+/// The columns of race.csv.
+pub const RACE_COLUMNS: &str = "case,decay,k,ck_limit,inside_ck,method,steps,wall_time_s,time_per_step_s,contact_time_per_step_s,\
+newton_iterations_per_step,fixed_point_iterations_per_step,unfrozen_steps,fallback_steps,setup_delassus_s,max_velocity_difference,\
+max_force_difference,differing_steps,status";
+
+/// Material points (x, y) where displacements are compared: nodes of every nested rectangle mesh
+/// (right corners, bottom and top midpoints, centre; the left corners are clamped).
+pub const PROBES: [[f64; 2]; 5] = [[2.0, 0.0], [1.0, 0.0], [2.0, 1.0], [1.0, 1.0], [1.0, 0.5]];
+
+/// Two methods differ on a step when their contact velocities or forces differ by more than
+/// this, relative to the step's velocity and force scales (tests/unfrozen.rs).
+const AGREEMENT_TOLERANCE: f64 = 1e-6;
+
+/// One level of joint refinement: the mesh and the time step.
+#[derive(Debug, Clone, Copy)]
+struct Level {
+    cells: [i64; 2],
+    k: f64,
+}
+
+/// What the race runs: the mesh, the horizon, the friction laws (multiples of the scene's
+/// decay α) and the steps beyond (C.k); the step inside (C.k) is derived from the limit.
+#[derive(Debug, Clone)]
+struct RacePlan {
+    cells: [i64; 2],
+    t_end: f64,
+    decay_factors: Vec<f64>,
+    beyond: Vec<f64>,
+}
+
+/// What the benchmark runs.
+#[derive(Debug, Clone)]
+struct Plan {
+    t_end: f64,
+    /// coarse to fine; h and k halved together
+    levels: Vec<Level>,
+    reference: Level,
+    schemes: Vec<SchemeKind>,
+    inners: Vec<InnerSolver>,
+    masses: Vec<MassKind>,
+    /// the conic twin runs on the coarsest `conic_levels` levels only (it is ~30× slower)
+    conic_levels: usize,
+    race: RacePlan,
+}
+
+/// The four joint levels [8,4]/2e-3 … [64,32]/2.5e-4, truncated to `n`.
+fn joint_levels(n: usize) -> Vec<Level> {
+    (0..n).map(|l| Level { cells: [8 << l, 4 << l], k: 2e-3 / f64::from(1u32 << l) }).collect()
+}
+
+impl Plan {
+    /// The full benchmark (~5 min in release): T = 0.3 s; the reference is one level finer than
+    /// the finest bench level (two levels finer would cost ~8× the whole benchmark).
+    fn full() -> Plan {
+        Plan {
+            t_end: 0.3,
+            levels: joint_levels(4),
+            reference: Level { cells: [128, 64], k: 1.25e-4 },
+            schemes: vec![SchemeKind::Midpoint, SchemeKind::Trapezoid, SchemeKind::BackwardEuler],
+            inners: vec![InnerSolver::Newton, InnerSolver::Conic],
+            masses: vec![MassKind::Lumped, MassKind::Consistent],
+            conic_levels: 3,
+            race: RacePlan { cells: [32, 16], t_end: 0.5, decay_factors: vec![1.0, 5.0], beyond: vec![5e-4, 1e-3] },
+        }
+    }
+
+    /// The smoke-test configuration: 2 levels, newton only, T = 0.05 s.
+    fn quick() -> Plan {
+        Plan {
+            t_end: 0.05,
+            levels: joint_levels(2),
+            reference: Level { cells: [32, 16], k: 5e-4 },
+            schemes: vec![SchemeKind::Midpoint, SchemeKind::Trapezoid, SchemeKind::BackwardEuler],
+            inners: vec![InnerSolver::Newton],
+            masses: vec![MassKind::Lumped, MassKind::Consistent],
+            conic_levels: 0,
+            race: RacePlan { cells: [16, 8], t_end: 0.05, decay_factors: vec![1.0, 5.0], beyond: vec![1e-3] },
+        }
+    }
+}
+
+/// One configuration of the work–precision sweep.
+#[derive(Debug, Clone, Copy)]
+struct RunSpec {
+    scheme: SchemeKind,
+    inner: InnerSolver,
+    mass: MassKind,
+    level: Level,
+}
+
+fn scheme_name(s: SchemeKind) -> &'static str {
+    match s {
+        SchemeKind::Midpoint => "midpoint",
+        SchemeKind::Trapezoid => "trapezoid",
+        SchemeKind::BackwardEuler => "backward-euler",
+    }
+}
+
+fn inner_name(i: InnerSolver) -> &'static str {
+    match i {
+        InnerSolver::Newton => "newton",
+        InnerSolver::Conic => "conic",
+        InnerSolver::NewtonUnfrozen => "newton-unfrozen",
+    }
+}
+
+fn mass_name(m: MassKind) -> &'static str {
+    match m {
+        MassKind::Lumped => "lumped",
+        MassKind::Consistent => "consistent",
+        MassKind::Modified => "modified",
+    }
+}
+
+impl RunSpec {
+    fn label(&self) -> String {
+        format!("{}/{}/{} {}x{} k={:e}", scheme_name(self.scheme), inner_name(self.inner), mass_name(self.mass), self.level.cells[0], self.level.cells[1], self.level.k)
+    }
+
+    /// The academic scene at this configuration, shortened to `t_end` and validated.
+    fn scene(&self, t_end: f64) -> Result<Scene> {
+        let mut s = Scene::default_scene();
+        s.domain.cells = Some(self.level.cells);
+        s.time.step = self.level.k;
+        s.time.end = t_end;
+        s.time.scheme = self.scheme;
+        s.solver.inner = self.inner;
+        s.solver.mass = self.mass;
+        s.validate()?;
+        Ok(s)
+    }
+}
+
+/// What one run leaves for the error measures: per step the contact forces (F_ν, F_τ) and the
+/// probe displacements at t_{n+1} ([ux, uy] per probe, flattened).
+#[derive(Debug, Clone, Default)]
+struct Trajectory {
+    k: f64,
+    forces: Vec<[f64; 2]>,
+    probes: Vec<Vec<f64>>,
+}
+
+/// Work and solver facts of one run.
+#[derive(Debug, Clone, Default)]
+struct RunStats {
+    steps: usize,
+    /// Simulation::new (assembly, factorization, Delassus) plus the time loop
+    wall_time_s: f64,
+    /// the time loop alone
+    step_time_s: f64,
+    /// Σ of sim.timing[1] (contact solve incl. F.1) over the steps
+    contact_time_s: f64,
+    setup_delassus_s: f64,
+    newton_iterations: usize,
+    fixed_point_iterations: usize,
+    unfrozen: usize,
+    fallbacks: usize,
+    /// two A_k solves (free + recovery) with this run's factor
+    floor_s: f64,
+}
+
+/// The free-DOF indices of [ux, uy] at each probe point (None where clamped).
+fn probe_dofs(p: &Problem) -> Result<Vec<[Option<usize>; 2]>> {
+    let tol = 1e-9 * p.mesh.bbox_diameter();
+    PROBES
+        .iter()
+        .map(|x| {
+            let node = p.mesh.nodes.iter().position(|y| (y[0] - x[0]).abs() <= tol && (y[1] - x[1]).abs() <= tol);
+            let node = node.ok_or_else(|| Error::Output(format!("bench: the probe point ({}, {}) is not a mesh node", x[0], x[1])))?;
+            Ok([p.dofs.map[2 * node], p.dofs.map[2 * node + 1]])
+        })
+        .collect()
+}
+
+/// The floor of one step: two sparse triangular-solve pairs (free solve + recovery) with the
+/// run's own factor of A_k; the best of 5 batches of the mean time per solve (robust to other
+/// processes on the machine).
+fn floor_time(sim: &Simulation) -> f64 {
+    let base: Vec<f64> = (0..sim.u.len()).map(|i| 1.0 + (i % 7) as f64).collect();
+    let mut x = base.clone();
+    let clock = Instant::now();
+    sim.stepper.solve_in_place(&mut x);
+    let once = clock.elapsed().as_secs_f64().max(1e-7);
+    let reps = ((0.01 / once) as usize).clamp(3, 5000);
+    let mut best = f64::INFINITY;
+    for _ in 0..5 {
+        let clock = Instant::now();
+        for _ in 0..reps {
+            x.copy_from_slice(&base);
+            sim.stepper.solve_in_place(&mut x);
+        }
+        best = best.min(clock.elapsed().as_secs_f64() / reps as f64);
+    }
+    2.0 * best
+}
+
+/// Run a problem to its end, recording the trajectory at `probes` and the work done; the
+/// recording is outside the timed parts.
+fn simulate(p: &Problem, probes: &[[Option<usize>; 2]]) -> Result<(Trajectory, RunStats)> {
+    let clock = Instant::now();
+    let mut sim = Simulation::new(p)?;
+    let setup = clock.elapsed().as_secs_f64();
+    let mut traj = Trajectory { k: p.k, forces: Vec::with_capacity(p.steps), probes: Vec::with_capacity(p.steps) };
+    let mut st = RunStats { steps: p.steps, setup_delassus_s: sim.setup_timing[2], ..RunStats::default() };
+    for _ in 0..p.steps {
+        let clock = Instant::now();
+        let rec = sim.step()?;
+        st.step_time_s += clock.elapsed().as_secs_f64();
+        st.contact_time_s += sim.timing[1];
+        st.newton_iterations += rec.report.inner_iterations;
+        st.fixed_point_iterations += rec.report.fixed_point_iterations;
+        st.unfrozen += usize::from(rec.report.unfrozen);
+        st.fallbacks += usize::from(rec.report.fallback);
+        traj.forces.push([rec.normal_force, rec.tangential_force]);
+        traj.probes.push(probes.iter().flat_map(|d| d.map(|i| i.map_or(0.0, |i| sim.u[i]))).collect());
+    }
+    st.wall_time_s = setup + st.step_time_s;
+    st.floor_s = floor_time(&sim);
+    Ok((traj, st))
+}
+
+/// How many steps of length `k` make the span `span` (an integer for nested levels).
+fn steps_in(span: f64, k: f64) -> Result<usize> {
+    let r = span / k;
+    let n = r.round() as usize;
+    (n >= 1 && (r - n as f64).abs() <= 1e-9 * r)
+        .then_some(n)
+        .ok_or_else(|| Error::Output(format!("bench: {span} is not a whole number of steps k = {k}")))
+}
+
+/// How many reference steps make one step of `run`, checking the reference covers the run.
+fn step_ratio(run: &Trajectory, reference: &Trajectory) -> Result<usize> {
+    let n = steps_in(run.k, reference.k)?;
+    (run.forces.len() * n <= reference.forces.len())
+        .then_some(n)
+        .ok_or_else(|| Error::Output(format!("bench: the reference (k = {}) is shorter than the run (k = {})", reference.k, run.k)))
+}
+
+/// Means of a force history over consecutive windows of `m` steps (a trailing partial window is dropped).
+fn window_means(forces: &[[f64; 2]], m: usize) -> Vec<[f64; 2]> {
+    forces.chunks_exact(m.max(1)).map(|w| [0, 1].map(|c| w.iter().map(|f| f[c]).sum::<f64>() / w.len() as f64)).collect()
+}
+
+/// Relative L² distances of a force history from a reference one on the same time grid (the
+/// common length): [vector (F_ν, F_τ), F_ν, F_τ].
+fn relative_l2(run: &[[f64; 2]], reference: &[[f64; 2]]) -> [f64; 3] {
+    let (mut diff, mut norm) = ([0.0; 2], [0.0; 2]);
+    for (f, g) in run.iter().zip(reference) {
+        for c in 0..2 {
+            diff[c] += (f[c] - g[c]).powi(2);
+            norm[c] += g[c] * g[c];
+        }
+    }
+    let rel = |d: f64, n: f64| if n > 0.0 { (d / n).sqrt() } else { f64::NAN };
+    [rel(diff[0] + diff[1], norm[0] + norm[1]), rel(diff[0], norm[0]), rel(diff[1], norm[1])]
+}
+
+/// Relative L²(0, T) errors of the force history at the run's own resolution [vector, F_ν, F_τ]:
+/// each step's force is its mean over the step, compared with the reference's mean over the
+/// same step. Step-to-step chatter of the run counts in full (a strong measure).
+fn force_errors(run: &Trajectory, reference: &Trajectory) -> Result<[f64; 3]> {
+    let r = step_ratio(run, reference)?;
+    Ok(relative_l2(&run.forces, &window_means(&reference.forces, r)))
+}
+
+/// Relative L²(0, T) error of the contact impulses over fixed windows of length `window` (the
+/// coarsest step): the force vector averaged over each window, for run and reference alike. A
+/// weak measure: chatter within a window averages out, as a time-averaged reading of the force.
+fn impulse_error(run: &Trajectory, reference: &Trajectory, window: f64) -> Result<f64> {
+    step_ratio(run, reference)?;
+    let (a, b) = (window_means(&run.forces, steps_in(window, run.k)?), window_means(&reference.forces, steps_in(window, reference.k)?));
+    Ok(relative_l2(&a, &b)[0])
+}
+
+/// Relative L²(0, T) error of the displacement at the probe points, at the run's step times.
+fn displacement_error(run: &Trajectory, reference: &Trajectory) -> Result<f64> {
+    let r = step_ratio(run, reference)?;
+    let (mut diff, mut norm) = (0.0, 0.0);
+    for (n, u) in run.probes.iter().enumerate() {
+        let u_ref = &reference.probes[(n + 1) * r - 1];
+        diff += u.iter().zip(u_ref).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
+        norm += u_ref.iter().map(|b| b * b).sum::<f64>();
+    }
+    Ok(if norm > 0.0 { (diff / norm).sqrt() } else { f64::NAN })
+}
+
+/// One row of work_precision.csv.
+#[derive(Debug, Clone)]
+struct WorkRow {
+    spec: RunSpec,
+    stats: RunStats,
+    /// [vector, normal, tangential]
+    error_force: [f64; 3],
+    /// force averaged over windows of the coarsest step
+    error_impulse: f64,
+    error_disp: f64,
+    status: String,
+}
+
+impl WorkRow {
+    fn time_per_step(&self) -> f64 {
+        self.stats.step_time_s / self.stats.steps.max(1) as f64
+    }
+    fn ok(&self) -> bool {
+        self.status == "ok"
+    }
+    fn group(&self) -> (SchemeKind, InnerSolver, MassKind) {
+        (self.spec.scheme, self.spec.inner, self.spec.mass)
+    }
+}
+
+/// A CSV field without separators or line breaks.
+fn csv_text(s: &str) -> String {
+    s.replace([',', '\n', '\r'], ";")
+}
+
+/// Run one configuration and measure its errors against the reference; a failed run becomes a
+/// row whose status says why (the conic twin can stall, and that is a result).
+fn work_row(spec: RunSpec, plan: &Plan, reference: &Trajectory) -> Result<WorkRow> {
+    let p = Problem::new(spec.scene(plan.t_end)?, Path::new("."))?;
+    let probes = probe_dofs(&p)?;
+    match simulate(&p, &probes) {
+        Ok((traj, stats)) => Ok(WorkRow {
+            spec,
+            stats,
+            error_force: force_errors(&traj, reference)?,
+            error_impulse: impulse_error(&traj, reference, plan.levels[0].k)?,
+            error_disp: displacement_error(&traj, reference)?,
+            status: "ok".into(),
+        }),
+        Err(e) => Ok(WorkRow {
+            spec,
+            stats: RunStats { steps: p.steps, ..RunStats::default() },
+            error_force: [f64::NAN; 3],
+            error_impulse: f64::NAN,
+            error_disp: f64::NAN,
+            status: format!("failed: {e}"),
+        }),
+    }
+}
+
+/// The configurations of the sweep, conic restricted to the coarse levels.
+fn run_specs(plan: &Plan) -> Vec<RunSpec> {
+    let mut v = Vec::new();
+    for &scheme in &plan.schemes {
+        for &inner in &plan.inners {
+            for &mass in &plan.masses {
+                for (l, &level) in plan.levels.iter().enumerate() {
+                    if inner == InnerSolver::Conic && l >= plan.conic_levels {
+                        continue;
+                    }
+                    v.push(RunSpec { scheme, inner, mass, level });
+                }
+            }
+        }
+    }
+    v
+}
+
+/// work_precision.csv.
+fn work_csv(rows: &[WorkRow]) -> String {
+    let mut s = format!("{WORK_PRECISION_COLUMNS}\n");
+    for r in rows {
+        let st = &r.stats;
+        let tps = r.time_per_step();
+        let ratio = if st.floor_s > 0.0 { tps / st.floor_s } else { f64::NAN };
+        let _ = writeln!(
+            s,
+            "{},{},{},{}x{},{:e},{},{:.6e},{:.6e},{:.6e},{:.4},{:.6e},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{}",
+            scheme_name(r.spec.scheme),
+            inner_name(r.spec.inner),
+            mass_name(r.spec.mass),
+            r.spec.level.cells[0],
+            r.spec.level.cells[1],
+            r.spec.level.k,
+            st.steps,
+            st.wall_time_s,
+            tps,
+            st.floor_s,
+            ratio,
+            r.error_force[0],
+            r.error_disp,
+            st.newton_iterations,
+            st.fixed_point_iterations,
+            r.error_force[1],
+            r.error_force[2],
+            r.error_impulse,
+            csv_text(&r.status)
+        );
+    }
+    s
+}
+
+/// Observed orders of one group: pairwise log2(e_l / e_{l+1}) between consecutive levels (h and k
+/// halve together) and the least-squares slope against k, for one error measure.
+fn observed_orders(rows: &[&WorkRow], error: Measure) -> (Vec<f64>, f64) {
+    let ok: Vec<&&WorkRow> = rows.iter().filter(|r| r.ok()).collect();
+    let errs: Vec<f64> = ok.iter().map(|r| error(r)).collect();
+    let ks: Vec<f64> = ok.iter().map(|r| r.spec.level.k).collect();
+    (errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect(), loglog_slope(&ks, &errs))
+}
+
+/// The rows of each scheme × inner × mass group, in sweep order.
+fn groups(rows: &[WorkRow]) -> Vec<Vec<&WorkRow>> {
+    let mut out: Vec<Vec<&WorkRow>> = Vec::new();
+    for r in rows {
+        match out.iter_mut().find(|g| g[0].group() == r.group()) {
+            Some(g) => g.push(r),
+            None => out.push(vec![r]),
+        }
+    }
+    out
+}
+
+fn group_label(r: &WorkRow) -> String {
+    format!("{}/{}/{}", scheme_name(r.spec.scheme), inner_name(r.spec.inner), mass_name(r.spec.mass))
+}
+
+/// The colour of a scheme × mass pair (newton and conic share it; the line style differs).
+fn group_color(r: &WorkRow) -> RGBColor {
+    let s = match r.spec.scheme {
+        SchemeKind::Midpoint => 0,
+        SchemeKind::Trapezoid => 1,
+        SchemeKind::BackwardEuler => 2,
+    };
+    let m = usize::from(r.spec.mass != MassKind::Lumped);
+    PALETTE[(2 * s + m) % PALETTE.len()]
+}
+
+/// An error measure of a work–precision row.
+type Measure = fn(&WorkRow) -> f64;
+
+fn svg_err(file: &'static str) -> impl Fn(&dyn std::fmt::Display) -> Error {
+    move |e| Error::Output(format!("{file}: {e}"))
+}
+
+/// A padded log-scale range of the positive finite values (a decade when there are none).
+fn log_range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = vals.filter(|v| v.is_finite() && *v > 0.0).fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
+    if lo.is_finite() { (lo / 1.6, hi * 1.6) } else { (0.1, 1.0) }
+}
+
+/// One log–log panel of work_precision.svg: `error` of each group against wall time.
+fn work_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, rows: &[WorkRow], error: Measure, y_desc: &str, legend: bool) -> Result<()> {
+    let err = svg_err("work_precision.svg");
+    let ok: Vec<&WorkRow> = rows.iter().filter(|r| r.ok()).collect();
+    let (x0, x1) = log_range(ok.iter().map(|r| r.stats.wall_time_s));
+    let (y0, y1) = log_range(ok.iter().map(|r| error(r)));
+    let mut chart = ChartBuilder::on(area)
+        .caption(y_desc, ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+        .map_err(|e| err(&e))?;
+    chart
+        .configure_mesh()
+        .x_desc("wall time [s]")
+        .y_desc(y_desc)
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()
+        .map_err(|e| err(&e))?;
+    for g in groups(rows) {
+        let pts: Vec<(f64, f64)> = g.iter().filter(|r| r.ok()).map(|r| (r.stats.wall_time_s, error(r))).filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.1.is_finite()).collect();
+        if pts.is_empty() {
+            continue;
+        }
+        let color = group_color(g[0]);
+        let style = ShapeStyle::from(&color).stroke_width(2);
+        let newton = g[0].spec.inner != InnerSolver::Conic;
+        let drawn = if newton {
+            chart.draw_series(LineSeries::new(pts.clone(), style)).map_err(|e| err(&e))?
+        } else {
+            chart.draw_series(DashedLineSeries::new(pts.clone(), 8, 5, style)).map_err(|e| err(&e))?
+        };
+        drawn.label(group_label(g[0])).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+        if newton {
+            chart.draw_series(pts.iter().map(|p| Circle::new(*p, 4, color.filled()))).map_err(|e| err(&e))?;
+        } else {
+            chart.draw_series(pts.iter().map(|p| TriangleMarker::new(*p, 6, color.filled()))).map_err(|e| err(&e))?;
+        }
+    }
+    if legend {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerLeft)
+            .label_font(("sans-serif", 12))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| err(&e))?;
+    }
+    Ok(())
+}
+
+/// work_precision.svg: the step-resolved force, impulse and displacement errors against wall
+/// time, log–log, one line per scheme × inner × mass (newton solid with circles, conic dashed
+/// with triangles).
+fn work_svg(rows: &[WorkRow], title: &str) -> Result<String> {
+    let err = svg_err("work_precision.svg");
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1950, 640)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let root = root.titled(title, ("sans-serif", 20)).map_err(|e| err(&e))?;
+        let panels = root.split_evenly((1, 3));
+        work_panel(&panels[0], rows, |r| r.error_force[0], "contact force (F_ν, F_τ) per step: relative L² error", true)?;
+        work_panel(&panels[1], rows, |r| r.error_impulse, "force averaged over the coarsest step: relative L² error", false)?;
+        work_panel(&panels[2], rows, |r| r.error_disp, "probe displacements: relative L² error", false)?;
+        root.present().map_err(|e| err(&e))?;
+    }
+    Ok(svg)
+}
+
+/// One case of the race: a friction law and a step.
+#[derive(Debug, Clone)]
+struct RaceCase {
+    label: String,
+    decay: f64,
+    k: f64,
+    ck_limit: Option<f64>,
+}
+
+/// One row of race.csv: a method on a case, with the case's agreement measures.
+#[derive(Debug, Clone)]
+struct RaceRow {
+    case: RaceCase,
+    method: InnerSolver,
+    stats: RunStats,
+    agreement: Agreement,
+    status: String,
+}
+
+/// Per-step comparison of F.1 and N.4 from the same state, along the F.1 trajectory.
+#[derive(Debug, Clone, Copy, Default)]
+struct Agreement {
+    max_dv: f64,
+    max_df: f64,
+    differing: usize,
+}
+
+/// The academic scene on the race mesh with decay α, step k and an inner solver, validated.
+fn race_scene(race: &RacePlan, decay: f64, k: f64, inner: InnerSolver) -> Result<Scene> {
+    let mut s = Scene::default_scene();
+    s.domain.cells = Some(race.cells);
+    s.time.end = race.t_end;
+    s.time.step = k;
+    s.solver.inner = inner;
+    s.contact.as_mut().ok_or_else(|| Error::scene("contact", "the race needs the academic scene's contact"))?.friction.decay = Some(decay);
+    s.validate()?;
+    Ok(s)
+}
+
+/// The scene's own friction decay α (the race's base law).
+fn base_decay() -> Result<f64> {
+    Scene::default_scene().contact.and_then(|c| c.friction.decay).ok_or_else(|| Error::scene("contact.friction.decay", "the race needs an exponential law"))
+}
+
+/// The largest step 1e-3 / 2^j inside the (C.k) limit (a whole number of steps over T).
+fn step_inside(limit: f64) -> f64 {
+    let mut k = 1e-3;
+    for _ in 0..30 {
+        if k <= limit {
+            break;
+        }
+        k /= 2.0;
+    }
+    k
+}
+
+/// The race cases: per friction law, a step inside (C.k) (from `ModelInfo::ck_step_limit`) and
+/// the plan's steps beyond it.
+fn race_cases(race: &RacePlan) -> Result<Vec<RaceCase>> {
+    let alpha0 = base_decay()?;
+    let mut cases = Vec::new();
+    for &f in &race.decay_factors {
+        let decay = alpha0 * f;
+        let probe = Problem::new(race_scene(race, decay, race.beyond[0], InnerSolver::Newton)?, Path::new("."))?;
+        let ck_limit = ModelInfo::of(&probe).ck_step_limit;
+        let mut ks: Vec<f64> = ck_limit.map(step_inside).into_iter().chain(race.beyond.iter().copied()).collect();
+        ks.sort_by(f64::total_cmp);
+        ks.dedup();
+        for k in ks {
+            cases.push(RaceCase { label: format!("α={decay} k={k:e}"), decay, k, ck_limit });
+        }
+    }
+    Ok(cases)
+}
+
+fn inner_failure(e: InnerFailure) -> Error {
+    Error::Output(format!(
+        "bench race: the {} solver failed in fixed-point iteration {} after {} iterations (residual {:.2e}): {}",
+        e.solver, e.fixed_point_iteration, e.iterations, e.residual, e.reason
+    ))
+}
+
+/// The Newton settings of a simulation whose inner solver is `newton`.
+fn newton_settings(sim: &Simulation) -> Result<NewtonSettings> {
+    match sim.settings.inner {
+        Inner::Newton(s) | Inner::NewtonUnfrozen(s) => Ok(s),
+        Inner::Conic(_) => Err(Error::Output("bench race: the comparison needs a Newton inner solver".into())),
+    }
+}
+
+/// (N.4) against (F.1) step by step from the same state (the F.1 trajectory): the largest
+/// difference of the contact velocities and forces, relative to the step's scales, and the
+/// number of steps where they differ beyond [`AGREEMENT_TOLERANCE`] (tests/unfrozen.rs).
+fn agreement(p: &Problem) -> Result<Agreement> {
+    let mut sim = Simulation::new(p)?;
+    let set = newton_settings(&sim)?;
+    let c = p.contact.as_ref().ok_or_else(|| Error::Output("bench race: the scene has no contact".into()))?;
+    let mut a = Agreement::default();
+    for _ in 0..p.steps {
+        {
+            let (w, _) = sim.free_velocity();
+            let (data, p_hat) = sim.step_data(c.restrict(&w)).ok_or_else(|| Error::Output("bench race: no contact data".into()))?;
+            let (f1, _, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).map_err(inner_failure)?;
+            let (un, _, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).map_err(inner_failure)?;
+            let vs = data.velocity_scale(&f1.y).max(1e-300);
+            let (ra, rb) = (data.forces(&f1.y, &f1.lambda, &f1.t), data.forces(&un.y, &un.lambda, &un.t));
+            let fs = crate::linalg::norm_inf(&ra).max(1e-300);
+            let dv = f1.y.iter().zip(&un.y).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / vs;
+            let df = ra.iter().zip(&rb).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / fs;
+            a.max_dv = a.max_dv.max(dv);
+            a.max_df = a.max_df.max(df);
+            a.differing += usize::from(dv > AGREEMENT_TOLERANCE || df > AGREEMENT_TOLERANCE);
+        }
+        sim.step()?;
+    }
+    Ok(a)
+}
+
+/// Both methods on one case: timed runs, then the per-step agreement.
+fn race_rows(race: &RacePlan, case: &RaceCase) -> Result<Vec<RaceRow>> {
+    let mut rows = Vec::new();
+    for method in [InnerSolver::Newton, InnerSolver::NewtonUnfrozen] {
+        let p = Problem::new(race_scene(race, case.decay, case.k, method)?, Path::new("."))?;
+        let (stats, status) = match simulate(&p, &[]) {
+            Ok((_, st)) => (st, "ok".to_string()),
+            Err(e) => (RunStats { steps: p.steps, ..RunStats::default() }, format!("failed: {e}")),
+        };
+        rows.push(RaceRow { case: case.clone(), method, stats, agreement: Agreement::default(), status });
+    }
+    let p = Problem::new(race_scene(race, case.decay, case.k, InnerSolver::Newton)?, Path::new("."))?;
+    let agreement = match agreement(&p) {
+        Ok(a) => a,
+        Err(e) => {
+            for r in &mut rows {
+                r.status = format!("{}; comparison failed: {e}", r.status);
+            }
+            Agreement { max_dv: f64::NAN, max_df: f64::NAN, differing: 0 }
+        }
+    };
+    for r in &mut rows {
+        r.agreement = agreement;
+    }
+    Ok(rows)
+}
+
+impl RaceRow {
+    fn per_step(&self, x: f64) -> f64 {
+        x / self.stats.steps.max(1) as f64
+    }
+    fn inside(&self) -> Option<bool> {
+        self.case.ck_limit.map(|l| self.case.k <= l)
+    }
+}
+
+/// race.csv.
+fn race_csv(rows: &[RaceRow]) -> String {
+    let mut s = format!("{RACE_COLUMNS}\n");
+    for r in rows {
+        let st = &r.stats;
+        let _ = writeln!(
+            s,
+            "{},{},{:e},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.4},{:.4},{},{},{:.6e},{:.3e},{:.3e},{},{}",
+            csv_text(&r.case.label),
+            r.case.decay,
+            r.case.k,
+            r.case.ck_limit.map_or("".into(), |l| format!("{l:.6e}")),
+            r.inside().map_or("", |b| if b { "yes" } else { "no" }),
+            inner_name(r.method),
+            st.steps,
+            st.wall_time_s,
+            r.per_step(st.step_time_s),
+            r.per_step(st.contact_time_s),
+            r.per_step(st.newton_iterations as f64),
+            r.per_step(st.fixed_point_iterations as f64),
+            st.unfrozen,
+            st.fallbacks,
+            st.setup_delassus_s,
+            r.agreement.max_dv,
+            r.agreement.max_df,
+            r.agreement.differing,
+            csv_text(&r.status)
+        );
+    }
+    s
+}
+
+/// One bar panel of race.csv: `value` per case, F.1 and N.4 side by side.
+fn race_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, rows: &[RaceRow], value: fn(&RaceRow) -> f64, y_desc: &str) -> Result<()> {
+    let err = svg_err("race.svg");
+    let labels: Vec<String> = rows.iter().step_by(2).map(|r| format!("{}{}", r.case.label, if r.inside() == Some(true) { " (C.k)" } else { "" })).collect();
+    let y1 = rows.iter().map(value).filter(|v| v.is_finite()).fold(0.0f64, f64::max).max(1e-12) * 1.15;
+    let n = labels.len();
+    let mut chart = ChartBuilder::on(area)
+        .caption(y_desc, ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(-0.5..(n as f64 - 0.5), 0.0..y1)
+        .map_err(|e| err(&e))?;
+    let fmt = |v: &f64| {
+        let i = v.round();
+        if (v - i).abs() < 1e-6 && i >= 0.0 { labels.get(i as usize).cloned().unwrap_or_default() } else { String::new() }
+    };
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(n.max(1))
+        .x_label_formatter(&fmt)
+        .x_label_style(("sans-serif", 11))
+        .y_desc(y_desc)
+        .draw()
+        .map_err(|e| err(&e))?;
+    for (m, (method, color)) in [(InnerSolver::Newton, PALETTE[0]), (InnerSolver::NewtonUnfrozen, PALETTE[1])].into_iter().enumerate() {
+        let x_off = if m == 0 { -0.38 } else { 0.02 };
+        let bars: Vec<Rectangle<(f64, f64)>> = rows
+            .iter()
+            .filter(|r| r.method == method)
+            .enumerate()
+            .filter(|(_, r)| value(r).is_finite())
+            .map(|(i, r)| Rectangle::new([(i as f64 + x_off, 0.0), (i as f64 + x_off + 0.36, value(r))], color.filled()))
+            .collect();
+        let name = if method == InnerSolver::Newton { "newton (F.1)" } else { "newton-unfrozen (N.4)" };
+        chart
+            .draw_series(bars)
+            .map_err(|e| err(&e))?
+            .label(name)
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 15, y + 5)], color.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| err(&e))?;
+    Ok(())
+}
+
+/// race.svg: contact-solve time and Newton iterations (dense LU factorizations) per step.
+fn race_svg(rows: &[RaceRow], title: &str) -> Result<String> {
+    let err = svg_err("race.svg");
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1400, 560)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let root = root.titled(title, ("sans-serif", 20)).map_err(|e| err(&e))?;
+        let panels = root.split_evenly((1, 2));
+        race_panel(&panels[0], rows, |r| 1e3 * r.per_step(r.stats.contact_time_s), "contact solve per step [ms]")?;
+        race_panel(&panels[1], rows, |r| r.per_step(r.stats.newton_iterations as f64), "Newton iterations (dense LU) per step")?;
+        root.present().map_err(|e| err(&e))?;
+    }
+    Ok(svg)
+}
+
+/// Best effort progress line on stderr (the benchmark runs for minutes).
+fn progress(msg: &str) {
+    use std::io::Write as _;
+    let _ = writeln!(std::io::stderr(), "bench: {msg}");
+}
+
+/// The printed summary of the work–precision part.
+fn work_report(plan: &Plan, rows: &[WorkRow], ref_stats: &RunStats) -> String {
+    let mut s = String::new();
+    let r = plan.reference;
+    let _ = writeln!(
+        s,
+        "work–precision: academic scene, T = {} s; reference midpoint/newton/lumped at {}x{}, k = {:e} \
+         (one level finer than the finest bench level; {} steps, {:.1} s)",
+        plan.t_end, r.cells[0], r.cells[1], r.k, ref_stats.steps, ref_stats.wall_time_s
+    );
+    if plan.inners.contains(&InnerSolver::Conic) && plan.conic_levels < plan.levels.len() {
+        let _ = writeln!(s, "conic runs only on the {} coarsest levels (it is ~30x slower than newton)", plan.conic_levels);
+    }
+    let _ = writeln!(
+        s,
+        "{:<38} {:>6} {:>9} {:>8} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>6}",
+        "run", "steps", "wall[s]", "step[ms]", "floor[ms]", "step/flr", "e_force", "e_Fn", "e_Ft", "e_imp", "e_disp", "newton", "fp"
+    );
+    for w in rows {
+        let st = &w.stats;
+        let name = format!("{} {}x{}", group_label(w), w.spec.level.cells[0], w.spec.level.cells[1]);
+        if !w.ok() {
+            let _ = writeln!(s, "{name:<38} {}", w.status);
+            continue;
+        }
+        let _ = writeln!(
+            s,
+            "{name:<38} {:>6} {:>9.3} {:>8.3} {:>9.4} {:>8.1} {:>8.2e} {:>8.2e} {:>8.2e} {:>8.2e} {:>8.2e} {:>7} {:>6}",
+            st.steps,
+            st.wall_time_s,
+            1e3 * w.time_per_step(),
+            1e3 * st.floor_s,
+            w.time_per_step() / st.floor_s,
+            w.error_force[0],
+            w.error_force[1],
+            w.error_force[2],
+            w.error_impulse,
+            w.error_disp,
+            st.newton_iterations,
+            st.fixed_point_iterations
+        );
+    }
+    let _ = writeln!(
+        s,
+        "e_force: (F_ν, F_τ) per step (e_Fn, e_Ft: each alone); e_imp: the force averaged over windows of {:e} s \
+         (the coarsest step); e_disp: displacements at the probe nodes; all relative L²(0, T). step/flr: time per step \
+         over the floor (two A_k solves); newton: Newton iterations (conic: interior-point iterations); fp: convex solves in F.1",
+        plan.levels[0].k
+    );
+    let _ = writeln!(
+        s,
+        "observed orders (h and k halved together; pairwise log2 ratios, then the least-squares slope). The reference \
+         is one level finer, so for the reference's own scheme the last pair is biased upward by -log2(1 - 2^-p):"
+    );
+    let list = |v: &[f64]| v.iter().map(|x| format!("{x:5.2}")).collect::<Vec<_>>().join(" ");
+    let measures: [(&str, Measure); 3] = [("force", |r| r.error_force[0]), ("impulse", |r| r.error_impulse), ("disp", |r| r.error_disp)];
+    for g in groups(rows) {
+        let parts: Vec<String> = measures
+            .iter()
+            .map(|(name, f)| {
+                let (pairs, fit) = observed_orders(&g, *f);
+                format!("{name} [{}] fit {fit:5.2}", list(&pairs))
+            })
+            .collect();
+        let _ = writeln!(s, "  {:<33} {}", group_label(g[0]), parts.join("; "));
+    }
+    s
+}
+
+/// The printed summary of the race.
+fn race_report(race: &RacePlan, rows: &[RaceRow]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "race (issue 7): newton (F.1) vs newton-unfrozen (N.4), academic scene {}x{}, T = {} s",
+        race.cells[0], race.cells[1], race.t_end
+    );
+    let _ = writeln!(
+        s,
+        "{:<22} {:>10} {:>7} {:<16} {:>9} {:>11} {:>9} {:>7} {:>8} {:>9} {:>9} {:>9} {:>5}",
+        "case", "(C.k) k<=", "inside", "method", "step[ms]", "contact[ms]", "newton/st", "fp/st", "unfrozen", "fallbacks", "max|dy|", "max|dr|", "diff"
+    );
+    for r in rows {
+        let st = &r.stats;
+        if r.status != "ok" {
+            let _ = writeln!(s, "{:<22} {:<16} {}", r.case.label, inner_name(r.method), r.status);
+            continue;
+        }
+        let _ = writeln!(
+            s,
+            "{:<22} {:>10} {:>7} {:<16} {:>9.3} {:>11.3} {:>9.2} {:>7.2} {:>8} {:>9} {:>9.1e} {:>9.1e} {:>5}",
+            r.case.label,
+            r.case.ck_limit.map_or("-".into(), |l| format!("{l:.3e}")),
+            r.inside().map_or("-", |b| if b { "yes" } else { "no" }),
+            inner_name(r.method),
+            1e3 * r.per_step(st.step_time_s),
+            1e3 * r.per_step(st.contact_time_s),
+            r.per_step(st.newton_iterations as f64),
+            r.per_step(st.fixed_point_iterations as f64),
+            st.unfrozen,
+            st.fallbacks,
+            r.agreement.max_dv,
+            r.agreement.max_df,
+            r.agreement.differing
+        );
+    }
+    if let Some(r) = rows.first() {
+        let _ = writeln!(
+            s,
+            "setup: Delassus operator W (2 n_c solves, once per run) {:.2} ms; max|dy|, max|dr|: per-step F.1 vs N.4 from the same state \
+             (relative); diff: steps differing by more than {AGREEMENT_TOLERANCE:e}",
+            1e3 * r.stats.setup_delassus_s
+        );
+    }
+    s
+}
+
+/// Write one output file under `out`.
+fn write(out: &Path, name: &str, text: &str) -> Result<()> {
+    write_atomic(&out.join(name), text.as_bytes())
+}
+
 /// Run the benchmark and write its CSV and SVG files under `out`.
-pub fn run(_out: &Path, _opts: &BenchOptions) -> Result<String> {
-    Err(Error::Output("the benchmark is not implemented yet".into()))
+pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
+    let clock = Instant::now();
+    let plan = if opts.quick { Plan::quick() } else { Plan::full() };
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+
+    let reference_spec = RunSpec { scheme: SchemeKind::Midpoint, inner: InnerSolver::Newton, mass: MassKind::Lumped, level: plan.reference };
+    progress(&format!("reference {}", reference_spec.label()));
+    let p_ref = Problem::new(reference_spec.scene(plan.t_end)?, Path::new("."))?;
+    let (reference, ref_stats) = simulate(&p_ref, &probe_dofs(&p_ref)?)?;
+
+    let mut rows = Vec::new();
+    for spec in run_specs(&plan) {
+        progress(&spec.label());
+        rows.push(work_row(spec, &plan, &reference)?);
+    }
+    write(out, "work_precision.csv", &work_csv(&rows))?;
+    let title = format!("work–precision, academic scene, T = {} s (newton solid, conic dashed)", plan.t_end);
+    write(out, "work_precision.svg", &work_svg(&rows, &title)?)?;
+
+    let mut race = Vec::new();
+    for case in race_cases(&plan.race)? {
+        progress(&format!("race {}", case.label));
+        race.extend(race_rows(&plan.race, &case)?);
+    }
+    write(out, "race.csv", &race_csv(&race))?;
+    let title = format!("F.1 vs N.4, academic scene {}x{}, T = {} s", plan.race.cells[0], plan.race.cells[1], plan.race.t_end);
+    write(out, "race.svg", &race_svg(&race, &title)?)?;
+
+    let mut report = work_report(&plan, &rows, &ref_stats);
+    report.push('\n');
+    report.push_str(&race_report(&plan.race, &race));
+    let _ = writeln!(report, "\ntotal benchmark wall time {:.1} s; outputs in {}", clock.elapsed().as_secs_f64(), out.display());
+    write(out, "report.txt", &report)?;
+    Ok(report)
 }

@@ -173,17 +173,31 @@ pub fn solve(step: &StepData, s: &[f64], set: &ConicSettings) -> Result<ContactS
         let m = 2 * n;
         return Ok(finish(step, s, vec![0.0; m], vec![0.0; m], 0));
     }
+    // constraints and pieces inactive by more than FAR velocity scales are left out (a huge
+    // right-hand side stalls the interior point, e.g. the bound β = 80 m/s against a motion of
+    // 1e-10 m/s at the first step); any the solution reaches is put back and the program re-solved
+    const FAR: f64 = 1e3;
+    let nh = step.law.hinges.len();
+    let z0 = |i: usize, h: usize| (step.nodes[i].d_aff - step.law.hinges[h].s) / (step.a_d * v_scale);
+    let mut active = Active {
+        bound: (0..n).map(|i| step.beta(i).is_some_and(|b| b / v_scale <= FAR)).collect(),
+        quad: (0..n * nh).map(|j| z0(j / nh, j % nh) >= -FAR).collect(),
+        piece: pieces.iter().map(|m| {
+            let h = step.law.hinges.iter().position(|h| h.s == m.s && h.c == m.c).unwrap_or(0);
+            if m.a > 0.0 { z0(m.node, h) <= FAR } else { z0(m.node, h) >= -FAR }
+        }).collect(),
+    };
     let mut iterations = 0usize;
     let mut moved = f64::INFINITY;
     let mut z_scale = 0.0;
     for _ in 0..set.max_rounds.max(1) {
-        let (y, r, its) = solve_once(step, s, set, &pieces, &z_l, v_scale)?;
+        let (y, r, its) = solve_once(step, s, set, &pieces, &z_l, v_scale, &active)?;
         iterations += its;
         let z_new: Vec<f64> = pieces.iter().map(|m| m.clip(step.d_end(m.node, &y) - m.s)).collect();
         moved = z_new.iter().zip(&z_l).fold(0.0f64, |acc, (a, b)| acc.max((a - b).abs()));
         z_scale = step.a_d * step.velocity_scale(&y);
         z_l = z_new;
-        if moved <= set.tolerance * z_scale {
+        if moved <= set.tolerance * z_scale && !active.reinstate(step, &pieces, &y) {
             return Ok(finish(step, s, y, r, iterations));
         }
     }
@@ -194,6 +208,44 @@ pub fn solve(step: &StepData, s: &[f64], set: &ConicSettings) -> Result<ContactS
     })
 }
 
+/// Which constraints and pieces the program includes (the others are inactive far away).
+struct Active {
+    /// the bound y_ν,i ≤ β_i
+    bound: Vec<bool>,
+    /// the exact quadratic part of hinge h at node i (index i·hinges + h)
+    quad: Vec<bool>,
+    /// the majorized log branches
+    piece: Vec<bool>,
+}
+
+impl Active {
+    /// Put back every left-out constraint or piece that the solution `y` reaches; true if any.
+    fn reinstate(&mut self, step: &StepData, pieces: &[Majorized], y: &[f64]) -> bool {
+        let nh = step.law.hinges.len();
+        let mut changed = false;
+        for i in 0..step.n() {
+            if !self.bound[i] && step.beta(i).is_some_and(|b| y[2 * i] > b) {
+                self.bound[i] = true;
+                changed = true;
+            }
+            for (h, hinge) in step.law.hinges.iter().enumerate() {
+                if !self.quad[i * nh + h] && step.d_end(i, y) > hinge.s {
+                    self.quad[i * nh + h] = true;
+                    changed = true;
+                }
+            }
+        }
+        for (k, m) in pieces.iter().enumerate() {
+            let z = step.d_end(m.node, y) - m.s;
+            if !self.piece[k] && ((m.a > 0.0 && z < 0.0) || (m.a < 0.0 && z > 0.0)) {
+                self.piece[k] = true;
+                changed = true;
+            }
+        }
+        changed
+    }
+}
+
 fn solve_once(
     step: &StepData,
     s: &[f64],
@@ -201,6 +253,7 @@ fn solve_once(
     pieces: &[Majorized],
     z_l: &[f64],
     v: f64,
+    active: &Active,
 ) -> Result<(Vec<f64>, Vec<f64>, usize), ConicFailure> {
     let n = step.n();
     let m = 2 * n;
@@ -224,7 +277,7 @@ fn solve_once(
         let nd = step.nodes[i];
         let (yn, yt) = (y[2 * i], y[2 * i + 1]);
         // exact constraint y_ν ≤ β
-        if let Some(beta) = step.beta(i) {
+        if let Some(beta) = step.beta(i).filter(|_| active.bound[i]) {
             b.le(vec![(yn, 1.0)], beta / v);
         }
         // friction (ω S/a_v)|v̄|, v̄ = v_aff + a_v y_τ, via s ≥ ±v̄
@@ -236,7 +289,7 @@ fn solve_once(
         }
         // normal force, hinge by hinge. All pieces are written in ξ = z/a_d (velocity units):
         // z = d^{n+1} − s = z0 + a_d y_ν, and (ω/a_d) F(z) becomes ω a_d (·) ξ² + ω (·) ξ.
-        for h in &step.law.hinges {
+        for (hi, h) in step.law.hinges.iter().enumerate() {
             let a = nd.d_n - h.s;
             let z0 = nd.d_aff - h.s;
             // exact quadratic part: lin·z + quad·z_+²
@@ -246,7 +299,7 @@ fn solve_once(
                 NormalForceRule::EndPoint => (0.0, 0.5 * h.c),
             };
             b.q[yn] += nd.omega * lin / v;
-            if quad > 0.0 {
+            if quad > 0.0 && active.quad[i * step.law.hinges.len() + hi] {
                 let xi = b.var(); // ξ ≥ max(y + z0/a_d, 0)
                 b.p.push((xi, xi, 2.0 * nd.omega * ad * quad));
                 b.le(vec![(yn, 1.0), (xi, -1.0)], -z0 / (ad * v));
@@ -256,6 +309,9 @@ fn solve_once(
     }
     // majorized log branches: (c/4) x² + (ψ'(z_l) − (c/2) z_l) x, x = z_L ≤ min(z, 0) or z_R ≥ max(z, 0)
     for (k, mj) in pieces.iter().enumerate() {
+        if !active.piece[k] {
+            continue;
+        }
         let nd = step.nodes[mj.node];
         let yn = y[2 * mj.node];
         let z0 = nd.d_aff - mj.s;
