@@ -10,7 +10,6 @@
 mod common;
 
 use dyncontact::fem::norms::error_norms;
-use dyncontact::linalg;
 use dyncontact::model::material::Material;
 use dyncontact::problem::Problem;
 use dyncontact::reference::ManufacturedKV;
@@ -114,22 +113,11 @@ fn b5_manufactured_orders_in_h() {
     assert!((last_en - 1.0).abs() <= 0.2, "energy-norm order {last_en} not within 1 ± 0.2");
 }
 
-/// L² distance of two free-DOF fields on the mesh of `p` (consistent mass with ρ = 1).
-fn l2_diff(p: &Problem, a: &[f64], b: &[f64]) -> f64 {
-    let mut mat = Material::from_scene(&p.scene.material, p.scene.domain.plane);
-    mat.rho = 1.0;
-    let (m, _, _) = dyncontact::fem::assemble::assemble_full(&p.mesh, &mat, dyncontact::scene::MassKind::Consistent)
-        .expect("assembly");
-    let m = dyncontact::fem::assemble::restrict(&m, &p.dofs).expect("restrict");
-    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
-    linalg::quad(&m, &d, &d).sqrt()
-}
-
 fn time_orders(scheme: &str) -> Vec<f64> {
     // self-convergence on a fixed 8×8 mesh: e_k = ‖u_k − u_{k/2}‖ isolates the time error
     let ks = [END / 8.0, END / 16.0, END / 32.0, END / 64.0, END / 128.0];
     let sols: Vec<(Problem, Vec<f64>)> = ks.iter().map(|&k| solve(scene(8, k, scheme, "lumped"))).collect();
-    let e: Vec<f64> = sols.windows(2).map(|w| l2_diff(&w[0].0, &w[0].1, &w[1].1)).collect();
+    let e: Vec<f64> = sols.windows(2).map(|w| common::l2_diff(&w[0].0, &w[0].1, &w[1].1)).collect();
     println!("{scheme}: k = {ks:?}");
     println!("{scheme}: ‖u_k − u_(k/2)‖ = {e:?}");
     let o = order(&e);

@@ -24,7 +24,6 @@ mod common;
 
 use common::problem;
 use dyncontact::fem::norms::error_norms;
-use dyncontact::linalg;
 use dyncontact::model::material::{lame, Material};
 use dyncontact::problem::Problem;
 use dyncontact::scene::Scene;
@@ -227,15 +226,7 @@ fn check(regime: Regime) {
         let (p, u, _) = solve(m.scene(8, k));
         (p, u)
     }).collect();
-    let l2 = |p: &Problem, a: &[f64], b: &[f64]| {
-        let mut mat = Material::from_scene(&p.scene.material, p.scene.domain.plane);
-        mat.rho = 1.0;
-        let (mm, _, _) = dyncontact::fem::assemble::assemble_full(&p.mesh, &mat, dyncontact::scene::MassKind::Consistent).expect("mass");
-        let mm = dyncontact::fem::assemble::restrict(&mm, &p.dofs).expect("restrict");
-        let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
-        linalg::quad(&mm, &d, &d).sqrt()
-    };
-    let ek: Vec<f64> = sols.windows(2).map(|w| l2(&w[0].0, &w[0].1, &w[1].1)).collect();
+    let ek: Vec<f64> = sols.windows(2).map(|w| common::l2_diff(&w[0].0, &w[0].1, &w[1].1)).collect();
     let ok = orders(&ek);
     println!("{regime:?}: energy errors {en:?}, orders in h {oh:?}");
     println!("{regime:?}: ‖u_k − u_(k/2)‖ {ek:?}, orders in k {ok:?}");

@@ -41,3 +41,14 @@ pub fn measured(test: &str, quantity: &str, value: f64, expected: &str) {
         let _ = f.write_all(format!("{line}\n").as_bytes());
     }
 }
+
+/// L² distance of two free-DOF fields on the mesh of `p` (consistent mass with ρ = 1).
+pub fn l2_diff(p: &Problem, a: &[f64], b: &[f64]) -> f64 {
+    let mut mat = dyncontact::model::material::Material::from_scene(&p.scene.material, p.scene.domain.plane);
+    mat.rho = 1.0;
+    let (m, _, _) = dyncontact::fem::assemble::assemble_full(&p.mesh, &mat, dyncontact::scene::MassKind::Consistent)
+        .expect("assembly");
+    let m = dyncontact::fem::assemble::restrict(&m, &p.dofs).expect("restrict");
+    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+    dyncontact::linalg::quad(&m, &d, &d).sqrt()
+}
