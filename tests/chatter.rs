@@ -49,6 +49,11 @@ fn force_error(recs: &[StepRecord], k: f64) -> f64 {
     num / den
 }
 
+/// The normal-force history of a run (t, force), for the comparison chart.
+fn force_history(s: Scene) -> Vec<(f64, f64)> {
+    records(&problem(s)).iter().map(|r| (r.t, r.normal_force)).collect()
+}
+
 struct Measures {
     chatter: f64,
     trapped: f64,
@@ -110,6 +115,28 @@ fn r1_r2_bar_impact_chatter_and_remedies() {
         errs.push(m.force_error);
     }
     assert!(errs[1] < errs[0] && errs[2] < errs[0], "the remedies do not reduce the force error: {errs:?}");
+    // the comparison chart: contact force histories of the four variants against ρ c v0 H
+    let series: Vec<dyncontact::output::plots::Series> = VARIANTS
+        .iter()
+        .map(|&v| dyncontact::output::plots::Series {
+            name: format!("{v:?}"),
+            points: force_history(with(fixture("bar_impact"), v)).into_iter().filter(|p| p.0 <= 2.4).collect(),
+            secondary: false,
+        })
+        .collect();
+    let svg = dyncontact::output::plots::line_chart(
+        "B.1: contact force of a bar hitting a rigid wall, per variant",
+        "t [s]",
+        "normal force [N/m]",
+        None,
+        &series,
+        &[("closed form ρ c v0 H".to_string(), 0.01)],
+    )
+    .expect("chart");
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("chatter");
+    std::fs::create_dir_all(&dir).expect("dir");
+    std::fs::write(dir.join("b1_forces.svg"), &svg).expect("write");
+    assert!(svg.matches("<polyline").count() >= 5, "four variants and the closed form");
     // orders under joint refinement at a fixed Courant number
     for v in VARIANTS {
         let e: Vec<f64> = [50, 100, 200]
