@@ -263,7 +263,7 @@ impl<'p> Simulation<'p> {
                 }
             }
             t_recover = clock.elapsed().as_secs_f64();
-            let d_n = c.penetration(&self.u);
+            let d_n: Vec<f64> = data.nodes.iter().map(|nd| nd.d_n).collect();
             contact_out = Some((sol, s, d_n));
         }
         let u_new = self.stepper.displacement(&self.u, &self.v, &w);

@@ -12,7 +12,7 @@ use crate::model::laws::NormalForceRule;
 use crate::scene::SchemeKind;
 
 /// How the contact quantities of one step depend on the unknown contact velocity y = H w:
-/// d^{n+1} = d^n + c_d + a_d y_ν and v̄ = c_v + a_v y_τ, where c_d, c_v come from v^n.
+/// d^{n+1} = d^n + a_d (y_ν + b_d v_ν^n) and v̄ = a_v (y_τ + b_v v_τ^n).
 #[derive(Debug, Clone, Copy)]
 pub struct ContactRule {
     /// d^{n+1} = d^n + a_d (y_ν + b_d v_ν^n)

@@ -221,7 +221,7 @@ pub fn solve_with(
             if step.friction {
                 if stick[i] {
                     prescribed[jt] = true;
-                    dy[jt] = f[m + n + i] * 1.0; // F_t = y_stick − y on the stick set
+                    dy[jt] = f[m + n + i]; // F_t = y_stick − y on the stick set
                 } else {
                     // slip: t_new = σ S(v̄); with the unfrozen bound (N.4) S varies with y_τ,
                     // which adds ω σ S'(v̄) a_v to the column of Δy_τ
