@@ -6,6 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::energy::EnergyTerms;
+use crate::simulation::State;
 use crate::error::{Error, Result};
 
 /// Bits of an f64 vector (JSON numbers would round-trip through decimal text).
@@ -49,19 +50,6 @@ pub struct Checkpoint {
     pub counters: Counters,
 }
 
-/// The state a checkpoint restores.
-pub struct State {
-    pub step: usize,
-    pub u: Vec<f64>,
-    pub v: Vec<f64>,
-    pub lambda: Vec<f64>,
-    pub t_fric: Vec<f64>,
-    pub energy: EnergyTerms,
-    pub energy_scale: f64,
-    pub active: Vec<bool>,
-    pub stick: Vec<bool>,
-}
-
 /// FNV-1a 64 of a text, as hex.
 pub fn fingerprint(text: &str) -> String {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
@@ -78,7 +66,7 @@ impl Checkpoint {
         Checkpoint {
             format: 2,
             scene_hash,
-            step: s.step,
+            step: s.n,
             u: bits(&s.u),
             v: bits(&s.v),
             lambda: bits(&s.lambda),
@@ -98,7 +86,7 @@ impl Checkpoint {
     pub fn state(&self) -> State {
         let e = self.energy.map(f64::from_bits);
         State {
-            step: self.step,
+            n: self.step,
             u: unbits(&self.u),
             v: unbits(&self.v),
             lambda: unbits(&self.lambda),
@@ -123,7 +111,7 @@ impl Checkpoint {
     /// Write to `dir/checkpoint.json` (through a temporary file and a rename).
     pub fn write(&self, dir: &std::path::Path) -> Result<()> {
         let text = serde_json::to_string(self).map_err(|e| Error::Output(format!("checkpoint.json: {e}")))?;
-        crate::output::write_atomic(&dir.join("checkpoint.json"), text.as_bytes())
+        crate::output::fs::write_atomic(&dir.join("checkpoint.json"), text.as_bytes())
     }
 
     /// Read `dir/checkpoint.json`.

@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+pub use crate::failure::SolverFailure;
+
 /// Why a run or a validation stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
@@ -45,26 +47,6 @@ pub enum Error {
         #[source]
         source: std::io::Error,
     },
-}
-
-/// The full report of a failed step: what failed, where and the numbers.
-#[derive(Debug, Clone)]
-pub struct SolverFailure {
-    pub step: usize,
-    pub time: f64,
-    pub what: String,
-    pub residuals: String,
-    pub suggestion: String,
-}
-
-impl std::fmt::Display for SolverFailure {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "step {} (t = {:.6e}): {}; {}. Suggestion: {}",
-            self.step, self.time, self.what, self.residuals, self.suggestion
-        )
-    }
 }
 
 impl Error {

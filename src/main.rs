@@ -1,4 +1,5 @@
-//! The dyncontact command line (SCENES.md): `run`, `check`. Thin: it calls the library.
+//! The dyncontact command line (the README's contract): `run`, `check`, `study`,
+//! `export-operators`. Thin: it calls the library.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -11,7 +12,7 @@ use dyncontact::output::ModelInfo;
 use dyncontact::problem::Problem;
 use dyncontact::run::{run, RunOptions};
 use dyncontact::scene::Scene;
-use dyncontact::Error;
+use dyncontact::{studies, Error};
 
 #[derive(Parser)]
 #[command(name = "dyncontact", version, about = "Dynamic viscoelastic contact with normal compliance, finite penetration and slip-rate-dependent friction")]
@@ -124,79 +125,25 @@ fn load(scene: Option<&Path>) -> Result<(Scene, PathBuf), Error> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
-        Command::Run { scene, out, checkpoint_every, resume, stop_after } => load(scene.as_deref()).and_then(|(s, dir)| {
-            let out = resume.clone().or_else(|| out.clone()).unwrap_or_else(|| PathBuf::from("out").join(&s.name));
-            let problem = Problem::new(s, &dir)?;
-            let progress = std::io::stdout().is_terminal();
-            let interrupt = Arc::new(AtomicBool::new(false));
-            let flag = interrupt.clone();
-            // a second Ctrl-C while the step finishes is ignored: the step completes and the files stay valid
-            let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
-            let opts = RunOptions {
-                out: out.clone(),
-                progress,
-                checkpoint_every: *checkpoint_every,
-                resume: resume.is_some(),
-                stop_after: *stop_after,
-                interrupt: Some(interrupt),
-            };
-            let summary = run(&problem, &opts)?;
-            say!(
-                "{}: {} steps in {:.2} s, max |(E.1) residual| = {:.3e} ({:.3e} relative), Newton iterations {}, fixed-point iterations {}",
-                summary.scene,
-                summary.steps_completed,
-                summary.wall_time_s,
-                summary.max_abs_energy_residual,
-                summary.max_relative_energy_residual,
-                summary.newton_iterations_total,
-                summary.fixed_point_iterations_total
-            );
-            for w in &summary.warnings {
-                say!("warning: {w}");
-            }
-            say!("outputs in {}", out.display());
-            Ok(())
-        }),
-        Command::Study { study: StudyKind::Penalty { scene, eps, out } } => load(scene.as_deref()).and_then(|(s, dir)| {
-            let out = out.clone().unwrap_or_else(|| PathBuf::from("out").join(&s.name));
-            let eps = eps.clone().unwrap_or_else(|| dyncontact::study::DEFAULT_EPS.to_vec());
-            let st = dyncontact::study::penalty_study(&s, &dir, &eps)?;
-            say!("penalty study of {} (exact reference: {:.2} s)", s.name, st.reference_wall_time_s);
-            say!("{:>10} {:>12} {:>12} {:>12} {:>10}", "eps", "e_V", "e_H", "delta", "time [s]");
-            for r in &st.rows {
-                say!("{:>10.1e} {:>12.4e} {:>12.4e} {:>12.4e} {:>10.2}", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s);
-            }
-            say!("log-log slopes: e_V {:.3}, e_H {:.3}, delta {:.3}", st.slope_e_v, st.slope_e_h, st.slope_delta);
-            st.write(&out, &format!("{}: P_ε → P as ε → 0", s.name))?;
-            say!("written {}", out.join("study").display());
-            Ok(())
-        }),
+        Command::Run { scene, out, checkpoint_every, resume, stop_after } => {
+            cmd_run(scene.as_deref(), out.as_deref(), *checkpoint_every, resume.as_deref(), *stop_after)
+        }
+        Command::Study { study: StudyKind::Penalty { scene, eps, out } } => cmd_penalty(scene.as_deref(), eps.as_deref(), out.as_deref()),
         Command::Study { study: StudyKind::Bench { out, quick } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/bench"));
-            dyncontact::bench::run(&out, &dyncontact::bench::BenchOptions { quick: *quick }).map(|report| say!("{report}"))
+            studies::bench::run(&out, &studies::bench::BenchOptions { quick: *quick }).map(|report| say!("{report}"))
         }
         Command::Study { study: StudyKind::Stability { out, quick } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/stability"));
-            dyncontact::stability::run(&out, &dyncontact::stability::StabilityOptions { quick: *quick }).map(|report| say!("{report}"))
+            studies::stability::run(&out, &studies::stability::StabilityOptions { quick: *quick }).map(|report| say!("{report}"))
         }
         Command::ExportOperators { scene, out } => load(Some(scene)).and_then(|(s, dir)| {
-            let problem = Problem::new(s, &dir)?;
+            let problem = Problem::from_scene(&s, &dir)?;
             dyncontact::output::export::export_operators(&problem, out)?;
-            say!("operators of {} written to {}", problem.scene.name, out.display());
+            say!("operators of {} written to {}", problem.model.name, out.display());
             Ok(())
         }),
-        Command::Check { scene } => load(Some(scene)).and_then(|(s, dir)| {
-            let problem = Problem::new(s, &dir)?;
-            let info = ModelInfo::of(&problem);
-            say!("scene {} is valid", problem.scene.name);
-            for l in info.lines() {
-                say!("  {l}");
-            }
-            for w in info.warnings() {
-                say!("warning: {w}");
-            }
-            Ok(())
-        }),
+        Command::Check { scene } => cmd_check(scene),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -209,4 +156,77 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// `dyncontact run`: a run with a progress bar, Ctrl-C as a clean stop, and a one-line report.
+fn cmd_run(
+    scene: Option<&Path>,
+    out: Option<&Path>,
+    checkpoint_every: Option<usize>,
+    resume: Option<&Path>,
+    stop_after: Option<usize>,
+) -> Result<(), Error> {
+    let (s, dir) = load(scene)?;
+    let out = resume.or(out).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&s.name));
+    let problem = Problem::from_scene(&s, &dir)?;
+    let interrupt = Arc::new(AtomicBool::new(false));
+    let flag = interrupt.clone();
+    // a second Ctrl-C while the step finishes is ignored: the step completes and the files stay valid
+    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
+    let opts = RunOptions {
+        out: out.clone(),
+        progress: std::io::stdout().is_terminal(),
+        checkpoint_every,
+        resume: resume.is_some(),
+        stop_after,
+        interrupt: Some(interrupt),
+    };
+    let summary = run(&problem, &opts)?;
+    say!(
+        "{}: {} steps in {:.2} s, max |(E.1) residual| = {:.3e} ({:.3e} relative), Newton iterations {}, fixed-point iterations {}",
+        summary.scene,
+        summary.steps_completed,
+        summary.wall_time_s,
+        summary.max_abs_energy_residual,
+        summary.max_relative_energy_residual,
+        summary.newton_iterations_total,
+        summary.fixed_point_iterations_total
+    );
+    for w in &summary.warnings {
+        say!("warning: {w}");
+    }
+    say!("outputs in {}", out.display());
+    Ok(())
+}
+
+/// `dyncontact study penalty`: the ε → 0 study, printed and written under OUT/study.
+fn cmd_penalty(scene: Option<&Path>, eps: Option<&[f64]>, out: Option<&Path>) -> Result<(), Error> {
+    let (s, dir) = load(scene)?;
+    let out = out.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&s.name));
+    let eps = eps.map(<[f64]>::to_vec).unwrap_or_else(|| studies::penalty::DEFAULT_EPS.to_vec());
+    let st = studies::penalty::penalty_study(&s, &dir, &eps)?;
+    say!("penalty study of {} (exact reference: {:.2} s)", s.name, st.reference_wall_time_s);
+    say!("{:>10} {:>12} {:>12} {:>12} {:>10}", "eps", "e_V", "e_H", "delta", "time [s]");
+    for r in &st.rows {
+        say!("{:>10.1e} {:>12.4e} {:>12.4e} {:>12.4e} {:>10.2}", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s);
+    }
+    say!("log-log slopes: e_V {:.3}, e_H {:.3}, delta {:.3}", st.slope_e_v, st.slope_e_h, st.slope_delta);
+    st.write(&out, &format!("{}: P_ε → P as ε → 0", s.name))?;
+    say!("written {}", out.join("study").display());
+    Ok(())
+}
+
+/// `dyncontact check`: validate, build the problem, and print the model it switches on.
+fn cmd_check(scene: &Path) -> Result<(), Error> {
+    let (s, dir) = load(Some(scene))?;
+    let problem = Problem::from_scene(&s, &dir)?;
+    let info = ModelInfo::of(&problem);
+    say!("scene {} is valid", problem.model.name);
+    for l in info.lines() {
+        say!("  {l}");
+    }
+    for w in info.warnings() {
+        say!("warning: {w}");
+    }
+    Ok(())
 }

@@ -1,5 +1,8 @@
-//! Scene → discrete problem: the mesh with Γ1, Γ2, Γ3, the material, the loads, the initial
+//! Model → discrete problem: the mesh with Γ1, Γ2, Γ3, the material, the loads, the initial
 //! data (S.0) and the contact model. Everything the time loop needs, checked once.
+//!
+//! A `Problem` is built only from a validated [`Model`] (see `Scene::validate`); the
+//! mesh-dependent checks (side names, the clamped set, u^0 ∈ K^h) are made here.
 
 use std::path::{Path, PathBuf};
 
@@ -7,14 +10,17 @@ use crate::error::{Error, Result};
 use crate::fem::{Dofs, LoadVector};
 use crate::mesh::{self, Mesh};
 use crate::model::contact::ContactModel;
-use crate::model::expr::{Expr, VecExpr};
-use crate::model::laws::{FrictionBoundLaw, FrictionCoefficient, NormalLaw};
+use crate::model::expr::VecExpr;
+use crate::model::kinds::{Bound, FrictionBound};
+use crate::model::laws::{FrictionBoundLaw, NormalLaw};
 use crate::model::material::Material;
-use crate::scene::{Bound, DomainKind, Enforcement, FrictionBound, FrictionLaw, NumOrStr, Scene};
+use crate::model::{ContactParams, Domain, Enforcement, Model};
+use crate::scene::Scene;
 
 /// The discrete problem of one scene.
 pub struct Problem {
-    pub scene: Scene,
+    /// the validated scene this problem was built from
+    pub model: Model,
     pub mesh: Mesh,
     pub material: Material,
     pub dofs: Dofs,
@@ -29,85 +35,32 @@ pub struct Problem {
 }
 
 impl Problem {
-    /// Build from a scene; `scene_dir` resolves a relative Gmsh path.
-    pub fn new(scene: Scene, scene_dir: &Path) -> Result<Problem> {
-        let mesh = build_mesh(&scene, scene_dir)?;
-        let names = mesh.side_list();
-        let side_err = |key: String, s: &str| Error::scene(key, format!("no side named {s:?}; the mesh has {names}"));
-        for (i, s) in scene.boundary.dirichlet.iter().enumerate() {
-            if mesh.side(s).is_none() {
-                return Err(side_err(format!("boundary.dirichlet[{i}]"), s));
-            }
-        }
-        for (i, s) in scene.boundary.contact.iter().enumerate() {
-            if mesh.side(s).is_none() {
-                return Err(side_err(format!("boundary.contact[{i}]"), s));
-            }
-        }
-        for (i, tr) in scene.loads.traction.iter().enumerate() {
-            if mesh.side(&tr.side).is_none() {
-                return Err(side_err(format!("loads.traction[{i}].side"), &tr.side));
-            }
-        }
-        let material = Material::from_scene(&scene.material, scene.domain.plane);
-        let clamped = mesh.nodes_on(&scene.boundary.dirichlet)?;
+    /// Validate a scene and build its problem; `scene_dir` resolves a relative Gmsh path.
+    pub fn from_scene(scene: &Scene, scene_dir: &Path) -> Result<Problem> {
+        Problem::new(scene.validate()?, scene_dir)
+    }
+
+    /// Build from a validated model; `scene_dir` resolves a relative Gmsh path.
+    pub fn new(model: Model, scene_dir: &Path) -> Result<Problem> {
+        let mesh = build_mesh(&model.domain, scene_dir)?;
+        check_sides(&model, &mesh)?;
+        let material = Material::new(&model.material, model.plane);
+        let clamped = mesh.nodes_on(&model.dirichlet)?;
         let dofs = Dofs::new(mesh.nodes.len(), &clamped);
         if dofs.n_free == 0 {
             return Err(Error::scene("boundary.dirichlet", "clamps every node: there is nothing to solve"));
         }
-
-        // loads
-        let body = VecExpr::parse(&scene.loads.body, &["x", "y", "t"], "loads.body")?;
-        let mut surface = Vec::new();
-        for (i, tr) in scene.loads.traction.iter().enumerate() {
-            let path = format!("loads.traction[{i}].value");
-            let f2 = VecExpr::parse(&tr.value, &["x", "y", "t"], &path)?;
-            let edges = mesh.side(&tr.side).map(|s| s.edges.clone()).unwrap_or_default();
-            surface.push((edges, f2, path));
-        }
-        // f3 on Γ3 (every contact side), for manufactured solutions with contact
-        let f3 = VecExpr::parse(&scene.loads.contact_surface, &["x", "y", "t"], "loads.contact_surface")?;
-        if !f3.is_zero() {
-            for side in &scene.boundary.contact {
-                let edges = mesh.side(side).map(|s| s.edges.clone()).unwrap_or_default();
-                surface.push((edges, f3.clone(), "loads.contact_surface".into()));
-            }
-        }
-        let loads = LoadVector::new(&mesh, &dofs, &body, &surface);
-        loads.check_finite(0.0)?;
-        loads.check_finite(scene.time.end)?;
-
-        // initial data (S.0): nodal interpolation
-        let (u0e, v0e) = initial_fields(&scene)?;
-        let (u0, v0) = initial_data(&mesh, &dofs, &u0e, &v0e)?;
-
-        let contact = if scene.has_contact() { Some(build_contact(&scene, &mesh, &dofs, &clamped)?) } else { None };
+        let loads = build_loads(&model, &mesh, &dofs)?;
+        let (u0, v0) = initial_data(&mesh, &dofs, &model.initial.displacement, &model.initial.velocity)?;
+        let contact = match &model.contact {
+            Some(c) => Some(build_contact(c, &model.contact_sides, &mesh, &dofs, &clamped)?),
+            None => None,
+        };
         if let Some(c) = &contact {
-            if c.n() == 0 {
-                return Err(Error::scene(
-                    "boundary.contact",
-                    "the contact sides have no node off the clamped sides (Γ̄3 \\ Γ̄1 is empty)",
-                ));
-            }
-            // S.0: u^0 ∈ K^h
-            if let Some(g) = c.constraint {
-                let d0 = c.penetration(&u0);
-                if let Some(i) = (0..c.n()).find(|&i| d0[i] > g * (1.0 + 1e-12) + 1e-300) {
-                    let x = mesh.nodes[c.nodes[i]];
-                    return Err(Error::scene(
-                        "initial.displacement",
-                        format!(
-                            "the initial state penetrates beyond the bound: u_ν − gap = {:.6e} > g = {g} at node {} ({}, {}); \
-                             u0 must satisfy the constraint (S.0)",
-                            d0[i], c.nodes[i], x[0], x[1]
-                        ),
-                    ));
-                }
-            }
+            check_initial_admissible(c, &mesh, &u0)?;
         }
-        let steps = scene.steps();
-        let k = scene.time.step;
-        Ok(Problem { scene, mesh, material, dofs, loads, u0, v0, contact, k, steps })
+        let (steps, k) = (model.time.steps, model.time.step);
+        Ok(Problem { model, mesh, material, dofs, loads, u0, v0, contact, k, steps })
     }
 
     /// The time of step n.
@@ -116,18 +69,73 @@ impl Problem {
     }
 }
 
-fn build_mesh(scene: &Scene, scene_dir: &Path) -> Result<Mesh> {
-    let d = &scene.domain;
-    let mesh = match d.kind {
-        DomainKind::Rectangle => {
-            let (size, cells) = match (d.size, d.cells) {
-                (Some(s), Some(c)) => (s, c),
-                _ => return Err(Error::scene("domain", "a rectangle needs size and cells")),
-            };
-            Mesh::rectangle(size[0], size[1], cells[0] as usize, cells[1] as usize)
+/// Every side the model names exists on the mesh.
+fn check_sides(model: &Model, mesh: &Mesh) -> Result<()> {
+    let names = mesh.side_list();
+    let side_err = |key: String, s: &str| Error::scene(key, format!("no side named {s:?}; the mesh has {names}"));
+    for (i, s) in model.dirichlet.iter().enumerate() {
+        if mesh.side(s).is_none() {
+            return Err(side_err(format!("boundary.dirichlet[{i}]"), s));
         }
-        DomainKind::Gmsh => {
-            let file = d.file.as_deref().unwrap_or("");
+    }
+    for (i, s) in model.contact_sides.iter().enumerate() {
+        if mesh.side(s).is_none() {
+            return Err(side_err(format!("boundary.contact[{i}]"), s));
+        }
+    }
+    for (i, tr) in model.loads.traction.iter().enumerate() {
+        if mesh.side(&tr.side).is_none() {
+            return Err(side_err(format!("loads.traction[{i}].side"), &tr.side));
+        }
+    }
+    Ok(())
+}
+
+/// f(t): the body load f0, the tractions f2 and the known load f3 on Γ3 (every contact side;
+/// for manufactured solutions with contact), checked finite at t = 0 and t = T.
+pub fn build_loads(model: &Model, mesh: &Mesh, dofs: &Dofs) -> Result<LoadVector> {
+    let edges_of = |side: &str| mesh.side(side).map(|s| s.edges.clone()).unwrap_or_default();
+    let mut surface: Vec<(Vec<[usize; 2]>, VecExpr, String)> =
+        model.loads.traction.iter().map(|tr| (edges_of(&tr.side), tr.value.clone(), tr.path.clone())).collect();
+    if let Some(f3) = &model.loads.contact_surface {
+        for side in &model.contact_sides {
+            surface.push((edges_of(side), f3.clone(), "loads.contact_surface".into()));
+        }
+    }
+    let loads = LoadVector::new(mesh, dofs, &model.loads.body, &surface);
+    loads.check_finite(0.0)?;
+    loads.check_finite(model.time.end)?;
+    Ok(loads)
+}
+
+/// (S.0) u^0 ∈ K^h: the initial state does not penetrate beyond the bound g.
+fn check_initial_admissible(c: &ContactModel, mesh: &Mesh, u0: &[f64]) -> Result<()> {
+    if c.n() == 0 {
+        return Err(Error::scene(
+            "boundary.contact",
+            "the contact sides have no node off the clamped sides (Γ̄3 \\ Γ̄1 is empty)",
+        ));
+    }
+    let Some(g) = c.constraint else { return Ok(()) };
+    let d0 = c.penetration(u0);
+    if let Some(i) = (0..c.n()).find(|&i| d0[i] > g * (1.0 + 1e-12) + 1e-300) {
+        let x = mesh.nodes[c.nodes[i]];
+        return Err(Error::scene(
+            "initial.displacement",
+            format!(
+                "the initial state penetrates beyond the bound: u_ν − gap = {:.6e} > g = {g} at node {} ({}, {}); \
+                 u0 must satisfy the constraint (S.0)",
+                d0[i], c.nodes[i], x[0], x[1]
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn build_mesh(domain: &Domain, scene_dir: &Path) -> Result<Mesh> {
+    let mesh = match domain {
+        Domain::Rectangle { size, cells } => Mesh::rectangle(size[0], size[1], cells[0], cells[1]),
+        Domain::Gmsh { file } => {
             let path: PathBuf = if Path::new(file).is_absolute() { file.into() } else { scene_dir.join(file) };
             if !path.exists() {
                 return Err(Error::scene("domain.file", format!("mesh file {:?} does not exist", path.display().to_string())));
@@ -137,14 +145,6 @@ fn build_mesh(scene: &Scene, scene_dir: &Path) -> Result<Mesh> {
     };
     mesh.check()?;
     Ok(mesh)
-}
-
-/// (P.7) The initial conditions u(0) = u0, u̇(0) = v0 of the scene, as fields in x, y.
-pub fn initial_fields(scene: &Scene) -> Result<(VecExpr, VecExpr)> {
-    Ok((
-        VecExpr::parse(&scene.initial.displacement, &["x", "y"], "initial.displacement")?,
-        VecExpr::parse(&scene.initial.velocity, &["x", "y"], "initial.velocity")?,
-    ))
 }
 
 /// (S.0) Discrete initial data u^0 = I_h u0, v^0 = I_h v0 (nodal interpolation; zero on Γ̄1).
@@ -167,50 +167,44 @@ pub fn initial_data(mesh: &Mesh, dofs: &Dofs, u0: &VecExpr, v0: &VecExpr) -> Res
     Ok((u, v))
 }
 
-fn build_contact(scene: &Scene, mesh: &Mesh, dofs: &Dofs, clamped: &[bool]) -> Result<ContactModel> {
-    let c = scene.contact.as_ref().ok_or_else(|| Error::scene("contact", "missing section"))?;
-    let side = mesh.side_nodes(&scene.boundary.contact, clamped)?;
-    let gap_expr = match &c.gap {
-        None => Expr::constant(0.0),
-        Some(NumOrStr::Num(v)) => Expr::constant(*v),
-        Some(NumOrStr::Str(s)) => Expr::parse(s, &["x", "y"], "contact.gap")?,
-    };
+/// The contact model of the contact sides: nodes, normals, weights, gap, and the laws the
+/// contact section switches on.
+fn build_contact(c: &ContactParams, sides: &[String], mesh: &Mesh, dofs: &Dofs, clamped: &[bool]) -> Result<ContactModel> {
+    let side = mesh.side_nodes(sides, clamped)?;
     let mut gap = Vec::with_capacity(side.nodes.len());
     for &v in &side.nodes {
         let p = mesh.nodes[v];
-        let g = gap_expr.eval(p[0], p[1], 0.0);
+        let g = c.gap.eval(p[0], p[1], 0.0);
         if !g.is_finite() {
             return Err(Error::scene("contact.gap", format!("evaluates to {g} at node {v} ({}, {})", p[0], p[1])));
         }
         gap.push(g);
     }
-    let bound = scene.bound_of(c)?;
     let compliance = NormalLaw::compliance(c.compliance);
-    let (normal, constraint) = match (c.enforcement, bound) {
+    let (normal, constraint) = match (c.enforcement, c.bound) {
         (Enforcement::Exact, Bound::Finite(g)) => (compliance.clone(), Some(g)),
         (Enforcement::Exact, Bound::Infinite) => (compliance.clone(), None),
-        (Enforcement::Penalty, Bound::Finite(g)) => (NormalLaw::penalized(c.compliance, g, c.penalty.unwrap_or(1.0)), None),
-        (Enforcement::Penalty, Bound::Infinite) => {
+        (Enforcement::Penalty { epsilon }, Bound::Finite(g)) => (NormalLaw::penalized(c.compliance, g, epsilon), None),
+        // validation refuses the penalty without a finite bound
+        (Enforcement::Penalty { .. }, Bound::Infinite) => {
             return Err(Error::scene("contact.enforcement", "penalty needs a finite penetration_bound"));
         }
     };
-    let f = &c.friction;
-    let friction = match f.law {
-        FrictionLaw::None => None,
-        FrictionLaw::Constant => Some(FrictionCoefficient::Constant(f.coefficient.unwrap_or(0.0))),
-        FrictionLaw::Exponential => Some(FrictionCoefficient::Exponential {
-            a: f.static_.unwrap_or(0.0),
-            b: f.kinetic.unwrap_or(0.0),
-            alpha: f.decay.unwrap_or(0.0),
-        }),
-        FrictionLaw::Table => Some(FrictionCoefficient::Table(f.points.clone().unwrap_or_default())),
-    };
-    let cap = match (c.friction_bound, bound) {
+    let cap = match (c.friction_bound, c.bound) {
         (FrictionBound::Capped, Bound::Finite(g)) => Some(g),
         _ => None,
     };
     let p_tau = FrictionBoundLaw { compliance: compliance.clone(), cap };
     // a friction law whose bound is identically zero (e.g. Signorini: p ≡ 0) does nothing
-    let friction = friction.filter(|mu| !(p_tau.compliance.is_zero() || (mu.is_constant() && mu.mu(0.0) == 0.0)));
-    Ok(ContactModel::new(side, gap, dofs, normal, compliance, constraint, bound, c.enforcement, friction, p_tau))
+    let friction =
+        c.friction.clone().filter(|mu| !(p_tau.compliance.is_zero() || (mu.is_constant() && mu.mu(0.0) == 0.0)));
+    // contact nodes are off Γ̄1 (side_nodes excludes clamped nodes), so both DOFs are free
+    let mut node_dofs = Vec::with_capacity(side.nodes.len());
+    for &v in &side.nodes {
+        match (dofs.map[2 * v], dofs.map[2 * v + 1]) {
+            (Some(dx), Some(dy)) => node_dofs.push([dx, dy]),
+            _ => return Err(Error::scene("boundary.contact", format!("contact node {v} has a clamped DOF"))),
+        }
+    }
+    Ok(ContactModel::new(side, gap, node_dofs, normal, compliance, constraint, c.bound, c.enforcement, friction, p_tau))
 }

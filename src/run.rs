@@ -13,6 +13,7 @@ use std::time::Instant;
 
 use crate::checkpoint::{fingerprint, Checkpoint, Counters};
 use crate::error::{Error, Result};
+use crate::failure::RunStatus;
 use crate::output::summary::Timing;
 use crate::output::{ModelInfo, Summary, Writer};
 use crate::problem::Problem;
@@ -40,6 +41,7 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Summary> {
     run_with(problem, Settings::from_problem(problem), opts)
 }
 
+/// The run's counters in the form a checkpoint stores.
 fn counters(s: &Summary, first_cap: Option<usize>) -> Counters {
     Counters {
         newton_iterations_total: s.newton_iterations_total,
@@ -52,12 +54,23 @@ fn counters(s: &Summary, first_cap: Option<usize>) -> Counters {
     }
 }
 
+/// The summary's counters continued from a checkpoint.
+fn restore_counters(summary: &mut Summary, c: &Counters) {
+    summary.newton_iterations_total = c.newton_iterations_total;
+    summary.fixed_point_iterations_total = c.fixed_point_iterations_total;
+    summary.fixed_point_iterations_max = c.fixed_point_iterations_max;
+    summary.fixed_point_cap_hits = c.fixed_point_cap_hits;
+    summary.max_abs_energy_residual = f64::from_bits(c.max_abs_energy_residual);
+    summary.max_relative_energy_residual = f64::from_bits(c.max_relative_energy_residual);
+}
+
+/// Add one step's iterations, timings and (E.1) residual to the summary.
 fn tally(summary: &mut Summary, first_cap: &mut Option<usize>, rec: &StepRecord) {
     let r = &rec.report;
     summary.newton_iterations_total += r.inner_iterations;
     summary.fixed_point_iterations_total += r.fixed_point_iterations;
     summary.fixed_point_iterations_max = summary.fixed_point_iterations_max.max(r.fixed_point_iterations);
-    if !r.fixed_point_converged {
+    if !r.fixed_point_converged() {
         summary.fixed_point_cap_hits += 1;
         first_cap.get_or_insert(rec.step);
     }
@@ -68,79 +81,106 @@ fn tally(summary: &mut Summary, first_cap: &mut Option<usize>, rec: &StepRecord)
     }
     summary.steps_completed = rec.step;
     summary.final_time = rec.t;
+    summary.timing.free_solve_s += rec.timing.free_solve;
+    summary.timing.contact_solve_s += rec.timing.contact_solve;
+    summary.timing.recovery_s += rec.timing.recovery;
 }
 
-/// As [`run`] with explicit solver settings.
-pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Result<Summary> {
-    let start = Instant::now();
-    let scene_hash = fingerprint(&format!("{:?}", problem.scene));
-    let mut sim = Simulation::with_settings(problem, settings)?;
-    let [assembly_s, factorization_s, delassus_s] = sim.setup_timing;
+/// The summary of a run that is starting.
+fn new_summary(problem: &Problem, sim: &Simulation, start: Instant) -> Summary {
     let info = ModelInfo::of(problem);
-    let mut summary = Summary {
-        scene: problem.scene.name.clone(),
-        description: problem.scene.description.clone(),
-        status: "running".into(),
+    let t = sim.setup_timing;
+    Summary {
+        scene: problem.model.name.clone(),
+        description: problem.model.description.clone(),
+        status: RunStatus::Running,
         failure: None,
-        model: info.clone(),
+        warnings: info.warnings(),
+        model: info,
         steps_completed: 0,
         final_time: 0.0,
         wall_time_s: 0.0,
-        timing: Timing { setup_s: start.elapsed().as_secs_f64(), assembly_s, factorization_s, delassus_s, ..Timing::default() },
+        timing: Timing {
+            setup_s: start.elapsed().as_secs_f64(),
+            assembly_s: t.assembly,
+            factorization_s: t.factorization,
+            delassus_s: t.delassus,
+            ..Timing::default()
+        },
         newton_iterations_total: 0,
         fixed_point_iterations_total: 0,
         fixed_point_iterations_max: 0,
         fixed_point_cap_hits: 0,
         max_abs_energy_residual: 0.0,
         max_relative_energy_residual: 0.0,
-        warnings: info.warnings(),
-    };
-    let mut first_cap: Option<usize> = None;
-    let mut writer = if opts.resume {
-        let cp = Checkpoint::read(&opts.out)?;
-        if cp.scene_hash != scene_hash {
-            return Err(Error::Output(format!(
-                "{}: the checkpoint was written for a different scene (or another version of it); resume needs the same scene",
-                opts.out.join("checkpoint.json").display()
-            )));
-        }
-        let c = cp.counters.clone();
-        sim.restore(cp.state())?;
-        summary.newton_iterations_total = c.newton_iterations_total;
-        summary.fixed_point_iterations_total = c.fixed_point_iterations_total;
-        summary.fixed_point_iterations_max = c.fixed_point_iterations_max;
-        summary.fixed_point_cap_hits = c.fixed_point_cap_hits;
-        summary.max_abs_energy_residual = f64::from_bits(c.max_abs_energy_residual);
-        summary.max_relative_energy_residual = f64::from_bits(c.max_relative_energy_residual);
-        summary.steps_completed = cp.step;
-        summary.final_time = problem.time(cp.step);
-        first_cap = c.first_cap;
-        summary.warnings.push(format!("resumed from the checkpoint of step {}", cp.step));
-        Writer::reopen(&opts.out, &sim, cp.step)?
-    } else {
-        let mut w = Writer::create(&opts.out, &sim)?;
-        w.record(&sim.initial_record(), &sim, problem.steps == 0)?;
-        w
-    };
-    let bar = opts.progress.then(|| {
-        let b = indicatif::ProgressBar::new(problem.steps as u64);
+    }
+}
+
+/// Where the run writes: a new folder, or the folder of a checkpoint to resume (the state and
+/// the counters are restored from it).
+fn open_writer(
+    problem: &Problem,
+    sim: &mut Simulation,
+    opts: &RunOptions,
+    scene_hash: &str,
+    summary: &mut Summary,
+    first_cap: &mut Option<usize>,
+) -> Result<Writer> {
+    if !opts.resume {
+        let mut w = Writer::create(&opts.out, problem)?;
+        w.record(&sim.initial_record(), problem, &sim.state, problem.steps == 0)?;
+        return Ok(w);
+    }
+    let cp = Checkpoint::read(&opts.out)?;
+    if cp.scene_hash != scene_hash {
+        return Err(Error::Output(format!(
+            "{}: the checkpoint was written for a different scene (or another version of it); resume needs the same scene",
+            opts.out.join("checkpoint.json").display()
+        )));
+    }
+    sim.restore(cp.state())?;
+    restore_counters(summary, &cp.counters);
+    summary.steps_completed = cp.step;
+    summary.final_time = problem.time(cp.step);
+    *first_cap = cp.counters.first_cap;
+    summary.warnings.push(format!("resumed from the checkpoint of step {}", cp.step));
+    Writer::reopen(&opts.out, problem, cp.step)
+}
+
+fn progress_bar(opts: &RunOptions, steps: usize, at: usize) -> Option<indicatif::ProgressBar> {
+    opts.progress.then(|| {
+        let b = indicatif::ProgressBar::new(steps as u64);
         if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {elapsed_precise} (eta {eta})  {msg}") {
             b.set_style(style);
         }
-        b.set_position(sim.n as u64);
+        b.set_position(at as u64);
         b
-    });
-    let stop_now = |n: usize| {
-        opts.stop_after.is_some_and(|s| n >= s) || opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst))
+    })
+}
+
+/// As [`run`] with explicit solver settings.
+pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Result<Summary> {
+    let start = Instant::now();
+    let scene_hash = fingerprint(&format!("{:?}", problem.model));
+    let mut sim = Simulation::with_settings(problem, settings)?;
+    let mut summary = new_summary(problem, &sim, start);
+    let mut first_cap: Option<usize> = None;
+    let mut writer = open_writer(problem, &mut sim, opts, &scene_hash, &mut summary, &mut first_cap)?;
+    let bar = progress_bar(opts, problem.steps, sim.state.n);
+    let stop_now =
+        |n: usize| opts.stop_after.is_some_and(|s| n >= s) || opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
+    let finish_timing = |summary: &mut Summary| {
+        summary.wall_time_s = start.elapsed().as_secs_f64();
+        summary.timing.total_s = summary.wall_time_s;
     };
-    while sim.n < problem.steps {
-        let rec = match sim.step() {
+    let mut steps = sim.steps();
+    while let Some(rec) = steps.next() {
+        let rec = match rec {
             Ok(r) => r,
             Err(e) => {
-                summary.status = "failed".into();
+                summary.status = RunStatus::Failed;
                 summary.failure = Some(e.to_string());
-                summary.wall_time_s = start.elapsed().as_secs_f64();
-                summary.timing.total_s = summary.wall_time_s;
+                finish_timing(&mut summary);
                 writer.write_summary(&summary)?;
                 if let Some(b) = &bar {
                     b.abandon_with_message("failed");
@@ -148,37 +188,33 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
                 return Err(e);
             }
         };
-        let [tf, tc, tr] = sim.timing;
-        summary.timing.free_solve_s += tf;
-        summary.timing.contact_solve_s += tc;
-        summary.timing.recovery_s += tr;
         tally(&mut summary, &mut first_cap, &rec);
+        let state = &steps.simulation().state;
         let t_out = Instant::now();
-        let last = sim.n == problem.steps;
-        let stopping = !last && stop_now(sim.n);
-        writer.record(&rec, &sim, last)?;
-        if opts.checkpoint_every.is_some_and(|c| c > 0 && sim.n % c == 0) || stopping {
-            Checkpoint::new(scene_hash.clone(), &sim.state(), counters(&summary, first_cap)).write(&opts.out)?;
+        let last = state.n == problem.steps;
+        let stopping = !last && stop_now(state.n);
+        writer.record(&rec, problem, state, last)?;
+        if opts.checkpoint_every.is_some_and(|c| c > 0 && state.n % c == 0) || stopping {
+            Checkpoint::new(scene_hash.clone(), state, counters(&summary, first_cap)).write(&opts.out)?;
         }
         summary.timing.output_s += t_out.elapsed().as_secs_f64();
         if let Some(b) = &bar {
             b.inc(1);
         }
         if stopping {
-            summary.status = "interrupted".into();
+            summary.status = RunStatus::Interrupted;
             summary.failure = Some(format!(
                 "stopped after step {} (t = {}); checkpoint.json holds that step: continue with --resume {}",
-                sim.n,
+                state.n,
                 rec.t,
                 opts.out.display()
             ));
-            summary.wall_time_s = start.elapsed().as_secs_f64();
-            summary.timing.total_s = summary.wall_time_s;
-            writer.finish(&summary, &sim)?;
+            finish_timing(&mut summary);
+            writer.finish(&summary, problem, state)?;
             if let Some(b) = &bar {
                 b.abandon_with_message("interrupted");
             }
-            return Err(Error::Interrupted { step: sim.n, time: rec.t });
+            return Err(Error::Interrupted { step: state.n, time: rec.t });
         }
     }
     if let Some(b) = &bar {
@@ -188,14 +224,13 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
         summary.warnings.push(format!(
             "the fixed point (F.1) hit max_fixed_point_iterations = {} on {} steps (first at step {}); those steps use the last \
              iterate — raise the cap, use relaxation < 1 or a smaller time.step",
-            problem.scene.solver.max_fixed_point_iterations,
+            problem.model.solver.max_fixed_point_iterations,
             summary.fixed_point_cap_hits,
             first_cap.unwrap_or(0)
         ));
     }
-    summary.status = "completed".into();
-    summary.wall_time_s = start.elapsed().as_secs_f64();
-    summary.timing.total_s = summary.wall_time_s;
-    writer.finish(&summary, &sim)?;
+    summary.status = RunStatus::Completed;
+    finish_timing(&mut summary);
+    writer.finish(&summary, problem, &sim.state)?;
     Ok(summary)
 }

@@ -1,14 +1,22 @@
-//! The scene file (SCENES.md): TOML schema, defaults, and validation with key-path messages.
+//! The scene file (the README's scene contract): TOML schema, defaults, and validation with
+//! key-path messages.
 //!
-//! Parsing is two-stage: serde (with `deny_unknown_fields` and `serde_path_to_error`, so an
-//! unknown key or a wrong type names its path), then [`Scene::validate`], which checks the
-//! ranges physics requires and the combinations that make sense. Nothing here touches the
+//! Two stages: [`Scene::from_toml`] reads the schema with serde (`deny_unknown_fields` and
+//! `serde_path_to_error`, so an unknown key or a wrong type names its path) into a plain,
+//! editable [`Scene`]; [`Scene::validate`] checks the ranges physics requires and the
+//! combinations that make sense and returns the typed [`Model`] (parsed expressions, laws,
+//! enforcement, scheme) — the only thing `Problem::new` accepts. Nothing here touches the
 //! mesh; side names are checked against the mesh in `crate::problem`.
 
 use serde::{Deserialize, Deserializer};
 
 use crate::error::{Error, Result};
 use crate::model::expr::{Expr, VecExpr};
+pub use crate::model::kinds::{
+    Bound, DomainKind, EnforcementKind, FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind,
+};
+use crate::model::laws::FrictionCoefficient;
+use crate::model::{self, ContactParams, Enforcement, MaterialParams, Model, SolverParams, TimeParams};
 
 /// The embedded default scene (`dyncontact run` with no SCENE).
 pub const DEFAULT_SCENE: &str = include_str!("../fixtures/scenes/academic.toml");
@@ -40,20 +48,7 @@ fn default_name() -> String {
     "scene".into()
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum DomainKind {
-    Rectangle,
-    Gmsh,
-}
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Plane {
-    #[default]
-    Strain,
-    Stress,
-}
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -201,21 +196,7 @@ fn opt_pairs<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Option<Vec<
     Vec::<Pair<f64>>::deserialize(d).map(|v| Some(v.into_iter().map(|p| p.0).collect()))
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Enforcement {
-    #[default]
-    Exact,
-    Penalty,
-}
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum FrictionBound {
-    #[default]
-    Capped,
-    Uncapped,
-}
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -225,7 +206,7 @@ pub struct Contact {
     pub compliance: f64,
     pub penetration_bound: NumOrStr,
     #[serde(default)]
-    pub enforcement: Enforcement,
+    pub enforcement: EnforcementKind,
     pub penalty: Option<f64>,
     #[serde(default)]
     pub friction_bound: FrictionBound,
@@ -233,15 +214,6 @@ pub struct Contact {
     pub friction: Friction,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum FrictionLaw {
-    #[default]
-    None,
-    Constant,
-    Exponential,
-    Table,
-}
 
 #[derive(Debug, Clone, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -257,14 +229,6 @@ pub struct Friction {
     pub points: Option<Vec<[f64; 2]>>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum SchemeKind {
-    #[default]
-    Midpoint,
-    Trapezoid,
-    BackwardEuler,
-}
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -275,26 +239,7 @@ pub struct Time {
     pub scheme: SchemeKind,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum InnerSolver {
-    #[default]
-    Newton,
-    Conic,
-    /// (N.4) Newton on the unfrozen friction bound, F.1 as fallback
-    #[serde(rename = "newton-unfrozen")]
-    NewtonUnfrozen,
-}
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum MassKind {
-    #[default]
-    Lumped,
-    Consistent,
-    /// (R.1) lumped, with zero mass on the contact nodes (redistributed)
-    Modified,
-}
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -363,12 +308,6 @@ impl Default for Output {
     }
 }
 
-/// The penetration bound g: finite, or none ("inf", pure normal compliance).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Bound {
-    Finite(f64),
-    Infinite,
-}
 
 impl Scene {
     /// Parse TOML text. `file` names the source in error messages.
@@ -391,7 +330,6 @@ impl Scene {
                 Error::SceneSyntax { file: file.to_string(), message: format!("{path}: {inner}") }
             }
         })?;
-        scene.validate()?;
         Ok(scene)
     }
 
@@ -405,21 +343,60 @@ impl Scene {
     pub fn default_scene() -> Scene {
         // The embedded text is checked by a test; a failure here is a build defect, not user input.
         Scene::from_toml(DEFAULT_SCENE, "<embedded academic scene>")
-            .expect("the embedded default scene is valid (tested)")
+            .expect("the embedded default scene parses (tested)")
     }
 
-    /// Number of time steps N = T/k.
-    pub fn steps(&self) -> usize {
-        (self.time.end / self.time.step).round() as usize
-    }
-
-    /// Check ranges and combinations; every error names its key path.
-    pub fn validate(&self) -> Result<()> {
-        let e = |p: &str, m: String| Err(Error::scene(p, m));
+    /// Check ranges and combinations and build the typed [`Model`]: every error names its key
+    /// path, every expression is parsed here once, and nothing downstream re-checks a value.
+    pub fn validate(&self) -> Result<Model> {
         if self.name.trim().is_empty() || self.name.contains(['/', '\\']) || self.name == "." || self.name == ".." {
-            return e("name", format!("must be a non-empty folder name without slashes, got {:?}", self.name));
+            return Err(Error::scene("name", format!("must be a non-empty folder name without slashes, got {:?}", self.name)));
         }
-        // domain
+        let domain = self.validate_domain()?;
+        self.validate_boundary()?;
+        let material = self.validate_material()?;
+        let loads = self.validate_loads()?;
+        let initial = self.validate_initial()?;
+        if !self.boundary.contact.is_empty() && self.contact.is_none() {
+            return Err(Error::scene("contact", "missing section [contact]: boundary.contact names contact sides"));
+        }
+        let contact = match &self.contact {
+            Some(c) => Some(self.validate_contact(c)?),
+            None => None,
+        };
+        let time = self.validate_time()?;
+        let solver = self.validate_solver()?;
+        if self.output.every < 1 {
+            return Err(Error::scene("output.every", format!("must be >= 1, got {}", self.output.every)));
+        }
+        Ok(Model {
+            name: self.name.clone(),
+            description: self.description.clone(),
+            domain,
+            plane: self.domain.plane,
+            dirichlet: self.boundary.dirichlet.clone(),
+            // a [contact] section without contact sides switches nothing on
+            contact_sides: if contact.is_some() { self.boundary.contact.clone() } else { Vec::new() },
+            material,
+            loads,
+            initial,
+            contact: contact.filter(|_| !self.boundary.contact.is_empty()),
+            time,
+            solver,
+            output_every: self.output.every as usize,
+        })
+    }
+
+    /// (P.7) The initial conditions u(0) = u0, u̇(0) = v0 of the scene, as fields in x, y.
+    pub fn validate_initial(&self) -> Result<model::Initial> {
+        Ok(model::Initial {
+            displacement: VecExpr::parse(&self.initial.displacement, &["x", "y"], "initial.displacement")?,
+            velocity: VecExpr::parse(&self.initial.velocity, &["x", "y"], "initial.velocity")?,
+        })
+    }
+
+    fn validate_domain(&self) -> Result<model::Domain> {
+        let e = |p: &str, m: String| Err(Error::scene(p, m));
         let d = &self.domain;
         match d.kind {
             DomainKind::Rectangle => {
@@ -445,38 +422,46 @@ impl Scene {
                 if d.file.is_some() {
                     return e("domain.file", "only used with kind = \"gmsh\"; remove it or set kind = \"gmsh\"".into());
                 }
+                Ok(model::Domain::Rectangle { size, cells: [cells[0] as usize, cells[1] as usize] })
             }
             DomainKind::Gmsh => {
-                match &d.file {
+                let file = match &d.file {
                     None => return e("domain.file", "missing: kind = \"gmsh\" needs file = \"path/to/mesh.msh\"".into()),
                     Some(f) if f.trim().is_empty() => return e("domain.file", "is empty".into()),
-                    _ => {}
-                }
+                    Some(f) => f.clone(),
+                };
                 if d.size.is_some() {
                     return e("domain.size", "only used with kind = \"rectangle\"; remove it".into());
                 }
                 if d.cells.is_some() {
                     return e("domain.cells", "only used with kind = \"rectangle\"; remove it".into());
                 }
+                Ok(model::Domain::Gmsh { file })
             }
         }
-        // boundary
+    }
+
+    fn validate_boundary(&self) -> Result<()> {
         for (i, s) in self.boundary.dirichlet.iter().enumerate() {
             if self.boundary.contact.contains(s) {
-                return e(
-                    &format!("boundary.dirichlet[{i}]"),
+                return Err(Error::scene(
+                    format!("boundary.dirichlet[{i}]"),
                     format!("side {s:?} is also a contact side; a side is either clamped (Γ1) or in contact (Γ3)"),
-                );
+                ));
             }
         }
         for (name, list) in [("dirichlet", &self.boundary.dirichlet), ("contact", &self.boundary.contact)] {
             for (i, s) in list.iter().enumerate() {
                 if list[..i].contains(s) {
-                    return e(&format!("boundary.{name}[{i}]"), format!("side {s:?} is listed twice"));
+                    return Err(Error::scene(format!("boundary.{name}[{i}]"), format!("side {s:?} is listed twice")));
                 }
             }
         }
-        // material
+        Ok(())
+    }
+
+    fn validate_material(&self) -> Result<MaterialParams> {
+        let e = |p: &str, m: String| Err(Error::scene(p, m));
         let m = &self.material;
         if !(m.density.is_finite() && m.density > 0.0) {
             return e("material.density", format!("must be > 0, got {}", m.density));
@@ -494,7 +479,7 @@ impl Scene {
         if !(v.zeta.is_finite() && v.zeta >= 0.0) {
             return e("material.viscosity.zeta", format!("must be >= 0, got {}", v.zeta));
         }
-        if d.plane == Plane::Stress && (v.theta > 0.0 || v.zeta > 0.0) {
+        if self.domain.plane == Plane::Stress && (v.theta > 0.0 || v.zeta > 0.0) {
             // decision 11: σ_zz = 0 is algebraic only when A = β B.
             let (lam, mu) = crate::model::material::lame(m.young, m.poisson);
             let proportional = (v.theta * mu - v.zeta * lam).abs() <= 1e-12 * (v.theta * mu).abs().max((v.zeta * lam).abs());
@@ -511,15 +496,21 @@ impl Scene {
                 );
             }
         }
-        // loads and initial data
-        VecExpr::parse(&self.loads.body, &["x", "y", "t"], "loads.body")?;
+        Ok(MaterialParams { density: m.density, young: m.young, poisson: m.poisson, theta: v.theta, zeta: v.zeta })
+    }
+
+    fn validate_loads(&self) -> Result<model::Loads> {
+        let e = |p: &str, m: String| Err(Error::scene(p, m));
+        let body = VecExpr::parse(&self.loads.body, &["x", "y", "t"], "loads.body")?;
         let f3 = VecExpr::parse(&self.loads.contact_surface, &["x", "y", "t"], "loads.contact_surface")?;
         if !f3.is_zero() && self.boundary.contact.is_empty() {
             return e("loads.contact_surface", "acts on Γ3 but boundary.contact is empty".into());
         }
+        let mut traction = Vec::new();
         for (i, tr) in self.loads.traction.iter().enumerate() {
             let p = format!("loads.traction[{i}]");
-            VecExpr::parse(&tr.value, &["x", "y", "t"], &format!("{p}.value"))?;
+            let path = format!("{p}.value");
+            let value = VecExpr::parse(&tr.value, &["x", "y", "t"], &path)?;
             if self.boundary.dirichlet.contains(&tr.side) {
                 return e(&format!("{p}.side"), format!("{:?} is a Dirichlet side (Γ1); tractions act on Γ2 only", tr.side));
             }
@@ -529,17 +520,13 @@ impl Scene {
             if self.loads.traction[..i].iter().any(|o| o.side == tr.side) {
                 return e(&format!("{p}.side"), format!("{:?} already has a traction; give one per side", tr.side));
             }
+            traction.push(model::Traction { side: tr.side.clone(), value, path });
         }
-        VecExpr::parse(&self.initial.displacement, &["x", "y"], "initial.displacement")?;
-        VecExpr::parse(&self.initial.velocity, &["x", "y"], "initial.velocity")?;
-        // contact
-        if !self.boundary.contact.is_empty() && self.contact.is_none() {
-            return e("contact", "missing section [contact]: boundary.contact names contact sides".into());
-        }
-        if let Some(c) = &self.contact {
-            self.validate_contact(c)?;
-        }
-        // time
+        Ok(model::Loads { body, traction, contact_surface: (!f3.is_zero()).then_some(f3) })
+    }
+
+    fn validate_time(&self) -> Result<TimeParams> {
+        let e = |p: &str, m: String| Err(Error::scene(p, m));
         let t = &self.time;
         if !(t.end.is_finite() && t.end > 0.0) {
             return e("time.end", format!("must be > 0, got {}", t.end));
@@ -564,7 +551,11 @@ impl Scene {
         if n > 1e8 {
             return e("time.step", format!("gives {n:.0} steps; at most 1e8 are allowed"));
         }
-        // solver
+        Ok(TimeParams { end: t.end, step: t.step, steps: n as usize, scheme: t.scheme })
+    }
+
+    fn validate_solver(&self) -> Result<SolverParams> {
+        let e = |p: &str, m: String| Err(Error::scene(p, m));
         let s = &self.solver;
         for (key, val) in [("newton_tolerance", s.newton_tolerance), ("fixed_point_tolerance", s.fixed_point_tolerance)] {
             if !(val.is_finite() && val > 0.0 && val < 1.0) {
@@ -590,39 +581,44 @@ impl Scene {
         if s.mass == MassKind::Modified && self.boundary.contact.is_empty() {
             return e("solver.mass", "\"modified\" moves the mass of the contact nodes and needs a contact side".into());
         }
-        if self.output.every < 1 {
-            return e("output.every", format!("must be >= 1, got {}", self.output.every));
-        }
-        Ok(())
+        Ok(SolverParams {
+            inner: s.inner,
+            mass: s.mass,
+            newton_tolerance: s.newton_tolerance,
+            fixed_point_tolerance: s.fixed_point_tolerance,
+            max_newton_iterations: s.max_newton_iterations as usize,
+            max_fixed_point_iterations: s.max_fixed_point_iterations as usize,
+            relaxation: s.relaxation,
+            persistency: s.persistency,
+        })
     }
 
-    fn validate_contact(&self, c: &Contact) -> Result<()> {
+    fn validate_contact(&self, c: &Contact) -> Result<ContactParams> {
         let e = |p: &str, m: String| Err(Error::scene(p, m));
-        if let Some(NumOrStr::Str(g)) = &c.gap {
-            Expr::parse(g, &["x", "y"], "contact.gap")?;
-        }
-        if let Some(NumOrStr::Num(g)) = &c.gap {
-            if !g.is_finite() {
-                return e("contact.gap", format!("must be finite, got {g}"));
-            }
-        }
+        let gap = match &c.gap {
+            None => Expr::constant(0.0),
+            Some(NumOrStr::Str(g)) => Expr::parse(g, &["x", "y"], "contact.gap")?,
+            Some(NumOrStr::Num(g)) if !g.is_finite() => return e("contact.gap", format!("must be finite, got {g}")),
+            Some(NumOrStr::Num(g)) => Expr::constant(*g),
+        };
         if !(c.compliance.is_finite() && c.compliance >= 0.0) {
             return e("contact.compliance", format!("must be >= 0, got {}", c.compliance));
         }
-        let bound = self.bound_of(c)?;
-        match (c.enforcement, c.penalty) {
-            (Enforcement::Penalty, None) => {
+        let bound = Self::bound_of(c)?;
+        let enforcement = match (c.enforcement, c.penalty) {
+            (EnforcementKind::Penalty, None) => {
                 return e("contact.penalty", "missing: enforcement = \"penalty\" needs penalty = ε > 0".into());
             }
-            (Enforcement::Penalty, Some(eps)) if !(eps.is_finite() && eps > 0.0) => {
+            (EnforcementKind::Penalty, Some(eps)) if !(eps.is_finite() && eps > 0.0) => {
                 return e("contact.penalty", format!("must be > 0, got {eps}"));
             }
-            (Enforcement::Exact, Some(_)) => {
+            (EnforcementKind::Exact, Some(_)) => {
                 return e("contact.penalty", "only used with enforcement = \"penalty\"; remove it or set enforcement = \"penalty\"".into());
             }
-            _ => {}
-        }
-        if c.enforcement == Enforcement::Penalty && bound == Bound::Infinite {
+            (EnforcementKind::Penalty, Some(eps)) => Enforcement::Penalty { epsilon: eps },
+            (EnforcementKind::Exact, None) => Enforcement::Exact,
+        };
+        if c.enforcement == EnforcementKind::Penalty && bound == Bound::Infinite {
             return e("contact.enforcement", "\"penalty\" penalizes u_ν > g and needs a finite penetration_bound".into());
         }
         if bound == Bound::Infinite && c.compliance == 0.0 {
@@ -631,82 +627,12 @@ impl Scene {
                 "is 0 and penetration_bound is \"inf\": the foundation exerts no force; give compliance > 0 or a finite bound".into(),
             );
         }
-        let f = &c.friction;
-        let p = "contact.friction";
-        let forbid = |key: &str, present: bool| -> Result<()> {
-            if present {
-                Err(Error::scene(
-                    format!("{p}.{key}"),
-                    format!("not used by law = \"{}\"; remove it", format!("{:?}", f.law).to_lowercase()),
-                ))
-            } else {
-                Ok(())
-            }
-        };
-        let need = |key: &str, v: Option<f64>| -> Result<f64> {
-            match v {
-                None => Err(Error::scene(format!("{p}.{key}"), format!("missing: law = \"{}\" needs it", format!("{:?}", f.law).to_lowercase()))),
-                Some(x) if !(x.is_finite() && x >= 0.0) => Err(Error::scene(format!("{p}.{key}"), format!("must be >= 0, got {x}"))),
-                Some(x) => Ok(x),
-            }
-        };
-        match f.law {
-            FrictionLaw::None => {
-                forbid("static", f.static_.is_some())?;
-                forbid("kinetic", f.kinetic.is_some())?;
-                forbid("decay", f.decay.is_some())?;
-                forbid("coefficient", f.coefficient.is_some())?;
-                forbid("points", f.points.is_some())?;
-            }
-            FrictionLaw::Constant => {
-                need("coefficient", f.coefficient)?;
-                forbid("static", f.static_.is_some())?;
-                forbid("kinetic", f.kinetic.is_some())?;
-                forbid("decay", f.decay.is_some())?;
-                forbid("points", f.points.is_some())?;
-            }
-            FrictionLaw::Exponential => {
-                need("static", f.static_)?;
-                need("kinetic", f.kinetic)?;
-                need("decay", f.decay)?;
-                forbid("coefficient", f.coefficient.is_some())?;
-                forbid("points", f.points.is_some())?;
-            }
-            FrictionLaw::Table => {
-                forbid("static", f.static_.is_some())?;
-                forbid("kinetic", f.kinetic.is_some())?;
-                forbid("decay", f.decay.is_some())?;
-                forbid("coefficient", f.coefficient.is_some())?;
-                let Some(pts) = &f.points else {
-                    return e(&format!("{p}.points"), "missing: law = \"table\" needs points = [[r0, mu0], [r1, mu1], ...]".into());
-                };
-                if pts.is_empty() {
-                    return e(&format!("{p}.points"), "is empty; give at least one [slip rate, mu] pair".into());
-                }
-                if pts[0][0] != 0.0 {
-                    return e(&format!("{p}.points[0][0]"), format!("the first slip rate must be 0 (μ(0) is the static value), got {}", pts[0][0]));
-                }
-                for (i, [r, mu]) in pts.iter().enumerate() {
-                    if !(r.is_finite() && mu.is_finite()) {
-                        return e(&format!("{p}.points[{i}]"), "must be finite numbers".into());
-                    }
-                    if *mu < 0.0 {
-                        return e(&format!("{p}.points[{i}][1]"), format!("μ must be >= 0, got {mu}"));
-                    }
-                    if i > 0 && *r <= pts[i - 1][0] {
-                        return e(
-                            &format!("{p}.points[{i}][0]"),
-                            format!("slip rates must increase strictly, got {} after {}", r, pts[i - 1][0]),
-                        );
-                    }
-                }
-            }
-        }
-        Ok(())
+        let friction = validate_friction(&c.friction)?;
+        Ok(ContactParams { gap, compliance: c.compliance, bound, enforcement, friction_bound: c.friction_bound, friction })
     }
 
     /// The penetration bound of a contact section.
-    pub fn bound_of(&self, c: &Contact) -> Result<Bound> {
+    pub fn bound_of(c: &Contact) -> Result<Bound> {
         match &c.penetration_bound {
             NumOrStr::Num(g) if g.is_finite() && *g >= 0.0 => Ok(Bound::Finite(*g)),
             NumOrStr::Num(g) if *g == f64::INFINITY => Ok(Bound::Infinite),
@@ -718,11 +644,92 @@ impl Scene {
             )),
         }
     }
+}
 
-    /// True when the scene has contact sides and a contact section.
-    pub fn has_contact(&self) -> bool {
-        !self.boundary.contact.is_empty() && self.contact.is_some()
+/// The friction section: the keys each law needs and forbids, and the coefficient μ it defines
+/// (None for `law = "none"`).
+fn validate_friction(f: &Friction) -> Result<Option<FrictionCoefficient>> {
+    let e = |p: &str, m: String| Err(Error::scene(p, m));
+    let p = "contact.friction";
+    let forbid = |key: &str, present: bool| -> Result<()> {
+        if present {
+            Err(Error::scene(
+                format!("{p}.{key}"),
+                format!("not used by law = \"{}\"; remove it", format!("{:?}", f.law).to_lowercase()),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    let need = |key: &str, v: Option<f64>| -> Result<f64> {
+        match v {
+            None => Err(Error::scene(format!("{p}.{key}"), format!("missing: law = \"{}\" needs it", format!("{:?}", f.law).to_lowercase()))),
+            Some(x) if !(x.is_finite() && x >= 0.0) => Err(Error::scene(format!("{p}.{key}"), format!("must be >= 0, got {x}"))),
+            Some(x) => Ok(x),
+        }
+    };
+    match f.law {
+        FrictionLaw::None => {
+            forbid("static", f.static_.is_some())?;
+            forbid("kinetic", f.kinetic.is_some())?;
+            forbid("decay", f.decay.is_some())?;
+            forbid("coefficient", f.coefficient.is_some())?;
+            forbid("points", f.points.is_some())?;
+        }
+        FrictionLaw::Constant => {
+            need("coefficient", f.coefficient)?;
+            forbid("static", f.static_.is_some())?;
+            forbid("kinetic", f.kinetic.is_some())?;
+            forbid("decay", f.decay.is_some())?;
+            forbid("points", f.points.is_some())?;
+        }
+        FrictionLaw::Exponential => {
+            need("static", f.static_)?;
+            need("kinetic", f.kinetic)?;
+            need("decay", f.decay)?;
+            forbid("coefficient", f.coefficient.is_some())?;
+            forbid("points", f.points.is_some())?;
+        }
+        FrictionLaw::Table => {
+            forbid("static", f.static_.is_some())?;
+            forbid("kinetic", f.kinetic.is_some())?;
+            forbid("decay", f.decay.is_some())?;
+            forbid("coefficient", f.coefficient.is_some())?;
+            let Some(pts) = &f.points else {
+                return e(&format!("{p}.points"), "missing: law = \"table\" needs points = [[r0, mu0], [r1, mu1], ...]".into());
+            };
+            if pts.is_empty() {
+                return e(&format!("{p}.points"), "is empty; give at least one [slip rate, mu] pair".into());
+            }
+            if pts[0][0] != 0.0 {
+                return e(&format!("{p}.points[0][0]"), format!("the first slip rate must be 0 (μ(0) is the static value), got {}", pts[0][0]));
+            }
+            for (i, [r, mu]) in pts.iter().enumerate() {
+                if !(r.is_finite() && mu.is_finite()) {
+                    return e(&format!("{p}.points[{i}]"), "must be finite numbers".into());
+                }
+                if *mu < 0.0 {
+                    return e(&format!("{p}.points[{i}][1]"), format!("μ must be >= 0, got {mu}"));
+                }
+                if i > 0 && *r <= pts[i - 1][0] {
+                    return e(
+                        &format!("{p}.points[{i}][0]"),
+                        format!("slip rates must increase strictly, got {} after {}", r, pts[i - 1][0]),
+                    );
+                }
+            }
+        }
     }
+    Ok(match f.law {
+        FrictionLaw::None => None,
+        FrictionLaw::Constant => Some(FrictionCoefficient::Constant(need("coefficient", f.coefficient)?)),
+        FrictionLaw::Exponential => Some(FrictionCoefficient::Exponential {
+            a: need("static", f.static_)?,
+            b: need("kinetic", f.kinetic)?,
+            alpha: need("decay", f.decay)?,
+        }),
+        FrictionLaw::Table => f.points.clone().map(FrictionCoefficient::Table),
+    })
 }
 
 fn one_paragraph(s: &str) -> String {

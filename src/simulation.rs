@@ -1,32 +1,39 @@
-//! The time loop: one step is (1) the free velocity A_k⁻¹ b^n, (2) the contact problem on the
-//! contact DOFs through the Delassus operator (F.1 around the inner solver), (3) the recovery
-//! solve, (4) the displacement update (S.1) and the energy balance (E.1).
+//! The time loop. One step reads as the model's step (spec/model.md §4.2–§4.5):
+//! free solve A_k⁻¹ b^n → contact solve on the contact DOFs through the Delassus operator (F.1
+//! around the inner solver) → recovery solve → advance (S.1) → balance (E.1).
+//!
+//! [`Simulation::steps`] is the one loop every caller drives (`run`, the studies, the tests):
+//! an iterator of [`StepRecord`]s, in the way scikit-fem's examples `yield` from their time
+//! loop.
+
+use std::time::Instant;
 
 use faer::Mat;
 
 use crate::energy::{self, EnergyTerms, StepEnergy};
-use crate::error::{Error, Result, SolverFailure};
+use crate::error::{Error, Result};
+use crate::failure::{ContactFailure, SolverFailure, StepFailureCause};
 use crate::fem::Operators;
 use crate::linalg;
+use crate::model::contact::ContactModel;
+use crate::model::kinds::{InnerSolver, SchemeKind};
 use crate::problem::Problem;
-use crate::scene::{InnerSolver, SchemeKind};
-use crate::scheme::{ContactRule, StepOperator};
+use crate::scheme::{ContactKinematics, StepOperator};
 use crate::step::conic::ConicSettings;
 use crate::step::fixed_point::{self, FixedPointSettings, Inner, StepReport};
 use crate::step::newton::NewtonSettings;
-use crate::step::{delassus, NodeData, NodeStatus, StepData};
-
+use crate::step::{delassus, ContactSolution, NodeData, NodeStatus, StepData};
 
 /// (R.2) Velocity-level persistency: on a node that stayed on the constraint (dir = ν) or in
 /// stick (dir = τ) over the step, set the end-point velocity component v_c^{n+1} = 0 instead
 /// of the −v_c^n that (S.1) gives; returns the kinetic energy removed, ½ m (v_c^{n+1})² ≥ 0
 /// (diagonal mass m), which (E.1) books as the persistency dissipation.
-pub fn persist_velocity(w: &mut [f64], dofs: [usize; 2], dir: [f64; 2], m: f64) -> f64 {
+pub fn persist_velocity(v_new: &mut [f64], dofs: [usize; 2], dir: [f64; 2], m: f64) -> f64 {
     let [dx, dy] = dofs;
-    let wc = dir[0] * w[dx] + dir[1] * w[dy];
-    w[dx] -= wc * dir[0];
-    w[dy] -= wc * dir[1];
-    0.5 * m * wc * wc
+    let vc = dir[0] * v_new[dx] + dir[1] * v_new[dy];
+    v_new[dx] -= vc * dir[0];
+    v_new[dy] -= vc * dir[1];
+    0.5 * m * vc * vc
 }
 
 /// Per-node contact quantities after a step (contact.csv).
@@ -46,6 +53,25 @@ pub struct NodeRecord {
     /// the frozen friction bound S used
     pub bound: f64,
     pub status: NodeStatus,
+}
+
+/// Wall-clock split of the setup, in seconds.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SetupTiming {
+    pub assembly: f64,
+    /// the factorization of A_k
+    pub factorization: f64,
+    /// W = H A_k⁻¹ Hᵀ
+    pub delassus: f64,
+}
+
+/// Wall-clock split of one step, in seconds.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StepTiming {
+    pub free_solve: f64,
+    /// the contact solve, (F.1) included
+    pub contact_solve: f64,
+    pub recovery: f64,
 }
 
 /// One history.csv row plus the nodal contact data.
@@ -69,9 +95,33 @@ pub struct StepRecord {
     pub stick_nodes: usize,
     pub report: StepReport,
     pub nodes: Vec<NodeRecord>,
+    pub timing: StepTiming,
 }
 
-/// Solver settings taken from the scene (and adjustable by tests and studies).
+impl StepRecord {
+    /// A record of step `step` at time `t` with every quantity zero.
+    pub fn empty(step: usize, t: f64) -> StepRecord {
+        StepRecord {
+            step,
+            t,
+            energy: EnergyTerms::default(),
+            energy_scale: 0.0,
+            normal_force: 0.0,
+            tangential_force: 0.0,
+            max_penetration: 0.0,
+            chatter: 0.0,
+            trapped_kinetic: 0.0,
+            contact_nodes: 0,
+            slip_nodes: 0,
+            stick_nodes: 0,
+            report: StepReport::default(),
+            nodes: Vec::new(),
+            timing: StepTiming::default(),
+        }
+    }
+}
+
+/// Solver settings taken from the model (and adjustable by tests and studies).
 #[derive(Debug, Clone, Copy)]
 pub struct Settings {
     pub inner: Inner,
@@ -80,32 +130,45 @@ pub struct Settings {
 
 impl Settings {
     pub fn from_problem(p: &Problem) -> Settings {
-        let s = &p.scene.solver;
+        let s = &p.model.solver;
+        let newton = NewtonSettings {
+            tolerance: s.newton_tolerance,
+            max_iterations: s.max_newton_iterations,
+            ..NewtonSettings::default()
+        };
         let inner = match s.inner {
-            InnerSolver::Newton => Inner::Newton(NewtonSettings {
-                tolerance: s.newton_tolerance,
-                max_iterations: s.max_newton_iterations as usize,
-                ..NewtonSettings::default()
-            }),
+            InnerSolver::Newton => Inner::Newton(newton),
             InnerSolver::Conic => Inner::Conic(ConicSettings { tolerance: s.newton_tolerance.max(1e-12), ..ConicSettings::default() }),
-            InnerSolver::NewtonUnfrozen => Inner::NewtonUnfrozen(NewtonSettings {
-                tolerance: s.newton_tolerance,
-                max_iterations: s.max_newton_iterations as usize,
-                ..NewtonSettings::default()
-            }),
+            InnerSolver::NewtonUnfrozen => Inner::NewtonUnfrozen(newton),
         };
         Settings {
             inner,
             fixed_point: FixedPointSettings {
                 tolerance: s.fixed_point_tolerance,
-                max_iterations: s.max_fixed_point_iterations as usize,
+                max_iterations: s.max_fixed_point_iterations,
                 relaxation: s.relaxation,
             },
         }
     }
 }
 
-/// The state and the constant operators of a run.
+/// The state at the end of step n: everything the next step reads (and a checkpoint stores).
+#[derive(Debug, Clone, PartialEq)]
+pub struct State {
+    pub n: usize,
+    pub u: Vec<f64>,
+    pub v: Vec<f64>,
+    /// multipliers λ_i and friction forces t_i of the last step (warm starts)
+    pub lambda: Vec<f64>,
+    pub t_fric: Vec<f64>,
+    pub energy: EnergyTerms,
+    pub energy_scale: f64,
+    /// contact nodes on the constraint (λ > 0) / in stick at the end of the last step (R.2)
+    pub active: Vec<bool>,
+    pub stick: Vec<bool>,
+}
+
+/// The constant operators and the state of a run.
 pub struct Simulation<'p> {
     pub problem: &'p Problem,
     pub ops: Operators,
@@ -113,21 +176,21 @@ pub struct Simulation<'p> {
     pub settings: Settings,
     /// W = H A_k⁻¹ Hᵀ (None without contact)
     pub delassus: Option<Mat<f64>>,
-    pub rule: ContactRule,
-    pub n: usize,
-    pub u: Vec<f64>,
-    pub v: Vec<f64>,
-    pub lambda: Vec<f64>,
-    pub t_fric: Vec<f64>,
-    /// contact nodes on the constraint (λ > 0) / in stick at the end of the last step
-    pub active: Vec<bool>,
-    pub stick: Vec<bool>,
-    pub energy: EnergyTerms,
-    energy_scale: f64,
-    /// wall-clock split of the last step: free solve, contact solve, recovery (seconds)
-    pub timing: [f64; 3],
-    /// setup: assembly, factorization of A_k, Delassus operator (seconds)
-    pub setup_timing: [f64; 3],
+    pub kinematics: ContactKinematics,
+    pub state: State,
+    pub setup_timing: SetupTiming,
+}
+
+/// What the contact solve of one step produced.
+struct ContactStep {
+    sol: ContactSolution,
+    /// the friction bound S of the last convex solve
+    s_bound: Vec<f64>,
+    /// d^n per contact node
+    d_n: Vec<f64>,
+    /// the contact forces r = [ω(q + λ), ω t] per node
+    r: Vec<f64>,
+    report: StepReport,
 }
 
 impl<'p> Simulation<'p> {
@@ -135,65 +198,65 @@ impl<'p> Simulation<'p> {
         Simulation::with_settings(problem, Settings::from_problem(problem))
     }
 
+    /// Assemble, factor A_k once, and compute the Delassus operator once (the fast path).
     pub fn with_settings(problem: &'p Problem, settings: Settings) -> Result<Simulation<'p>> {
-        let clock = std::time::Instant::now();
+        let clock = Instant::now();
         let contact_nodes: &[usize] = problem.contact.as_ref().map(|c| c.nodes.as_slice()).unwrap_or(&[]);
-        let ops = Operators::new(&problem.mesh, &problem.material, problem.scene.solver.mass, &problem.dofs, contact_nodes)?;
-        let t_assembly = clock.elapsed().as_secs_f64();
-        let clock = std::time::Instant::now();
-        let stepper = StepOperator::new(&ops, problem.scene.time.scheme, problem.k)?;
-        let t_factor = clock.elapsed().as_secs_f64();
-        let clock = std::time::Instant::now();
+        let ops = Operators::new(&problem.mesh, &problem.material, problem.model.solver.mass, &problem.dofs, contact_nodes)?;
+        let assembly = clock.elapsed().as_secs_f64();
+        let clock = Instant::now();
+        let stepper = StepOperator::new(&ops, problem.model.time.scheme, problem.k)?;
+        let factorization = clock.elapsed().as_secs_f64();
+        let clock = Instant::now();
         let delassus = problem.contact.as_ref().map(|c| delassus::delassus(stepper.factor(), c));
         let t_delassus = clock.elapsed().as_secs_f64();
-        let nc = problem.contact.as_ref().map(|c| c.n()).unwrap_or(0);
-        let u = problem.u0.clone();
-        let v = problem.v0.clone();
-        let mut energy = EnergyTerms {
-            kinetic: energy::half_quad(&ops.m, &v),
-            elastic: energy::half_quad(&ops.k, &u),
-            ..EnergyTerms::default()
-        };
+        let nc = problem.contact.as_ref().map(ContactModel::n).unwrap_or(0);
+        let (u, v) = (problem.u0.clone(), problem.v0.clone());
+        let mut energy = EnergyTerms { kinetic: energy::half_quad(&ops.m, &v), elastic: energy::half_quad(&ops.k, &u), ..EnergyTerms::default() };
         if let Some(c) = &problem.contact {
             energy.compliance = c.penetration(&u).iter().zip(&c.omega).map(|(d, w)| w * c.normal.energy(*d)).sum();
         }
-        let energy_scale = energy.scale();
-        Ok(Simulation {
-            problem,
-            rule: stepper.contact_rule(),
-            ops,
-            stepper,
-            settings,
-            delassus,
+        let state = State {
             n: 0,
             u,
             v,
             lambda: vec![0.0; nc],
             t_fric: vec![0.0; nc],
+            energy,
+            energy_scale: energy.scale(),
             active: vec![false; nc],
             stick: vec![false; nc],
-            energy,
-            energy_scale,
-            timing: [0.0; 3],
-            setup_timing: [t_assembly, t_factor, t_delassus],
+        };
+        Ok(Simulation {
+            problem,
+            kinematics: stepper.contact_kinematics(),
+            ops,
+            stepper,
+            settings,
+            delassus,
+            state,
+            setup_timing: SetupTiming { assembly, factorization, delassus: t_delassus },
         })
+    }
+
+    /// The remaining steps of the scene, one record each: `for rec in sim.steps() { … }`.
+    /// The iterator ends after the scene's last step, or after the first failure (which is its
+    /// last item). `Steps::simulation` gives the state between steps.
+    pub fn steps(&mut self) -> Steps<'_, 'p> {
+        Steps { sim: self, failed: false }
     }
 
     /// The row of t = 0.
     pub fn initial_record(&self) -> StepRecord {
         let mut nodes = Vec::new();
-        let mut max_pen = f64::NEG_INFINITY;
         if let Some(c) = &self.problem.contact {
-            let d = c.penetration(&self.u);
-            for i in 0..c.n() {
-                let (_, ut) = c.components(i, &self.u);
-                let (_, vt) = c.components(i, &self.v);
-                max_pen = max_pen.max(d[i]);
+            let d = c.penetration(&self.state.u);
+            for (i, &d_i) in d.iter().enumerate() {
                 nodes.push(NodeRecord {
-                    u_n: d[i],
-                    u_t: ut,
-                    v_t: vt,
-                    p: c.compliance.p(d[i]),
+                    u_n: d_i,
+                    u_t: c.components(i, &self.state.u).1,
+                    v_t: c.components(i, &self.state.v).1,
+                    p: c.compliance.p(d_i),
                     lambda: 0.0,
                     friction: 0.0,
                     bound: 0.0,
@@ -204,214 +267,198 @@ impl<'p> Simulation<'p> {
         StepRecord {
             step: 0,
             t: 0.0,
-            energy: self.energy,
-            energy_scale: self.energy_scale,
+            energy: self.state.energy,
+            energy_scale: self.state.energy_scale,
             normal_force: 0.0,
             tangential_force: 0.0,
-            max_penetration: if nodes.is_empty() { 0.0 } else { max_pen },
-            chatter: 0.0,
-            trapped_kinetic: 0.0,
-            contact_nodes: 0,
-            slip_nodes: 0,
-            stick_nodes: 0,
-            report: StepReport { fixed_point_converged: true, ..StepReport::default() },
+            max_penetration: if nodes.is_empty() { 0.0 } else { nodes.iter().map(|nr| nr.u_n).fold(f64::NEG_INFINITY, f64::max) },
             nodes,
+            ..StepRecord::empty(0, 0.0)
         }
     }
 
-    fn failure(&self, what: String, residuals: String, suggestion: &str) -> Error {
-        Error::Solver(Box::new(SolverFailure {
-            step: self.n + 1,
-            time: self.problem.time(self.n + 1),
-            what,
-            residuals,
-            suggestion: suggestion.to_string(),
+    fn failure(&self, cause: StepFailureCause) -> Error {
+        let step = self.state.n + 1;
+        Error::Solver(Box::new(SolverFailure { step, time: self.problem.time(step), cause }))
+    }
+
+    /// Advance one step: free solve → contact solve → recovery → advance (S.1) → balance (E.1).
+    pub fn step(&mut self) -> Result<StepRecord> {
+        let clock = Instant::now();
+        let (mut v_new, f) = self.free_velocity();
+        let mut timing = StepTiming { free_solve: clock.elapsed().as_secs_f64(), ..StepTiming::default() };
+        let contact = match self.contact_solve(&v_new) {
+            Some(Ok(cs)) => Some(cs),
+            Some(Err(e)) => return Err(self.failure(StepFailureCause::Contact(e))),
+            None => None,
+        };
+        timing.contact_solve = clock.elapsed().as_secs_f64() - timing.free_solve;
+        let clock = Instant::now();
+        if let (Some(c), Some(cs)) = (&self.problem.contact, &contact) {
+            self.recover(c, cs, &mut v_new);
+        }
+        timing.recovery = clock.elapsed().as_secs_f64();
+        let u_new = self.stepper.displacement(&self.state.u, &self.state.v, &v_new);
+        if let Some(entry) = u_new.iter().chain(&v_new).position(|x| !x.is_finite()) {
+            return Err(self.failure(StepFailureCause::NonFinite { entry }));
+        }
+        Ok(self.balance(u_new, v_new, &f, contact, timing))
+    }
+
+    /// The contact solve of the step for the free velocity `v_free` (None without contact).
+    fn contact_solve(&self, v_free: &[f64]) -> Option<std::result::Result<ContactStep, ContactFailure>> {
+        let c = self.problem.contact.as_ref()?;
+        let (data, p_tau_hat) = self.step_data(c.restrict(v_free))?;
+        let d_n = data.nodes.iter().map(|nd| nd.d_n).collect();
+        Some(self.solve_frozen_sequence(&data, &p_tau_hat, &self.settings.inner, None).map(|(sol, s_bound, report)| {
+            let r = data.forces(&sol.y, &sol.lambda, &sol.t);
+            ContactStep { sol, s_bound, d_n, r, report }
         }))
     }
 
-    /// Advance one step.
-    pub fn step(&mut self) -> Result<StepRecord> {
-        let p = self.problem;
-        let clock = std::time::Instant::now();
-        let (mut w, f) = self.free_velocity();
-        let t_free = clock.elapsed().as_secs_f64();
-        let mut report = StepReport { fixed_point_converged: true, ..StepReport::default() };
-        let mut t_contact = 0.0;
-        let mut t_recover = 0.0;
-        let mut contact_out = None;
-        if let (Some(c), Some(_)) = (&p.contact, &self.delassus) {
-            let clock = std::time::Instant::now();
-            let y_free = c.restrict(&w);
-            let (data, p_tau_hat) = self.step_data(y_free).ok_or_else(|| self.failure("no contact data".into(), String::new(), ""))?;
-            let (sol, s, rep) = self.solve_frozen_sequence(&data, &p_tau_hat, &self.settings.inner, None).map_err(|e| {
-                self.failure(
-                    format!("the {} solver failed in fixed-point iteration {} ({})", e.solver, e.fixed_point_iteration, e.reason),
-                    format!("after {} iterations the relative residual is {:.3e}", e.iterations, e.residual),
-                    "a smaller time.step, solver.relaxation < 1, a larger contact.penalty, or more solver.max_newton_iterations",
-                )
-            })?;
-            report = rep;
-            t_contact = clock.elapsed().as_secs_f64();
-            let clock = std::time::Instant::now();
-            let r = data.forces(&sol.y, &sol.lambda, &sol.t);
-            if r.iter().any(|v| *v != 0.0) {
-                let mut corr = vec![0.0; w.len()];
-                c.scatter_add(&r, &mut corr);
-                self.stepper.solve_in_place(&mut corr);
-                for (wi, ci) in w.iter_mut().zip(&corr) {
-                    *wi -= ci;
-                }
+    /// Recovery: v^{n+1} = v_free − A_k⁻¹ Hᵀ r with the contact forces r of the solution.
+    fn recover(&self, c: &ContactModel, cs: &ContactStep, v_new: &mut [f64]) {
+        if cs.r.iter().any(|v| *v != 0.0) {
+            let mut corr = vec![0.0; v_new.len()];
+            c.scatter_add(&cs.r, &mut corr);
+            self.stepper.solve_in_place(&mut corr);
+            for (vi, ci) in v_new.iter_mut().zip(&corr) {
+                *vi -= ci;
             }
-            t_recover = clock.elapsed().as_secs_f64();
-            let d_n: Vec<f64> = data.nodes.iter().map(|nd| nd.d_n).collect();
-            contact_out = Some((sol, s, d_n));
         }
-        let u_new = self.stepper.displacement(&self.u, &self.v, &w);
-        if let Some(bad) = u_new.iter().chain(&w).position(|x| !x.is_finite()) {
-            return Err(self.failure(
-                format!("a non-finite value appeared in the solution (entry {bad})"),
-                "the loads or the step produced NaN or infinity".into(),
-                "check the load expressions and use a smaller time.step",
-            ));
-        }
-        // --- energy balance (E.1) ---
-        let du: Vec<f64> = u_new.iter().zip(&self.u).map(|(a, b)| a - b).collect();
-        let vc = self.stepper.viscous_velocity(&self.v, &w);
+    }
+
+    /// (E.1) terms of the step, (R.2) persistency, the contact records; then the state moves
+    /// to t_{n+1}.
+    fn balance(&mut self, u_new: Vec<f64>, mut v_new: Vec<f64>, f: &[f64], contact: Option<ContactStep>, timing: StepTiming) -> StepRecord {
+        let (u, v) = (&self.state.u, &self.state.v);
+        let du: Vec<f64> = u_new.iter().zip(u).map(|(a, b)| a - b).collect();
+        let v_visc = self.stepper.viscous_velocity(v, &v_new);
         let mut se = StepEnergy {
-            d_kinetic: energy::increment(&self.ops.m, &self.v, &w),
-            d_elastic: energy::increment(&self.ops.k, &self.u, &u_new),
-            work: linalg::dot(&du, &f),
-            viscous: linalg::quad(&self.ops.c, &du, &vc),
+            d_kinetic: energy::increment(&self.ops.m, v, &v_new),
+            d_elastic: energy::increment(&self.ops.k, u, &u_new),
+            work: linalg::dot(&du, f),
+            viscous: linalg::quad(&self.ops.c, &du, &v_visc),
             ..StepEnergy::default()
         };
-        let mut rec_nodes = Vec::new();
-        let (mut fn_sum, mut ft_sum, mut max_pen) = (0.0, 0.0, f64::NEG_INFINITY);
-        let (mut n_contact, mut n_slip, mut n_stick) = (0, 0, 0);
-        if let (Some(c), Some((sol, s, d_n))) = (&p.contact, &contact_out) {
-            let d_new = c.penetration(&u_new);
-            for i in 0..c.n() {
-                let w_i = c.omega[i];
-                se.d_compliance += w_i * (c.normal.energy(d_new[i]) - c.normal.energy(d_n[i]));
-                let (_, dut) = c.components(i, &du);
-                se.friction += w_i * s[i] * dut.abs();
-                if let Some(g) = c.constraint {
-                    se.constraint += w_i * sol.lambda[i] * (g - d_n[i]);
-                }
-                fn_sum += w_i * (sol.q[i] + sol.lambda[i]);
-                ft_sum -= w_i * sol.t[i];
-                max_pen = max_pen.max(d_new[i]);
-                match sol.status[i] {
-                    NodeStatus::Separated => {}
-                    NodeStatus::Stick => {
-                        n_contact += 1;
-                        n_stick += 1;
-                    }
-                    NodeStatus::Slip => {
-                        n_contact += 1;
-                        n_slip += 1;
-                    }
-                }
-                let (_, ut) = c.components(i, &u_new);
-                let vbar = self.rule.a_v * (sol.y[2 * i + 1] + self.rule.b_v * c.components(i, &self.v).1);
-                rec_nodes.push(NodeRecord {
-                    u_n: d_new[i],
-                    u_t: ut,
-                    v_t: vbar,
-                    p: sol.q[i],
-                    lambda: sol.lambda[i],
-                    friction: -sol.t[i],
-                    bound: s[i],
-                    status: sol.status[i],
-                });
-            }
-            self.lambda.clone_from(&sol.lambda);
-            self.t_fric.clone_from(&sol.t);
+        let mut rec = StepRecord { timing, ..StepRecord::empty(self.state.n + 1, self.problem.time(self.state.n + 1)) };
+        if let (Some(c), Some(cs)) = (&self.problem.contact, &contact) {
+            self.contact_terms(c, cs, &u_new, &du, &mut se, &mut rec);
+            self.persistency(c, cs, &mut v_new, &mut se, &mut rec);
+            self.state.lambda.clone_from(&cs.sol.lambda);
+            self.state.t_fric.clone_from(&cs.sol.t);
+            rec.report = cs.report.clone();
         }
-        let (mut chatter, mut trapped) = (0.0f64, 0.0f64);
-        if let (Some(c), Some((sol, _, _))) = (&p.contact, &contact_out) {
-            let persistency = p.scene.solver.persistency;
-            let mut removed = 0.0;
-            for i in 0..c.n() {
-                let now_active = sol.lambda[i] > 0.0;
-                let now_stick = sol.status[i] == NodeStatus::Stick;
-                let [dx, dy] = c.dofs[i];
-                let m = self.ops.m_lumped[dx];
-                for (persistent, dir) in [(self.active[i] && now_active, c.normals[i]), (self.stick[i] && now_stick, c.tangent(i))] {
-                    if !persistent {
-                        continue;
-                    }
-                    let wc = dir[0] * w[dx] + dir[1] * w[dy];
-                    if persistency {
-                        removed += persist_velocity(&mut w, [dx, dy], dir, m);
-                    } else {
-                        chatter = chatter.max(wc.abs());
-                        trapped += 0.5 * m * wc * wc;
-                    }
-                }
-                self.active[i] = now_active;
-                self.stick[i] = now_stick;
+        self.state.energy = self.state.energy.advance(&se);
+        self.state.energy_scale = self.state.energy_scale.max(self.state.energy.scale());
+        self.state.u = u_new;
+        self.state.v = v_new;
+        self.state.n += 1;
+        rec.energy = self.state.energy;
+        rec.energy_scale = self.state.energy_scale;
+        rec
+    }
+
+    /// The contact terms of (E.1) (compliance energy, friction and constraint dissipation),
+    /// the forces and counts of the history row, and the contact.csv records.
+    fn contact_terms(&self, c: &ContactModel, cs: &ContactStep, u_new: &[f64], du: &[f64], se: &mut StepEnergy, rec: &mut StepRecord) {
+        let (sol, s_bound) = (&cs.sol, &cs.s_bound);
+        let d_new = c.penetration(u_new);
+        let mut max_pen = f64::NEG_INFINITY;
+        for i in 0..c.n() {
+            let omega = c.omega[i];
+            se.d_compliance += omega * (c.normal.energy(d_new[i]) - c.normal.energy(cs.d_n[i]));
+            se.friction += omega * s_bound[i] * c.components(i, du).1.abs();
+            if let Some(g) = c.constraint {
+                se.constraint += omega * sol.lambda[i] * (g - cs.d_n[i]);
             }
-            if persistency {
-                se.d_kinetic = energy::increment(&self.ops.m, &self.v, &w);
-                se.persistency = removed;
+            rec.normal_force += omega * (sol.q[i] + sol.lambda[i]);
+            rec.tangential_force -= omega * sol.t[i];
+            max_pen = max_pen.max(d_new[i]);
+            match sol.status[i] {
+                NodeStatus::Separated => {}
+                NodeStatus::Stick => rec.stick_nodes += 1,
+                NodeStatus::Slip => rec.slip_nodes += 1,
             }
+            let k = self.kinematics;
+            rec.nodes.push(NodeRecord {
+                u_n: d_new[i],
+                u_t: c.components(i, u_new).1,
+                v_t: k.a_v * (sol.y[2 * i + 1] + k.b_v * c.components(i, &self.state.v).1),
+                p: sol.q[i],
+                lambda: sol.lambda[i],
+                friction: -sol.t[i],
+                bound: s_bound[i],
+                status: sol.status[i],
+            });
         }
-        self.energy = self.energy.advance(&se);
-        self.energy_scale = self.energy_scale.max(self.energy.scale());
-        self.u = u_new;
-        self.v = w;
-        self.n += 1;
-        self.timing = [t_free, t_contact, t_recover];
-        Ok(StepRecord {
-            step: self.n,
-            t: p.time(self.n),
-            energy: self.energy,
-            energy_scale: self.energy_scale,
-            normal_force: fn_sum,
-            tangential_force: ft_sum,
-            max_penetration: if rec_nodes.is_empty() { 0.0 } else { max_pen },
-            chatter,
-            trapped_kinetic: trapped,
-            contact_nodes: n_contact,
-            slip_nodes: n_slip,
-            stick_nodes: n_stick,
-            report,
-            nodes: rec_nodes,
-        })
+        rec.contact_nodes = rec.stick_nodes + rec.slip_nodes;
+        rec.max_penetration = if rec.nodes.is_empty() { 0.0 } else { max_pen };
+    }
+
+    /// (R.2) on nodes that stayed on the constraint or in stick over the step: either remove
+    /// the velocity they keep (`solver.persistency`) and book it, or measure it as chatter.
+    fn persistency(&mut self, c: &ContactModel, cs: &ContactStep, v_new: &mut [f64], se: &mut StepEnergy, rec: &mut StepRecord) {
+        let persistency = self.problem.model.solver.persistency;
+        let mut removed = 0.0;
+        for i in 0..c.n() {
+            let now_active = cs.sol.lambda[i] > 0.0;
+            let now_stick = cs.sol.status[i] == NodeStatus::Stick;
+            let [dx, dy] = c.dofs[i];
+            let m = self.ops.m_lumped[dx];
+            for (persistent, dir) in [(self.state.active[i] && now_active, c.normals[i]), (self.state.stick[i] && now_stick, c.tangent(i))] {
+                if !persistent {
+                    continue;
+                }
+                let vc = dir[0] * v_new[dx] + dir[1] * v_new[dy];
+                if persistency {
+                    removed += persist_velocity(v_new, [dx, dy], dir, m);
+                } else {
+                    rec.chatter = rec.chatter.max(vc.abs());
+                    rec.trapped_kinetic += 0.5 * m * vc * vc;
+                }
+            }
+            self.state.active[i] = now_active;
+            self.state.stick[i] = now_stick;
+        }
+        if persistency {
+            se.d_kinetic = energy::increment(&self.ops.m, &self.state.v, v_new);
+            se.persistency = removed;
+        }
     }
 
     /// The free velocity A_k⁻¹ b^n of the current state and the load used.
     pub fn free_velocity(&self) -> (Vec<f64>, Vec<f64>) {
-        let f = self.problem.loads.at(self.stepper.load_time(self.problem.time(self.n)));
-        let mut w = self.stepper.rhs(&self.u, &self.v, &f);
-        self.stepper.solve_in_place(&mut w);
-        (w, f)
+        let f = self.problem.loads.at(self.stepper.load_time(self.problem.time(self.state.n)));
+        let mut v_free = self.stepper.rhs(&self.state.u, &self.state.v, &f);
+        self.stepper.solve_in_place(&mut v_free);
+        (v_free, f)
     }
 
     /// The condensed contact problem of the current state for a given free contact velocity
     /// `y_free`, and p_τ(û) per node. None without contact.
     pub fn step_data(&self, y_free: Vec<f64>) -> Option<(StepData<'_>, Vec<f64>)> {
-        let (c, wmat) = (self.problem.contact.as_ref()?, self.delassus.as_ref()?);
-        let d_n = c.penetration(&self.u);
-        let vn = c.restrict(&self.v);
-        let rule = self.rule;
+        let (c, w) = (self.problem.contact.as_ref()?, self.delassus.as_ref()?);
+        let d_n = c.penetration(&self.state.u);
+        let vn = c.restrict(&self.state.v);
+        let k = self.kinematics;
         let nodes: Vec<NodeData> = (0..c.n())
             .map(|i| NodeData {
                 omega: c.omega[i],
                 d_n: d_n[i],
-                d_aff: d_n[i] + rule.a_d * rule.b_d * vn[2 * i],
-                v_aff: rule.a_v * rule.b_v * vn[2 * i + 1],
+                d_aff: d_n[i] + k.a_d * k.b_d * vn[2 * i],
+                v_aff: k.a_v * k.b_v * vn[2 * i + 1],
                 bound: c.constraint,
             })
             .collect();
-        let p_tau_hat: Vec<f64> = (0..c.n()).map(|i| c.p_tau.p_tau(d_n[i] + rule.p_d * vn[2 * i])).collect();
+        let p_tau_hat: Vec<f64> = (0..c.n()).map(|i| c.p_tau.p_tau(d_n[i] + k.p_d * vn[2 * i])).collect();
         let data = StepData {
-            w: wmat,
+            delassus: w,
             y_free,
             nodes,
-            a_d: rule.a_d,
-            a_v: rule.a_v,
-            rule: rule.force,
+            a_d: k.a_d,
+            a_v: k.a_v,
+            force_rule: k.force,
             law: &c.normal,
             friction: c.friction.is_some(),
         };
@@ -419,61 +466,62 @@ impl<'p> Simulation<'p> {
     }
 
     /// (F.1) on the current state with a given inner solver; `trace` collects the contact
-    /// velocities of every convex solve.
+    /// velocities of every convex solve. Without contact there is nothing to solve: an empty
+    /// solution.
     pub fn solve_frozen_sequence(
         &self,
         data: &StepData,
         p_tau_hat: &[f64],
         inner: &Inner,
         trace: Option<&mut Vec<Vec<f64>>>,
-    ) -> std::result::Result<(crate::step::ContactSolution, Vec<f64>, StepReport), fixed_point::InnerFailure> {
-        let c = self.problem.contact.as_ref().ok_or_else(|| fixed_point::InnerFailure {
-            solver: "none",
-            iterations: 0,
-            residual: 0.0,
-            reason: "the problem has no contact".into(),
-            fixed_point_iteration: 0,
-        })?;
-        let vn = c.restrict(&self.v);
-        fixed_point::solve(data, c.friction.as_ref(), p_tau_hat, &vn, &self.lambda, &self.t_fric, inner, &self.settings.fixed_point, trace)
-    }
-
-    /// The state to checkpoint after the current step.
-    pub fn state(&self) -> crate::checkpoint::State {
-        crate::checkpoint::State {
-            step: self.n,
-            u: self.u.clone(),
-            v: self.v.clone(),
-            lambda: self.lambda.clone(),
-            t_fric: self.t_fric.clone(),
-            energy: self.energy,
-            energy_scale: self.energy_scale,
-            active: self.active.clone(),
-            stick: self.stick.clone(),
-        }
+    ) -> std::result::Result<(ContactSolution, Vec<f64>, StepReport), ContactFailure> {
+        let (mu, vn) = match &self.problem.contact {
+            Some(c) => (c.friction.as_ref(), c.restrict(&self.state.v)),
+            None => (None, Vec::new()),
+        };
+        fixed_point::solve(data, mu, p_tau_hat, &vn, &self.state.lambda, &self.state.t_fric, inner, &self.settings.fixed_point, trace)
     }
 
     /// Continue from a checkpointed state (sizes must match this problem).
-    pub fn restore(&mut self, s: crate::checkpoint::State) -> Result<()> {
-        if s.u.len() != self.u.len() || s.v.len() != self.v.len() || s.lambda.len() != self.lambda.len() || s.t_fric.len() != self.t_fric.len() {
+    pub fn restore(&mut self, s: State) -> Result<()> {
+        let cur = &self.state;
+        if s.u.len() != cur.u.len() || s.v.len() != cur.v.len() || s.lambda.len() != cur.lambda.len() || s.t_fric.len() != cur.t_fric.len() {
             return Err(Error::Output("the checkpoint does not match this problem's sizes".into()));
         }
-        if s.step > self.problem.steps {
-            return Err(Error::Output(format!("the checkpoint is at step {}, beyond the scene's {} steps", s.step, self.problem.steps)));
+        if s.n > self.problem.steps {
+            return Err(Error::Output(format!("the checkpoint is at step {}, beyond the scene's {} steps", s.n, self.problem.steps)));
         }
-        self.n = s.step;
-        self.u = s.u;
-        self.v = s.v;
-        self.lambda = s.lambda;
-        self.t_fric = s.t_fric;
-        self.energy = s.energy;
-        self.energy_scale = s.energy_scale;
-        self.active = s.active;
-        self.stick = s.stick;
+        self.state = s;
         Ok(())
     }
 
     pub fn scheme(&self) -> SchemeKind {
         self.stepper.kind
+    }
+}
+
+/// The time loop as an iterator of step records (see [`Simulation::steps`]).
+pub struct Steps<'s, 'p> {
+    sim: &'s mut Simulation<'p>,
+    failed: bool,
+}
+
+impl<'p> Steps<'_, 'p> {
+    /// The simulation between steps (its state is that of the last record returned).
+    pub fn simulation(&self) -> &Simulation<'p> {
+        self.sim
+    }
+}
+
+impl Iterator for Steps<'_, '_> {
+    type Item = Result<StepRecord>;
+
+    fn next(&mut self) -> Option<Result<StepRecord>> {
+        if self.failed || self.sim.state.n >= self.sim.problem.steps {
+            return None;
+        }
+        let rec = self.sim.step();
+        self.failed = rec.is_err();
+        Some(rec)
     }
 }

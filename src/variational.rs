@@ -31,8 +31,8 @@ fn margin(pair: &StepPair, z: &[f64]) -> (f64, f64) {
     let sim = pair.sim;
     let p = sim.problem;
     let k = p.k;
-    let (u0, v0, u1, w) = (pair.u_before, pair.v_before, &sim.u, &sim.v);
-    let t_n = p.time(sim.n - 1);
+    let (u0, v0, u1, w) = (pair.u_before, pair.v_before, &sim.state.u, &sim.state.v);
+    let t_n = p.time(sim.state.n - 1);
     let f = p.loads.at(sim.stepper.load_time(t_n));
     let vbar: Vec<f64> = v0.iter().zip(w.iter()).map(|(a, b)| 0.5 * (a + b)).collect();
     let uhalf: Vec<f64> = u0.iter().zip(u1.iter()).map(|(a, b)| 0.5 * (a + b)).collect();
@@ -51,13 +51,13 @@ fn margin(pair: &StepPair, z: &[f64]) -> (f64, f64) {
         let zero = 1e-9 * linalg::norm_inf(v0).max(linalg::norm_inf(w));
         for i in 0..c.n() {
             let (zn, zt) = c.components(i, z);
-            let q = sim.rule.force.force(&c.normal, d0[i], d1[i]);
+            let q = sim.kinematics.force.force(&c.normal, d0[i], d1[i]);
             let contact = c.omega[i] * q * zn;
             total += contact;
             scale += contact.abs();
             if let Some(mu) = &c.friction {
                 let vn0 = c.components(i, v0).0;
-                let p_hat = c.p_tau.p_tau(d0[i] + sim.rule.p_d * vn0);
+                let p_hat = c.p_tau.p_tau(d0[i] + sim.kinematics.p_d * vn0);
                 let fr = c.omega[i] * p_hat * psi0(mu, c.components(i, &vbar).1, zt, zero);
                 total += fr;
                 scale += fr.abs();
@@ -88,7 +88,7 @@ pub fn admissible(pair: &StepPair, z: &mut [f64]) {
     let p = pair.sim.problem;
     let Some(c) = &p.contact else { return };
     let Some(g) = c.constraint else { return };
-    let d1 = c.penetration(&pair.sim.u);
+    let d1 = c.penetration(&pair.sim.state.u);
     for i in 0..c.n() {
         let (zn, _) = c.components(i, z);
         let excess = zn - (g - d1[i]);

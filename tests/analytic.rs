@@ -7,7 +7,7 @@ mod common;
 
 use common::{fixture, problem, records};
 use dyncontact::reference::{bar_impact_force, sliding_block_velocity, CompliantLayer};
-use dyncontact::scene::Enforcement;
+use dyncontact::scene::EnforcementKind as Enforcement;
 use dyncontact::simulation::{Simulation, StepRecord};
 
 /// Mean of a column over the records with t in [t0, t1].
@@ -21,7 +21,7 @@ fn mean_over(recs: &[StepRecord], t0: f64, t1: f64, f: impl Fn(&StepRecord) -> f
 ///
 /// Tolerances: the force is compared in the mean over [0.1, 1.9] because the midpoint rule
 /// with exact enforcement makes the contact force alternate from step to step (the chatter of
-/// issue 8; the impulse per pair of steps is right): 1% — the dispersion of 100 P1 cells at
+/// the midpoint chatter; the impulse per pair of steps is right): 1% — the dispersion of 100 P1 cells at
 /// c k/h = 0.25 smears the wave fronts over a few cells, ~1% of the bar. Release time within
 /// 2 h/c + 2k (the front crosses a cell in h/c). Exit speed within 1%: the constraint
 /// dissipation of the impact (0.77% of the energy, measured) costs 0.4% of the speed.
@@ -149,7 +149,7 @@ fn b2_penalty_overshoot_matches_closed_form() {
 fn mean_velocity_x(sim: &Simulation) -> f64 {
     let (mut mom, mut mass) = (0.0, 0.0);
     for (i, m) in sim.ops.m_lumped.iter().enumerate().step_by(2) {
-        mom += m * sim.v[i];
+        mom += m * sim.state.v[i];
         mass += m;
     }
     mom / mass
@@ -167,16 +167,16 @@ fn b3_sliding_block_matches_closed_form() {
     let mut sim = Simulation::new(&p).expect("setup");
     let (m, n, ft, a, b, alpha, t0) = (2.0, 10.0, 7.0, 0.6, 0.3, 20.0, 0.1);
     let mut worst: f64 = 0.0;
-    for _ in 0..p.steps {
-        sim.step().expect("step");
-        let t = p.time(sim.n);
-        if t >= t0 {
-            let exact = sliding_block_velocity(m, n, ft, a, b, alpha, t - t0);
-            worst = worst.max((mean_velocity_x(&sim) - exact).abs());
+    let mut steps = sim.steps();
+    while let Some(rec) = steps.next() {
+        let rec = rec.expect("step");
+        if rec.t >= t0 {
+            let exact = sliding_block_velocity(m, n, ft, a, b, alpha, rec.t - t0);
+            worst = worst.max((mean_velocity_x(steps.simulation()) - exact).abs());
         }
     }
     let v_end = mean_velocity_x(&sim);
-    let exact_end = sliding_block_velocity(m, n, ft, a, b, alpha, p.time(sim.n) - t0);
+    let exact_end = sliding_block_velocity(m, n, ft, a, b, alpha, p.time(sim.state.n) - t0);
     println!("B.3: worst |v_h − v| = {worst:.3e}; at the end v_h = {v_end:.5}, closed form {exact_end:.5}");
     common::measured("analytic::b3_sliding_block_matches_closed_form", "B.3 sliding velocity error (absolute)", worst, "≤ 3e-3");
     assert!(worst <= 3e-3, "sliding velocity off the closed form by {worst:.3e}");
@@ -196,9 +196,10 @@ fn b3_block_sticks_below_the_static_threshold() {
     let mut sim = Simulation::new(&p).expect("setup");
     let mut worst: f64 = 0.0;
     let mut last = None;
-    for _ in 0..p.steps {
-        last = Some(sim.step().expect("step"));
-        worst = worst.max(mean_velocity_x(&sim).abs());
+    let mut steps = sim.steps();
+    while let Some(rec) = steps.next() {
+        last = Some(rec.expect("step"));
+        worst = worst.max(mean_velocity_x(steps.simulation()).abs());
     }
     let last = last.expect("steps");
     println!("B.3 stuck: largest |mean velocity| {worst:.3e}; stick nodes at the end {} of {}", last.stick_nodes, last.nodes.len());

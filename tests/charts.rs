@@ -1,4 +1,4 @@
-//! The charts `run` writes into plots/ (issue 6, item 2): forces, contact status map, normal
+//! The charts `run` writes into plots/: forces, contact status map, normal
 //! stress profiles and the deformed mesh; well-formed SVG with the series each one claims.
 
 use std::collections::BTreeSet;
@@ -33,7 +33,7 @@ fn run_scene(name: &str, end: Option<f64>, every: i64) -> (PathBuf, Problem) {
         scene.time.end = end;
     }
     scene.output.every = every;
-    let problem = Problem::new(scene, &scene_dir()).expect("problem");
+    let problem = Problem::from_scene(&scene, &scene_dir()).expect("problem");
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("charts_{name}"));
     let _ = std::fs::remove_dir_all(&out);
     run(&problem, &RunOptions { out: out.clone(), progress: false, ..RunOptions::default() }).expect("run");
@@ -372,7 +372,7 @@ fn charts_accept_empty_and_non_finite_data() {
         contact_charts::contact_status(&frames, &along),
         contact_charts::normal_stress(&[], &along, None),
         contact_charts::normal_stress(&frames, &along, Some(nan)),
-        plots::line_chart("empty", "x", "y", Some("z"), &[], &[]),
+        plots::line_chart("empty", "x", "y", &[], &[]),
     ];
     for (k, o) in outputs.into_iter().enumerate() {
         let text = o.unwrap_or_else(|e| panic!("chart {k} failed: {e}"));
@@ -392,9 +392,9 @@ fn charts_accept_empty_and_non_finite_data() {
 fn positions_follow_the_arc_length_on_a_bent_contact_boundary() {
     let mut scene = Scene::from_file(&scene_dir().join("impact_friction.toml")).expect("scene");
     scene.boundary.contact = vec!["bottom".into(), "right".into()];
-    let problem = Problem::new(scene, &scene_dir()).expect("problem");
+    let problem = Problem::from_scene(&scene, &scene_dir()).expect("problem");
     let c = problem.contact.as_ref().expect("contact");
-    let along = Along::of(&problem.mesh, c, &problem.scene.boundary.contact);
+    let along = Along::of(&problem.mesh, c, &problem.model.contact_sides);
     let at = |x: f64, y: f64| {
         let i = c.nodes.iter().position(|&v| problem.mesh.nodes[v] == [x, y]).expect("node");
         along.s[i]

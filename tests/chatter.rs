@@ -1,4 +1,4 @@
-//! Velocity chatter of the midpoint rule at contact nodes, and its remedies (issue 8).
+//! Velocity chatter of the midpoint rule at contact nodes, and its remedies.
 //!
 //! With exact enforcement, (S.1) gives v^{n+1} = 2(u^{n+1} − u^n)/k − v^n: a node that stays on
 //! the constraint (u_ν^{n+1} = u_ν^n = g) or sticks has v^{n+1} = −v^n. Its end-point velocity
@@ -121,14 +121,12 @@ fn r1_r2_bar_impact_chatter_and_remedies() {
         .map(|&v| dyncontact::output::plots::Series {
             name: format!("{v:?}"),
             points: force_history(with(fixture("bar_impact"), v)).into_iter().filter(|p| p.0 <= 2.4).collect(),
-            secondary: false,
         })
         .collect();
     let svg = dyncontact::output::plots::line_chart(
         "B.1: contact force of a bar hitting a rigid wall, per variant",
         "t [s]",
         "normal force [N/m]",
-        None,
         &series,
         &[("closed form ρ c v0 H".to_string(), 0.01)],
     )

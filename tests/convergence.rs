@@ -1,4 +1,4 @@
-//! Convergence of the academic scene against a fine reference (issue 4 item 3): h and k halved
+//! Convergence of the academic scene against a fine reference: h and k halved
 //! together three times (8×4 / 2e-3 → 32×16 / 5e-4) against 64×32 / 2.5e-4, T = 0.3 s, for the
 //! midpoint rule and backward Euler. No exact solution exists, so no order is asserted: the
 //! errors must fall under refinement (they do), and the observed orders go into the report.
@@ -6,7 +6,7 @@
 
 mod common;
 
-use dyncontact::bench::convergence;
+use dyncontact::studies::bench::convergence;
 use dyncontact::scene::SchemeKind;
 
 fn orders(e: &[f64]) -> Vec<f64> {
@@ -19,7 +19,7 @@ fn orders(e: &[f64]) -> Vec<f64> {
 fn academic_scene_converges_under_refinement() {
     for scheme in [SchemeKind::Midpoint, SchemeKind::BackwardEuler] {
         let rows = convergence(scheme, 3, 0.3).expect("study");
-        let col = |f: fn(&dyncontact::bench::ConvergenceRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+        let col = |f: fn(&dyncontact::studies::bench::ConvergenceRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
         let (force, imp, disp) = (col(|r| r.error_force), col(|r| r.error_impulse), col(|r| r.error_disp));
         println!("{scheme:?}: force {force:?} orders {:?}", orders(&force));
         println!("{scheme:?}: impulse {imp:?} orders {:?}", orders(&imp));

@@ -9,9 +9,7 @@ use std::collections::HashMap;
 
 use common::{fixture, problem};
 use dyncontact::fem::assemble::{assemble_full, Dofs};
-use dyncontact::fem::LoadVector;
 use dyncontact::linalg;
-use dyncontact::model::expr::VecExpr;
 
 fn reference(name: &str) -> std::path::PathBuf {
     std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/reference").join(name)
@@ -53,7 +51,7 @@ fn rel_diff(ours: &linalg::SpMat, theirs: &HashMap<(usize, usize), f64>) -> f64 
 fn p1_p2_p4_operators_match_scikit_fem() {
     for name in ["crosscheck_strain", "crosscheck_stress", "crosscheck_elastic", "crosscheck_gmsh"] {
         let p = problem(fixture(name));
-        let (m, k, c) = assemble_full(&p.mesh, &p.material, p.scene.solver.mass).expect("assembly");
+        let (m, k, c) = assemble_full(&p.mesh, &p.material, p.model.solver.mass).expect("assembly");
         let n = 2 * p.mesh.nodes.len();
         let mut report = Vec::new();
         for (label, ours) in [("M", &m), ("K", &k), ("C", &c)] {
@@ -64,18 +62,7 @@ fn p1_p2_p4_operators_match_scikit_fem() {
             assert!(d <= 1e-12, "{name}: {label} differs from scikit-fem by {d:.3e}");
         }
         let all = Dofs::new(p.mesh.nodes.len(), &vec![false; p.mesh.nodes.len()]);
-        let body = VecExpr::parse(&p.scene.loads.body, &["x", "y", "t"], "loads.body").expect("body");
-        let surface: Vec<_> = p
-            .scene
-            .loads
-            .traction
-            .iter()
-            .map(|tr| {
-                let e = p.mesh.side(&tr.side).expect("side").edges.clone();
-                (e, VecExpr::parse(&tr.value, &["x", "y", "t"], "tr").expect("traction"), String::new())
-            })
-            .collect();
-        let f = LoadVector::new(&p.mesh, &all, &body, &surface).at(0.0);
+        let f = dyncontact::problem::build_loads(&p.model, &p.mesh, &all).expect("loads").at(0.0);
         let text = std::fs::read_to_string(reference(&format!("{name}_f.txt"))).expect("f");
         let theirs: Vec<f64> = text.lines().filter(|l| !l.starts_with('%') && !l.trim().is_empty()).map(|l| l.trim().parse().expect("value")).collect();
         assert_eq!(theirs.len(), n);

@@ -63,7 +63,7 @@ fn e1_energy_balance_without_contact() {
 #[test]
 fn e1_backward_euler_dissipates_numerically() {
     let p = problem(no_contact_scene("backward-euler"));
-    assert_eq!(p.scene.time.scheme, SchemeKind::BackwardEuler);
+    assert_eq!(p.model.time.scheme, SchemeKind::BackwardEuler);
     let recs = records(&p);
     let scale = recs.iter().map(|r| r.energy_scale).fold(0.0, f64::max);
     let max_pos = recs.iter().map(|r| r.energy.residual).fold(f64::NEG_INFINITY, f64::max);
@@ -127,7 +127,7 @@ fn e1_energy_balance_frictional_impact() {
 fn e1_energy_balance_penalty() {
     let mut s = fixture("impact_friction");
     let c = s.contact.as_mut().expect("contact");
-    c.enforcement = dyncontact::scene::Enforcement::Penalty;
+    c.enforcement = dyncontact::scene::EnforcementKind::Penalty;
     c.penalty = Some(1e-4);
     let p = problem(s);
     let recs = records(&p);

@@ -1,4 +1,4 @@
-//! Generated bad input (issue 5, item 2): the valid fixture scenes (`fixtures/scenes/*.toml`)
+//! Generated bad input: the valid fixture scenes (`fixtures/scenes/*.toml`)
 //! and meshes (`fixtures/meshes/*.msh`) are mutated at random — lines deleted, duplicated and
 //! swapped, numbers replaced by 0, −1, 1e308, −1e-300, nan, inf and huge integers, strings
 //! replaced by garbage or by random expressions of the expression grammar (deep nesting,
@@ -11,7 +11,7 @@
 //! - not hang (each case runs in its own thread and must answer within [`CASE_TIMEOUT`]),
 //! - end in success or a clean `dyncontact::Error`: a non-empty one-paragraph message that,
 //!   for a scene error, starts with a key path (`contact.friction.decay: ...`) or the file name,
-//! - never leave a NaN or an infinity in `sim.u` / `sim.v` after a step that returned Ok.
+//! - never leave a NaN or an infinity in `sim.state.u` / `sim.state.v` after a step that returned Ok.
 //!
 //! Harness bounds (they bound the time of a case, not the behaviour of the library, and the
 //! cases they skip are counted as "skipped"): a rectangle with more than [`MAX_CELLS`] cells
@@ -1035,7 +1035,7 @@ fn error_kind(e: &Error) -> String {
         }
         Error::Mesh { message, .. } => format!("Mesh {}", gist(message, 5)),
         Error::LinearAlgebra(m) => format!("LinearAlgebra {}", gist(m, 4)),
-        Error::Solver(f) => format!("Solver {}", gist(&f.what, 5)),
+        Error::Solver(f) => format!("Solver {}", gist(&f.cause.to_string(), 5)),
         Error::Output(m) => format!("Output {}", gist(m, 4)),
         Error::Io { source, .. } => format!("Io {}", source.kind()),
         // variants added later: their name
@@ -1093,7 +1093,7 @@ fn pipeline(input: &Input, reached: &mut Vec<String>) -> Result<Outcome, String>
     if scene.solver.max_newton_iterations.saturating_mul(scene.solver.max_fixed_point_iterations) > MAX_ITERATION_PRODUCT {
         return Ok(Outcome::Skipped("more than 10^4 Newton x fixed-point iterations"));
     }
-    let problem = match Problem::new(scene, &input.scene_dir) {
+    let problem = match Problem::from_scene(&scene, &input.scene_dir) {
         Ok(p) => p,
         Err(e) => return check_clean("Problem::new", &e),
     };
@@ -1101,31 +1101,38 @@ fn pipeline(input: &Input, reached: &mut Vec<String>) -> Result<Outcome, String>
     if !finite(&problem.u0) || !finite(&problem.v0) {
         return Err("Problem::new returned Ok with non-finite initial data".into());
     }
-    if problem.scene.solver.inner == InnerSolver::Conic && problem.contact.as_ref().is_some_and(|c| c.n() > MAX_CONIC_NODES) {
+    if problem.model.solver.inner == InnerSolver::Conic && problem.contact.as_ref().is_some_and(|c| c.n() > MAX_CONIC_NODES) {
         return Ok(Outcome::Skipped("conic inner solver on more than 64 contact nodes"));
     }
     let mut sim = match Simulation::new(&problem) {
         Ok(s) => s,
         Err(e) => return check_clean("Simulation::new", &e),
     };
-    let sc = &problem.scene;
+    let sc = &problem.model;
     reached.push("time loop".into());
-    reached.push(format!("{:?} mesh", sc.domain.kind));
+    reached.push(match sc.domain {
+        dyncontact::model::Domain::Rectangle { .. } => "Rectangle mesh".into(),
+        dyncontact::model::Domain::Gmsh { .. } => "Gmsh mesh".to_string(),
+    });
     reached.push(format!("{:?}", sc.time.scheme));
     reached.push(format!("{:?} mass", sc.solver.mass));
-    reached.push(format!("plane {:?}", sc.domain.plane));
+    reached.push(format!("plane {:?}", sc.plane));
     if let Some(c) = &problem.contact {
         reached.push(format!("contact, {:?} inner solver", sc.solver.inner));
         reached.push(format!("contact {:?}, bound {}", c.enforcement, if c.constraint.is_some() { "finite" } else { "none" }));
         reached.push(format!("friction {}", c.friction.as_ref().map(|f| format!("{f:?}").split(['(', ' ', '{']).next().unwrap_or("").to_string()).unwrap_or("none".into())));
     }
-    for n in 0..problem.steps.min(MAX_STEPS) {
-        if let Err(e) = sim.step() {
+    let mut steps = sim.steps().take(MAX_STEPS);
+    let mut n = 0;
+    while let Some(rec) = steps.next() {
+        n += 1;
+        if let Err(e) = rec {
             return check_clean("Simulation::step", &e);
         }
-        if !finite(&sim.u) || !finite(&sim.v) {
-            return Err(format!("step {} returned Ok but left a non-finite value in sim.u or sim.v", n + 1));
-        }
+    }
+    drop(steps);
+    if !finite(&sim.state.u) || !finite(&sim.state.v) {
+        return Err(format!("step {n} returned Ok but left a non-finite value in the state's u or v"));
     }
     Ok(Outcome::Ok)
 }

@@ -248,14 +248,14 @@ fn gmsh_scene_runs() {
     let path = fixture("scenes/gmsh_square.toml");
     let scene = Scene::from_file(&path).expect("gmsh_square.toml parses");
     let dir = path.parent().expect("scene dir");
-    let problem = Problem::new(scene, dir).expect("gmsh_square.toml builds");
+    let problem = Problem::from_scene(&scene, dir).expect("gmsh_square.toml builds");
     assert_eq!(problem.mesh.nodes.len(), 12);
     assert_eq!(problem.mesh.triangles.len(), 14);
     assert!(problem.contact.is_none());
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("gmsh_scene_runs");
     let _ = std::fs::remove_dir_all(&out);
     let summary = run(&problem, &RunOptions { out: out.clone(), progress: false, ..Default::default() }).expect("the run completes");
-    assert_eq!(summary.status, "completed");
+    assert_eq!(summary.status, dyncontact::failure::RunStatus::Completed);
     assert_eq!(summary.steps_completed, problem.steps);
     assert!(problem.steps > 0);
     assert!(out.join("summary.json").is_file());
@@ -391,7 +391,7 @@ fn missing_mesh_file_is_reported() {
     let e = gmsh::read(&missing).expect_err("missing file");
     assert!(e.to_string().contains("no_such_mesh.msh"), "{e}");
     let scene = Scene::from_toml(&scene_text("../meshes/no_such_mesh.msh", "left"), "missing.toml").expect("scene parses");
-    let e = Problem::new(scene, &fixture("scenes")).err().expect("missing mesh file");
+    let e = Problem::from_scene(&scene, &fixture("scenes")).err().expect("missing mesh file");
     let msg = e.to_string();
     assert!(msg.contains("domain.file") && msg.contains("no_such_mesh.msh") && msg.contains("does not exist"), "{msg}");
 }
@@ -400,7 +400,7 @@ fn missing_mesh_file_is_reported() {
 #[test]
 fn scene_naming_an_unknown_side_lists_the_available_sides() {
     let scene = Scene::from_toml(&scene_text("../meshes/square_v41.msh", "west"), "unknown_side.toml").expect("scene parses");
-    let e = Problem::new(scene, &fixture("scenes")).err().expect("unknown side");
+    let e = Problem::from_scene(&scene, &fixture("scenes")).err().expect("unknown side");
     let msg = e.to_string();
     assert!(msg.contains("boundary.dirichlet[0]"), "{msg}");
     assert!(msg.contains("no side named \"west\"; the mesh has bottom, right, top, left"), "{msg}");

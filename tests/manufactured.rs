@@ -10,7 +10,6 @@
 mod common;
 
 use dyncontact::fem::norms::error_norms;
-use dyncontact::model::material::Material;
 use dyncontact::problem::Problem;
 use dyncontact::reference::ManufacturedKV;
 use dyncontact::scene::{Scene, SchemeKind};
@@ -72,13 +71,13 @@ mass = "{mass}"
 
 /// Final displacement (free DOFs) of a run.
 fn solve(scene: Scene) -> (Problem, Vec<f64>) {
-    let problem = Problem::new(scene, std::path::Path::new(".")).expect("problem builds");
+    let problem = Problem::from_scene(&scene, std::path::Path::new(".")).expect("problem builds");
     let u = {
         let mut sim = Simulation::new(&problem).expect("simulation starts");
-        for _ in 0..problem.steps {
-            sim.step().expect("step succeeds");
+        for rec in sim.steps() {
+            rec.expect("step succeeds");
         }
-        sim.u.clone()
+        sim.state.u.clone()
     };
     (problem, u)
 }
@@ -97,7 +96,7 @@ fn b5_manufactured_orders_in_h() {
     for cells in [4, 8, 16, 32] {
         // k = 1/1024: the O(k²) time error (~1e-7) stays far below the finest L² error (~1e-4)
         let (p, u) = solve(scene(cells, 1.0 / 1024.0, "midpoint", "lumped"));
-        let mat = Material::from_scene(&p.scene.material, p.scene.domain.plane);
+        let mat = p.material;
         let uh = p.dofs.expand(&u);
         let (e0, e1) = error_norms(&p.mesh, &mat, &uh, |x, y| m.u(x, y, END), |x, y| m.grad_u(x, y, END));
         println!("{cells:5}  {:.5}  {e0:.4e}    {e1:.4e}", 1.0 / cells as f64);
@@ -136,7 +135,7 @@ fn s1_s2_midpoint_second_order_in_k() {
     let a = solve(scene(4, END / 16.0, "trapezoid", "lumped"));
     let b = solve(scene(4, END / 16.0, "midpoint", "lumped"));
     assert_eq!(a.1, b.1, "trapezoid and midpoint differ without contact");
-    assert_eq!(SchemeKind::Trapezoid, a.0.scene.time.scheme);
+    assert_eq!(SchemeKind::Trapezoid, a.0.model.time.scheme);
 }
 
 /// Backward Euler (the first-order baseline) converges like k (±0.2).
@@ -155,7 +154,7 @@ fn b5_consistent_mass_order_in_h() {
     let mut l2 = Vec::new();
     for cells in [8, 16, 32] {
         let (p, u) = solve(scene(cells, 1.0 / 1024.0, "midpoint", "consistent"));
-        let mat = Material::from_scene(&p.scene.material, p.scene.domain.plane);
+        let mat = p.material;
         let (e0, _) = error_norms(&p.mesh, &mat, &p.dofs.expand(&u), |x, y| m.u(x, y, END), |x, y| m.grad_u(x, y, END));
         l2.push(e0);
     }

@@ -24,7 +24,7 @@ mod common;
 
 use common::problem;
 use dyncontact::fem::norms::error_norms;
-use dyncontact::model::material::{lame, Material};
+use dyncontact::model::material::lame;
 use dyncontact::problem::Problem;
 use dyncontact::scene::Scene;
 use dyncontact::simulation::Simulation;
@@ -186,14 +186,13 @@ fn solve(s: Scene) -> (Problem, Vec<f64>, (bool, bool, bool)) {
     let (u, seen) = {
         let mut sim = Simulation::new(&p).expect("setup");
         let (mut sep, mut slip, mut active) = (false, false, false);
-        for _ in 0..p.steps {
-            let r = sim.step().expect("step");
-
+        for r in sim.steps() {
+            let r = r.expect("step");
             sep |= r.contact_nodes < r.nodes.len();
             slip |= r.slip_nodes > 0;
             active |= r.nodes.iter().any(|n| n.lambda > 0.0);
         }
-        (sim.u.clone(), (sep, slip, active))
+        (sim.state.u.clone(), (sep, slip, active))
     };
     (p, u, seen)
 }
@@ -208,7 +207,7 @@ fn check(regime: Regime) {
     let mut en = Vec::new();
     for cells in [4, 8, 16, 32] {
         let (p, u, seen) = solve(m.scene(cells, 1.0 / 512.0));
-        let mat = Material::from_scene(&p.scene.material, p.scene.domain.plane);
+        let mat = p.material;
         let (_, e1) = error_norms(&p.mesh, &mat, &p.dofs.expand(&u), |x, y| m.u(x, y, END), |x, y| m.grad(x, y, END));
         en.push(e1);
         if cells == 32 {
@@ -261,11 +260,11 @@ fn b5_mms_velocity_weakening_slip_is_unstable() {
     for cells in [8, 16, 32] {
         let p = problem(m.scene(cells, 1.0 / 512.0));
         let mut sim = Simulation::new(&p).expect("setup");
-        for _ in 0..p.steps {
-            stuck |= sim.step().expect("step").stick_nodes > 0;
+        for r in sim.steps() {
+            stuck |= r.expect("step").stick_nodes > 0;
         }
-        let mat = Material::from_scene(&p.scene.material, p.scene.domain.plane);
-        en.push(error_norms(&p.mesh, &mat, &p.dofs.expand(&sim.u), |x, y| m.u(x, y, END), |x, y| m.grad(x, y, END)).1);
+        let mat = p.material;
+        en.push(error_norms(&p.mesh, &mat, &p.dofs.expand(&sim.state.u), |x, y| m.u(x, y, END), |x, y| m.grad(x, y, END)).1);
     }
     println!("velocity weakening: energy errors {en:?}, orders {:?}, a node stuck: {stuck}", orders(&en));
     common::measured("manufactured_contact", "velocity-weakening slip: energy order in h (unstable)", orders(&en)[1], "reported");

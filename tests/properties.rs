@@ -9,15 +9,15 @@ use dyncontact::mesh::Mesh;
 use dyncontact::model::expr::VecExpr;
 use dyncontact::model::laws::{FrictionBoundLaw, FrictionCoefficient, NormalForceRule, NormalLaw};
 use dyncontact::model::material::Material;
-use dyncontact::scene::{self, MassKind, Plane};
+use dyncontact::model::MaterialParams;
+use dyncontact::scene::{MassKind, Plane};
 use dyncontact::step::newton::{self, friction_residual, normal_residual, NewtonSettings};
 use dyncontact::step::{NodeData, StepData};
 use nalgebra::{Matrix3, SMatrix, SymmetricEigen};
 use proptest::prelude::*;
 
 fn material(young: f64, poisson: f64, theta: f64, zeta: f64, plane: Plane) -> Material {
-    let m = scene::Material { density: 1.3, young, poisson, viscosity: scene::Viscosity { theta, zeta } };
-    Material::from_scene(&m, plane)
+    Material::new(&MaterialParams { density: 1.3, young, poisson, theta, zeta }, plane)
 }
 
 /// A non-degenerate triangle: three points with area ≥ 5% of the squared diameter.
@@ -281,7 +281,7 @@ proptest! {
         let nodes: Vec<NodeData> = (0..n).map(|i| NodeData {
             omega: 0.1, d_n: d_n[i].min(g), d_aff: d_n[i].min(g) + 0.5 * k * 0.3, v_aff: 0.5 * v_t[i], bound: bound.then_some(g),
         }).collect();
-        let data = StepData { w: &w, y_free: y_free.clone(), nodes, a_d: 0.5 * k, a_v: 0.5, rule: NormalForceRule::DiscreteGradient, law: &law, friction: true };
+        let data = StepData { delassus: &w, y_free: y_free.clone(), nodes, a_d: 0.5 * k, a_v: 0.5, force_rule: NormalForceRule::DiscreteGradient, law: &law, friction: true };
         let set = NewtonSettings { tolerance: 1e-12, max_iterations: 100, ..NewtonSettings::default() };
         let sol = newton::solve(&data, &s, &vec![0.0; n], &vec![0.0; n], &set);
         prop_assert!(sol.is_ok(), "Newton failed: {:?}", sol.err());

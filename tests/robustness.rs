@@ -1,4 +1,4 @@
-//! Solver failure, interruption and resume (issue 5): a run that cannot continue stops with
+//! Solver failure, interruption and resume: a run that cannot continue stops with
 //! exit code 2 and a message with the step, time, residuals and a suggestion; an interrupted
 //! run exits 130; in both cases every file written so far is valid (history.csv complete up to
 //! the last good step, series.pvd listing only frames on disk, summary.json saying why it

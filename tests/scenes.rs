@@ -7,7 +7,7 @@ use std::path::Path;
 
 use dyncontact::problem::Problem;
 use dyncontact::scene::{
-    Bound, DomainKind, Enforcement, FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind, Scene,
+    Bound, DomainKind, EnforcementKind as Enforcement, FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind, Scene,
     DEFAULT_SCENE,
 };
 
@@ -410,11 +410,13 @@ fn malformed_scenes_are_refused_with_the_key_path() {
     assert!(cases.len() >= 25);
     let mut failures = Vec::new();
     for c in &cases {
-        let refused = match (Scene::from_toml(&c.toml, "case.toml"), c.stage) {
+        // the scene stage: the schema (from_toml) and the ranges (validate)
+        let parsed = Scene::from_toml(&c.toml, "case.toml").and_then(|s| s.validate().map(|_| s));
+        let refused = match (parsed, c.stage) {
             (Err(e), Stage::Scene) => Ok(e.to_string()),
             (Err(e), Stage::Problem) => Err(format!("refused too early (the scene should parse): {e}")),
-            (Ok(_), Stage::Scene) => Err("accepted by Scene::from_toml".to_string()),
-            (Ok(scene), Stage::Problem) => match Problem::new(scene, Path::new(".")) {
+            (Ok(_), Stage::Scene) => Err("accepted by Scene::from_toml and Scene::validate".to_string()),
+            (Ok(scene), Stage::Problem) => match Problem::from_scene(&scene, Path::new(".")) {
                 Err(e) => Ok(e.to_string()),
                 Ok(_) => Err("accepted by Problem::new".to_string()),
             },
@@ -443,7 +445,7 @@ fn the_default_scene_is_valid() {
     assert_eq!(scene.name, "academic");
     let again = Scene::default_scene();
     assert_eq!(again.name, scene.name);
-    let problem = Problem::new(scene, Path::new(".")).expect("the default scene builds a problem");
+    let problem = Problem::from_scene(&scene, Path::new(".")).expect("the default scene builds a problem");
     assert_eq!(problem.steps, 2000);
     assert!(problem.contact.is_some());
 }
@@ -461,7 +463,7 @@ fn every_fixture_scene_loads() {
     assert!(files.iter().any(|p| p.ends_with("academic.toml")), "fixtures/scenes/academic.toml is shipped");
     let mut failures = Vec::new();
     for path in &files {
-        let loaded = Scene::from_file(path).and_then(|scene| Problem::new(scene, path.parent().unwrap_or(dir)));
+        let loaded = Scene::from_file(path).and_then(|scene| Problem::from_scene(&scene, path.parent().unwrap_or(dir)));
         match loaded {
             Ok(p) => println!("ok   {} ({} steps)", path.display(), p.steps),
             Err(e) => failures.push(format!("{}: {e}", path.display())),
@@ -494,14 +496,14 @@ step = 0.1
     assert!(s.boundary.dirichlet.is_empty());
     assert!(s.boundary.contact.is_empty());
     assert!(s.contact.is_none());
-    assert!(!s.has_contact());
+    assert!(s.validate().expect("valid").contact.is_none());
     assert_eq!((s.material.viscosity.theta, s.material.viscosity.zeta), (0.0, 0.0));
     assert_eq!(s.loads.body, ["0".to_string(), "0".to_string()]);
     assert!(s.loads.traction.is_empty());
     assert_eq!(s.initial.displacement, ["0".to_string(), "0".to_string()]);
     assert_eq!(s.initial.velocity, ["0".to_string(), "0".to_string()]);
     assert_eq!(s.time.scheme, SchemeKind::Midpoint);
-    assert_eq!(s.steps(), 10);
+    assert_eq!(s.validate().expect("valid").time.steps, 10);
     assert_eq!(s.solver.inner, InnerSolver::Newton);
     assert_eq!(s.solver.mass, MassKind::Lumped);
     assert_eq!(s.solver.newton_tolerance, 1e-10);
@@ -511,7 +513,7 @@ step = 0.1
     assert_eq!(s.solver.relaxation, 1.0);
     assert_eq!(s.output.every, 10);
     // A free body is allowed ("May be empty for a free body"), with zero loads.
-    let p = Problem::new(s, Path::new(".")).expect("a free body builds a problem");
+    let p = Problem::from_scene(&s, Path::new(".")).expect("a free body builds a problem");
     assert!(p.contact.is_none());
     assert!(p.u0.iter().chain(&p.v0).all(|&v| v == 0.0));
 
@@ -523,14 +525,14 @@ step = 0.1
     assert_eq!(c.friction_bound, FrictionBound::Capped);
     assert_eq!(c.friction.law, FrictionLaw::None);
     assert!(c.gap.is_none() && c.penalty.is_none());
-    assert_eq!(s.bound_of(c).unwrap(), Bound::Finite(0.1));
+    assert_eq!(Scene::bound_of(c).unwrap(), Bound::Finite(0.1));
     assert_eq!(c.compliance, 10.0, "an integer is accepted where a number is expected");
     let zero = with_contact.replace("penetration_bound = 0.1", "penetration_bound = 0");
     let s = Scene::from_toml(&zero, "zero.toml").expect("penetration_bound = 0 (integer) is valid");
-    assert_eq!(s.bound_of(s.contact.as_ref().unwrap()).unwrap(), Bound::Finite(0.0));
+    assert_eq!(Scene::bound_of(s.contact.as_ref().unwrap()).unwrap(), Bound::Finite(0.0));
 
     // "inf" means pure normal compliance.
     let inf = with_contact.replace("penetration_bound = 0.1", "penetration_bound = \"inf\"");
     let s = Scene::from_toml(&inf, "inf.toml").expect("penetration_bound = \"inf\" is valid");
-    assert_eq!(s.bound_of(s.contact.as_ref().unwrap()).unwrap(), Bound::Infinite);
+    assert_eq!(Scene::bound_of(s.contact.as_ref().unwrap()).unwrap(), Bound::Infinite);
 }

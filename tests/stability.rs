@@ -1,13 +1,13 @@
-//! The stability map (`dyncontact study stability`, src/stability.rs): the quick sweep's
-//! outputs, the classification rules, and one test per behaviour the full map found (issue 4
-//! item 5). Every number pinned here was measured first (release, this machine; the values are
+//! The stability map (`dyncontact study stability`, src/studies/stability.rs): the quick
+//! sweep's outputs, the classification rules, and one test per behaviour the full map found.
+//! Every number pinned here was measured first (release, this machine; the values are
 //! in each test's doc and message) on the base scene of the map (the academic scene on 16 × 8
 //! cells, k = 5e-4; its (C.k) limit is 6.94e-4) or on fixtures/scenes/impact_friction.toml.
 //! Horizons are shortened (T = 0.2–0.3 s) so the file stays well under 30 s in the dev profile.
 
 use dyncontact::error::{Error, SolverFailure};
-use dyncontact::scene::{Enforcement, NumOrStr, Scene};
-use dyncontact::stability::*;
+use dyncontact::scene::{EnforcementKind as Enforcement, NumOrStr, Scene};
+use dyncontact::studies::stability::*;
 
 fn var(name: &str) -> Variant {
     variant(name).unwrap_or_else(|| panic!("no variant {name}"))
@@ -54,7 +54,7 @@ fn lost_fraction(m: &Measured) -> f64 {
 fn quick_sweep_writes_csv_and_svg_with_a_row_per_run() {
     let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("stability_quick");
     let _ = std::fs::remove_dir_all(&out);
-    let report = dyncontact::stability::run(&out, &StabilityOptions { quick: true }).expect("quick sweep");
+    let report = dyncontact::studies::stability::run(&out, &StabilityOptions { quick: true }).expect("quick sweep");
     println!("{report}");
     let n = cases(true).len();
     assert!(n >= 7 * variants().len(), "the quick sweep has every sweep × every variant, got {n} cases");
@@ -86,21 +86,18 @@ fn quick_sweep_writes_csv_and_svg_with_a_row_per_run() {
 /// capped fixed point, then the (E.1) defect (energy-conserving variants only), else converged.
 #[test]
 fn classification_follows_the_documented_precedence() {
-    let solver = |what: &str| {
-        Error::Solver(Box::new(SolverFailure {
-            step: 3,
-            time: 0.1,
-            what: what.into(),
-            residuals: String::new(),
-            suggestion: String::new(),
-        }))
+    use dyncontact::failure::{ContactFailure, InnerFailure, NewtonFailure, NewtonStatus, StepFailureCause};
+    let solver = |cause: StepFailureCause| Error::Solver(Box::new(SolverFailure { step: 3, time: 0.1, cause }));
+    let newton_failed = || {
+        let inner = InnerFailure::Newton(NewtonFailure { status: NewtonStatus::MaxIterations, iterations: 50, residual: 1e-3 });
+        StepFailureCause::Contact(ContactFailure { fixed_point_iteration: 1, inner })
     };
     let mut m = Measured::empty(10, 1e-3);
     m.steps_completed = 10;
     assert_eq!(classify(None, false, &m, true), RunClass::Converged);
     assert_eq!(classify(None, true, &m, true), RunClass::NonFinite);
-    assert_eq!(classify(Some(&solver("the newton solver failed")), false, &m, true), RunClass::NewtonFailed);
-    assert_eq!(classify(Some(&solver("a non-finite value appeared in the solution (entry 3)")), false, &m, true), RunClass::NonFinite);
+    assert_eq!(classify(Some(&solver(newton_failed())), false, &m, true), RunClass::NewtonFailed);
+    assert_eq!(classify(Some(&solver(StepFailureCause::NonFinite { entry: 3 })), false, &m, true), RunClass::NonFinite);
     assert_eq!(classify(Some(&Error::scene("contact.penalty", "must be > 0")), false, &m, true), RunClass::ClearError);
     m.max_defect = 2.0 * DEFECT_TOLERANCE;
     assert_eq!(classify(None, false, &m, true), RunClass::EnergyDefect, "a midpoint defect above 1e-9");
@@ -109,7 +106,7 @@ fn classification_follows_the_documented_precedence() {
     assert_eq!(classify(None, false, &m, true), RunClass::FixedPointCapped);
     m.max_gain = 2.0 * GAIN_TOLERANCE;
     assert_eq!(classify(None, false, &m, true), RunClass::EnergyGrew);
-    assert_eq!(classify(Some(&solver("the newton solver failed")), false, &m, true), RunClass::NewtonFailed, "a stop beats a gain");
+    assert_eq!(classify(Some(&solver(newton_failed())), false, &m, true), RunClass::NewtonFailed, "a stop beats a gain");
 }
 
 /// ε = 0 (the limit ε → 0 is Problem P, not a penalty) is refused before any step with a clear

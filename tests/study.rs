@@ -12,7 +12,7 @@
 mod common;
 
 use common::fixture;
-use dyncontact::study::penalty_study;
+use dyncontact::studies::penalty::penalty_study;
 
 /// (E.0) δ(ε) falls with a log–log slope ≥ ½ over ε ∈ [1e-7, 1e-3] and e_V decreases
 /// monotonically; the study's CSV and SVG are written with one row / point per ε.

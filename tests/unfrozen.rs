@@ -39,7 +39,7 @@ fn compare(p: &Problem, tol: f64) -> Agreement {
         let (un, _, r2) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).expect("unfrozen");
         a.newton_f1 += r1.inner_iterations;
         a.newton_unfrozen += r2.inner_iterations;
-        a.fallbacks += r2.fallback as usize;
+        a.fallbacks += usize::from(r2.fallback.is_some());
         let vs = data.velocity_scale(&f1.y).max(1e-300);
         let (ra, rb) = (data.forces(&f1.y, &f1.lambda, &f1.t), data.forces(&un.y, &un.lambda, &un.t));
         let fs = linalg::norm_inf(&ra).max(1e-300);

@@ -9,7 +9,7 @@
 mod common;
 
 use common::{fixture, problem};
-use dyncontact::scene::Enforcement;
+use dyncontact::scene::EnforcementKind as Enforcement;
 use dyncontact::simulation::Simulation;
 use dyncontact::variational::{admissible, hemivariational_margin, variational_margin, StepPair};
 
@@ -40,14 +40,14 @@ fn v1_penalty_steps_satisfy_the_hemivariational_inequality() {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let (mut worst, mut checked) = (f64::INFINITY, 0usize);
     for _ in 0..p.steps {
-        let (u0, v0) = (sim.u.clone(), sim.v.clone());
+        let (u0, v0) = (sim.state.u.clone(), sim.state.v.clone());
         sim.step().expect("step");
         let pair = StepPair { sim: &sim, u_before: &u0, v_before: &v0 };
         for _ in 0..20 {
             let z = rng.vector(p.dofs.n_free);
             let (m, scale) = hemivariational_margin(&pair, &z);
             worst = worst.min(m / scale);
-            assert!(m >= -1e-7 * scale, "step {}: margin {m:.3e} (scale {scale:.3e})", sim.n);
+            assert!(m >= -1e-7 * scale, "step {}: margin {m:.3e} (scale {scale:.3e})", sim.state.n);
             checked += 1;
         }
     }
@@ -67,7 +67,7 @@ fn v2_exact_steps_satisfy_the_variational_inequality() {
     let (mut worst, mut checked, mut bites) = (f64::INFINITY, 0usize, 0usize);
     let c = p.contact.as_ref().expect("contact");
     for _ in 0..p.steps {
-        let (u0, v0) = (sim.u.clone(), sim.v.clone());
+        let (u0, v0) = (sim.state.u.clone(), sim.state.v.clone());
         let rec = sim.step().expect("step");
         let pair = StepPair { sim: &sim, u_before: &u0, v_before: &v0 };
         for _ in 0..20 {
@@ -75,7 +75,7 @@ fn v2_exact_steps_satisfy_the_variational_inequality() {
             admissible(&pair, &mut z);
             let (m, scale) = variational_margin(&pair, &z);
             worst = worst.min(m / scale);
-            assert!(m >= -1e-7 * scale, "step {}: margin {m:.3e} (scale {scale:.3e})", sim.n);
+            assert!(m >= -1e-7 * scale, "step {}: margin {m:.3e} (scale {scale:.3e})", sim.state.n);
             checked += 1;
         }
         if let Some(i) = rec.nodes.iter().position(|n| n.lambda > 0.0) {

@@ -5,7 +5,7 @@ use crate::error::{Error, Result};
 use crate::linalg::{self, SpMat};
 use crate::mesh::Mesh;
 use crate::model::material::Material;
-use crate::scene::MassKind;
+use crate::model::kinds::MassKind;
 
 use super::element;
 
@@ -136,15 +136,7 @@ pub fn nodal_masses(mesh: &Mesh, mat: &Material, mass: MassKind, dofs: &Dofs, co
         return Ok(lumped);
     }
     let per_node = modified_masses(mesh, mat, dofs, contact_nodes)?;
-    let mut out = vec![0.0; dofs.n_free];
-    for (k, m) in per_node.iter().enumerate() {
-        for c in 0..2 {
-            if let Some(i) = dofs.map[2 * k + c] {
-                out[i] = *m;
-            }
-        }
-    }
-    Ok(out)
+    Ok(per_dof(&per_node, dofs))
 }
 
 /// (R.1) Modified mass (the Khenous–Laborde–Renard family, as classified by Doyen–Ern–Piperno):
@@ -156,14 +148,7 @@ pub fn nodal_masses(mesh: &Mesh, mat: &Material, mass: MassKind, dofs: &Dofs, co
 /// structured mesh); every resulting mass must stay positive, or this is an error.
 pub fn modified_masses(mesh: &Mesh, mat: &Material, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Vec<f64>> {
     let n = mesh.nodes.len();
-    let mut mass = vec![0.0; n];
-    for tri in &mesh.triangles {
-        let x = [mesh.nodes[tri[0]], mesh.nodes[tri[1]], mesh.nodes[tri[2]]];
-        let area = element::gradients(x).1.abs();
-        for &v in tri {
-            mass[v] += mat.rho * area / 3.0;
-        }
-    }
+    let mut mass = vertex_masses(mesh, mat);
     let original = mass.clone();
     let mut adj = vec![Vec::new(); n];
     for tri in &mesh.triangles {
@@ -225,17 +210,31 @@ pub fn modified_masses(mesh: &Mesh, mat: &Material, dofs: &Dofs, contact_nodes: 
     Ok(mass)
 }
 
-/// Row-sum lumped mass per free DOF: Σ over adjacent triangles of ρ|T|/3.
-pub fn lumped_masses(mesh: &Mesh, mat: &Material, dofs: &Dofs) -> Vec<f64> {
-    let mut d = vec![0.0; dofs.n_free];
+/// Row-sum lumped mass per mesh node: Σ over adjacent triangles of ρ|T|/3.
+pub fn vertex_masses(mesh: &Mesh, mat: &Material) -> Vec<f64> {
+    let mut mass = vec![0.0; mesh.nodes.len()];
     for tri in &mesh.triangles {
         let x = [mesh.nodes[tri[0]], mesh.nodes[tri[1]], mesh.nodes[tri[2]]];
         let area = element::gradients(x).1.abs();
         for &v in tri {
-            for c in 0..2 {
-                if let Some(i) = dofs.map[2 * v + c] {
-                    d[i] += mat.rho * area / 3.0;
-                }
+            mass[v] += element::vertex_mass(area, mat.rho);
+        }
+    }
+    mass
+}
+
+/// Row-sum lumped mass per free DOF (both DOFs of a node carry the node's mass).
+pub fn lumped_masses(mesh: &Mesh, mat: &Material, dofs: &Dofs) -> Vec<f64> {
+    per_dof(&vertex_masses(mesh, mat), dofs)
+}
+
+/// A nodal quantity on the free DOFs (both components of a node get the node's value).
+fn per_dof(per_node: &[f64], dofs: &Dofs) -> Vec<f64> {
+    let mut d = vec![0.0; dofs.n_free];
+    for (k, m) in per_node.iter().enumerate() {
+        for c in 0..2 {
+            if let Some(i) = dofs.map[2 * k + c] {
+                d[i] = *m;
             }
         }
     }

@@ -47,7 +47,12 @@ pub fn consistent_mass(area: f64, rho: f64) -> SMatrix<f64, 6, 6> {
     m
 }
 
+/// The lumped (row-sum) mass a P1 triangle gives each of its vertices: ρ|T|/3.
+pub fn vertex_mass(area: f64, rho: f64) -> f64 {
+    rho * area / 3.0
+}
+
 /// Row-sum lumped mass: ρA/3 on each diagonal entry.
 pub fn lumped_mass(area: f64, rho: f64) -> SMatrix<f64, 6, 6> {
-    SMatrix::<f64, 6, 6>::from_diagonal_element(rho * area / 3.0)
+    SMatrix::<f64, 6, 6>::from_diagonal_element(vertex_mass(area, rho))
 }

@@ -346,7 +346,17 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
         }
     }
     let mut mesh = Mesh { nodes, triangles, sides, source: file.to_string() };
-    // orientation: all clockwise (surface normal -z) is flipped; a mix means a folded mesh
+    orient(&mut mesh, &tags, file)?;
+    check_duplicates(&mesh, &raw.node_order, file)?;
+    check_unreferenced(&mesh, &raw.node_order, file)?;
+    check_side_edges(&mesh, &side_lines, file)?;
+    mesh.check()?;
+    Ok(mesh)
+}
+
+/// Orientation: all clockwise (surface normal −z) is flipped; a mix means a folded mesh.
+/// `tags` are the file's triangle tags, for messages.
+fn orient(mesh: &mut Mesh, tags: &[i64], file: &str) -> Result<()> {
     let signs: Vec<f64> = (0..mesh.triangles.len()).map(|t| mesh.signed_area(t)).collect();
     let scale = 1e-14 * mesh.bbox_diameter().powi(2);
     if let Some(t) = signs.iter().position(|a| !a.is_finite()) {
@@ -378,8 +388,12 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
             ),
         ));
     }
-    // duplicate nodes: coordinates equal within tol under different tags. A grid of cells of
-    // size tol finds every pair within tol in both coordinates among the 9 cells around a node.
+    Ok(())
+}
+
+/// Duplicate nodes: coordinates equal within tol under different tags. A grid of cells of
+/// size tol finds every pair within tol in both coordinates among the 9 cells around a node.
+fn check_duplicates(mesh: &Mesh, node_tags: &[i64], file: &str) -> Result<()> {
     let tol = 1e-12 * mesh.bbox_diameter();
     let lo = mesh.nodes.iter().fold([f64::INFINITY; 2], |m, p| [m[0].min(p[0]), m[1].min(p[1])]);
     let cell = |p: [f64; 2]| (((p[0] - lo[0]) / tol).floor() as i64, ((p[1] - lo[1]) / tol).floor() as i64);
@@ -393,14 +407,18 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
                     file,
                     format!(
                         "nodes {} and {} are duplicates (both at ({}, {})); merge them (Gmsh: `Coherence Mesh;` in the .geo file, or Geometry > Coherence)",
-                        raw.node_order[j], raw.node_order[i], p[0], p[1]
+                        node_tags[j], node_tags[i], p[0], p[1]
                     ),
                 ));
             }
         }
         grid.entry((cx, cy)).or_default().push(i);
     }
-    // unreferenced nodes
+    Ok(())
+}
+
+/// Every node is a vertex of some triangle.
+fn check_unreferenced(mesh: &Mesh, node_tags: &[i64], file: &str) -> Result<()> {
     let mut used = vec![false; mesh.nodes.len()];
     mesh.triangles.iter().flatten().for_each(|&v| used[v] = true);
     if let Some(v) = used.iter().position(|u| !u) {
@@ -408,11 +426,16 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
             file,
             format!(
                 "node {} is not a vertex of any triangle; remove unreferenced nodes (Gmsh: save only physical groups, or Mesh.SaveAll = 0)",
-                raw.node_order[v]
+                node_tags[v]
             ),
         ));
     }
-    // side edges must be boundary edges (one owning triangle); say so in Gmsh's terms
+    Ok(())
+}
+
+/// Side edges must be boundary edges (one owning triangle); say so in Gmsh's terms.
+/// `side_lines` are (element tag, side name, node tags, node indices) of every side edge.
+fn check_side_edges(mesh: &Mesh, side_lines: &[(i64, String, [i64; 2], [usize; 2])], file: &str) -> Result<()> {
     let mut owners: HashMap<(usize, usize), usize> = HashMap::new();
     for tri in &mesh.triangles {
         for k in 0..3 {
@@ -420,7 +443,7 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
             *owners.entry((a.min(b), a.max(b))).or_default() += 1;
         }
     }
-    for (tag, name, [ta, tb], [a, b]) in &side_lines {
+    for (tag, name, [ta, tb], [a, b]) in side_lines {
         match owners.get(&(*a.min(b), *a.max(b))).copied().unwrap_or(0) {
             1 => {}
             0 => {
@@ -443,6 +466,5 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
             }
         }
     }
-    mesh.check()?;
-    Ok(mesh)
+    Ok(())
 }

@@ -94,18 +94,6 @@ impl Mesh {
         (0..self.triangles.len()).map(|t| self.signed_area(t)).sum()
     }
 
-    /// Largest edge length.
-    pub fn h_max(&self) -> f64 {
-        let mut h: f64 = 0.0;
-        for tri in &self.triangles {
-            for k in 0..3 {
-                let (p, q) = (self.nodes[tri[k]], self.nodes[tri[(k + 1) % 3]]);
-                h = h.max(((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt());
-            }
-        }
-        h
-    }
-
     /// For every side edge, the outward unit normal and the length; errors if an edge is not a
     /// boundary edge of the triangulation.
     pub fn edge_geometry(&self, side: &Side) -> Result<Vec<([f64; 2], f64)>> {

@@ -1,12 +1,12 @@
-//! The contact model a scene switches on (model.md §1, §2, §4.1): the contact nodes of Γ̄3 \ Γ̄1
+//! The contact model a scene switches on (spec/model.md §1, §2, §4.1): the contact nodes of Γ̄3 \ Γ̄1
 //! with their normals, tangents and weights, the gap, and the laws — normal compliance with the
 //! bound g (exact, Problem P) or its penalty (Problem P_ε), and friction.
 
-use crate::fem::Dofs;
 use crate::mesh::SideNodes;
-use crate::scene::{Bound, Enforcement};
 
+use super::kinds::Bound;
 use super::laws::{FrictionBoundLaw, FrictionCoefficient, NormalLaw};
+use super::Enforcement;
 
 /// What the foundation does at one contact node.
 #[derive(Debug, Clone)]
@@ -79,12 +79,13 @@ impl ContactModel {
         (0..self.n()).map(|i| self.components(i, u).0 - self.gap[i]).collect()
     }
 
-    /// Assemble from the boundary data of Γ3 (Γ̄1 nodes already excluded).
+    /// Assemble from the boundary data of Γ3 (Γ̄1 nodes already excluded) and the free DOFs
+    /// (x, y) of each of its nodes.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         side: SideNodes,
         gap: Vec<f64>,
-        dofs: &Dofs,
+        node_dofs: Vec<[usize; 2]>,
         normal: NormalLaw,
         compliance: NormalLaw,
         constraint: Option<f64>,
@@ -93,14 +94,6 @@ impl ContactModel {
         friction: Option<FrictionCoefficient>,
         p_tau: FrictionBoundLaw,
     ) -> ContactModel {
-        let node_dofs = side
-            .nodes
-            .iter()
-            .map(|&v| {
-                // contact nodes are not on Γ̄1, so both DOFs are free
-                [dofs.map[2 * v].unwrap_or(usize::MAX), dofs.map[2 * v + 1].unwrap_or(usize::MAX)]
-            })
-            .collect();
         ContactModel {
             nodes: side.nodes,
             normals: side.normals,

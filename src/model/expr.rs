@@ -791,6 +791,10 @@ impl Expr {
 pub struct VecExpr(pub [Expr; 2]);
 
 impl VecExpr {
+    /// The two source strings, as the scene wrote them.
+    pub fn sources(&self) -> [String; 2] {
+        [self.0[0].source().to_string(), self.0[1].source().to_string()]
+    }
     pub fn parse(src: &[String; 2], vars: &[&str], path: &str) -> Result<VecExpr> {
         Ok(VecExpr([
             Expr::parse(&src[0], vars, &format!("{path}[0]"))?,

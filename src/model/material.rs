@@ -3,7 +3,8 @@
 
 use nalgebra::Matrix3;
 
-use crate::scene::{self, Plane};
+use super::kinds::Plane;
+use super::MaterialParams;
 
 /// Lamé constants (λ, μ_L) from Young's modulus E and Poisson's ratio ν.
 pub fn lame(young: f64, poisson: f64) -> (f64, f64) {
@@ -18,7 +19,7 @@ pub struct Material {
     pub rho: f64,
     /// B ε = λ tr(ε) I + 2 μ_L ε (in-plane constants after the plane reduction)
     pub lambda: f64,
-    pub mu: f64,
+    pub mu_lame: f64,
     /// A ε = θ tr(ε) I + 2 ζ ε (in-plane constants after the plane reduction)
     pub theta: f64,
     pub zeta: f64,
@@ -29,9 +30,10 @@ pub struct Material {
 }
 
 impl Material {
-    pub fn from_scene(m: &scene::Material, plane: Plane) -> Material {
+    /// The plane-reduced material of the scene's constants.
+    pub fn new(m: &MaterialParams, plane: Plane) -> Material {
         let (lambda, mu) = lame(m.young, m.poisson);
-        let (theta, zeta) = (m.viscosity.theta, m.viscosity.zeta);
+        let (theta, zeta) = (m.theta, m.zeta);
         // Plane stress: σ_zz = 0 eliminates ε_zz, giving λ* = 2λμ/(λ + 2μ) (and the same for
         // (θ, ζ), exact when A is proportional to B, which validation requires — decision 11).
         let reduce = |l: f64, m: f64| if l + 2.0 * m > 0.0 { 2.0 * l * m / (l + 2.0 * m) } else { 0.0 };
@@ -39,12 +41,12 @@ impl Material {
             Plane::Strain => (lambda, theta),
             Plane::Stress => (reduce(lambda, mu), reduce(theta, zeta)),
         };
-        Material { rho: m.density, lambda: lp, mu, theta: tp, zeta, lambda_3d: lambda, theta_3d: theta, plane }
+        Material { rho: m.density, lambda: lp, mu_lame: mu, theta: tp, zeta, lambda_3d: lambda, theta_3d: theta, plane }
     }
 
     /// Voigt matrix of B: [[λ+2μ, λ, 0], [λ, λ+2μ, 0], [0, 0, μ]].
     pub fn elasticity(&self) -> Matrix3<f64> {
-        isotropic(self.lambda, self.mu)
+        isotropic(self.lambda, self.mu_lame)
     }
 
     /// Voigt matrix of A: [[θ+2ζ, θ, 0], [θ, θ+2ζ, 0], [0, 0, ζ]].
@@ -69,11 +71,6 @@ impl Material {
             Plane::Strain => self.lambda_3d * (eps_u[0] + eps_u[1]) + self.theta_3d * (eps_v[0] + eps_v[1]),
         };
         [s[0], s[1], s[2], szz]
-    }
-
-    /// Dilatational wave speed c_p = sqrt((λ + 2μ)/ρ) (in-plane constants).
-    pub fn wave_speed(&self) -> f64 {
-        ((self.lambda + 2.0 * self.mu) / self.rho).sqrt()
     }
 }
 

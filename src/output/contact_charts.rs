@@ -1,4 +1,4 @@
-//! The contact and geometry charts of plots/ (issue 6, item 2): force histories with the
+//! The contact and geometry charts of plots/: force histories with the
 //! Coulomb→Tresca reference, the space–time contact-status map along Γ3, normal-stress
 //! profiles along Γ3 and the deformed mesh.
 //!
@@ -161,8 +161,8 @@ fn cell_edges(centres: &[f64], lone_width: f64) -> Vec<f64> {
 pub fn forces(rows: &[ChartRow], reference: Option<f64>) -> Result<String, String> {
     let hist = |f: fn(&ChartRow) -> f64| rows.iter().map(|r| (r.t, f(r))).collect();
     let series = [
-        Series { name: "normal force Σ ω (q + λ)".into(), points: hist(|r| r.normal_force), secondary: false },
-        Series { name: "tangential force −Σ ω t".into(), points: hist(|r| r.tangential_force), secondary: false },
+        Series { name: "normal force Σ ω (q + λ)".into(), points: hist(|r| r.normal_force) },
+        Series { name: "tangential force −Σ ω t".into(), points: hist(|r| r.tangential_force) },
     ];
     let hlines: Vec<(String, f64)> =
         reference.filter(|r| r.is_finite()).map(|r| (format!("p(g)·|Γ3| = {r:.4} N/m"), r)).into_iter().collect();
@@ -172,7 +172,7 @@ pub fn forces(rows: &[ChartRow], reference: Option<f64>) -> Result<String, Strin
         "Contact forces on Γ3 (above p(g)·|Γ3|: constraint active, friction capped at μ p(g): Coulomb→Tresca)"
     };
     let opts = Options { markers: false, legend: SeriesLabelPosition::UpperRight, headroom: 0.3 };
-    plots::line_chart_with(title, "t [s]", "force per unit thickness [N/m]", None, &series, &hlines, &opts)
+    plots::line_chart_with(title, "t [s]", "force per unit thickness [N/m]", &series, &hlines, &opts)
 }
 
 /// Normal stress q + λ along Γ3 at about five frames spread over the contact phase, with p(g),
@@ -187,7 +187,7 @@ pub fn normal_stress(frames: &[Frame], along: &Along, p_g: Option<f64>) -> Resul
         .map(|&k| {
             let (_, t, recs) = pool[k];
             let points = along.order.iter().filter_map(|&i| Some((along.s[i], recs.get(i).map(|r| r.p + r.lambda)?))).collect();
-            Series { name: format!("t = {t:.4} s"), points, secondary: false }
+            Series { name: format!("t = {t:.4} s"), points }
         })
         .collect();
     let hlines: Vec<(String, f64)> = p_g.map(|p| (format!("p(g) = {p:.4} Pa (compliance bound)"), p)).into_iter().collect();
@@ -196,7 +196,6 @@ pub fn normal_stress(frames: &[Frame], along: &Along, p_g: Option<f64>) -> Resul
         "Normal stress q + λ along Γ3 (frames with contact load)",
         along.label,
         "q + λ [Pa]",
-        None,
         &series,
         &hlines,
         &opts,

@@ -1,4 +1,4 @@
-//! Outputs in the run folder (SCENES.md): history.csv (every step), contact.csv and VTU
+//! Outputs in the run folder (the README): history.csv (every step), contact.csv and VTU
 //! frames (every `output.every` steps), series.pvd, summary.json and plots/*.svg.
 //!
 //! Files are written so that a run stopped at any point leaves valid files: CSV rows are
@@ -7,6 +7,7 @@
 
 pub mod contact_charts;
 pub mod export;
+pub mod fs;
 pub mod plots;
 pub mod resume;
 pub mod summary;
@@ -17,25 +18,64 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::simulation::{Simulation, StepRecord};
+use crate::problem::Problem;
+use crate::simulation::{NodeRecord, State, StepRecord};
 
+pub use fs::write_atomic;
 pub use summary::{ModelInfo, Summary};
 
-/// The required history.csv columns (SCENES.md), then our additions.
-pub const HISTORY_COLUMNS: &str = "step,t,kinetic,elastic,compliance,external_work,viscous_dissipation,friction_dissipation,\
-constraint_dissipation,energy_residual,normal_force,tangential_force,max_penetration,contact_nodes,slip_nodes,\
-stick_nodes,newton_iterations,fixed_point_iterations,energy_scale,fixed_point_converged,inner_residual,\
-persistency_dissipation,chatter,trapped_kinetic";
-
-/// The contact.csv columns (SCENES.md), then our additions.
-pub const CONTACT_COLUMNS: &str = "step,t,node,x,y,u_n,u_t,v_t,p,lambda,friction,status,friction_bound";
-
-/// Write `bytes` to `path` through a temporary file and a rename.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = path.with_extension(format!("{}.tmp", path.extension().and_then(|e| e.to_str()).unwrap_or("")));
-    std::fs::write(&tmp, bytes).map_err(|e| Error::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+/// A history.csv value: a real or a count (written with Rust's shortest round-trip format).
+#[derive(Debug, Clone, Copy)]
+pub enum Cell {
+    Real(f64),
+    Count(usize),
 }
+
+impl std::fmt::Display for Cell {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Cell::Real(x) => write!(f, "{x}"),
+            Cell::Count(n) => write!(f, "{n}"),
+        }
+    }
+}
+
+/// history.csv, column by column: the required columns of the README's output contract, then
+/// our additions. The header and every row are written from this one table.
+pub const HISTORY: [(&str, fn(&StepRecord) -> Cell); 24] = [
+    ("step", |r| Cell::Count(r.step)),
+    ("t", |r| Cell::Real(r.t)),
+    ("kinetic", |r| Cell::Real(r.energy.kinetic)),
+    ("elastic", |r| Cell::Real(r.energy.elastic)),
+    ("compliance", |r| Cell::Real(r.energy.compliance)),
+    ("external_work", |r| Cell::Real(r.energy.external_work)),
+    ("viscous_dissipation", |r| Cell::Real(r.energy.viscous_dissipation)),
+    ("friction_dissipation", |r| Cell::Real(r.energy.friction_dissipation)),
+    ("constraint_dissipation", |r| Cell::Real(r.energy.constraint_dissipation)),
+    ("energy_residual", |r| Cell::Real(r.energy.residual)),
+    ("normal_force", |r| Cell::Real(r.normal_force)),
+    ("tangential_force", |r| Cell::Real(r.tangential_force)),
+    ("max_penetration", |r| Cell::Real(r.max_penetration)),
+    ("contact_nodes", |r| Cell::Count(r.contact_nodes)),
+    ("slip_nodes", |r| Cell::Count(r.slip_nodes)),
+    ("stick_nodes", |r| Cell::Count(r.stick_nodes)),
+    ("newton_iterations", |r| Cell::Count(r.report.inner_iterations)),
+    ("fixed_point_iterations", |r| Cell::Count(r.report.fixed_point_iterations)),
+    ("energy_scale", |r| Cell::Real(r.energy_scale)),
+    ("fixed_point_converged", |r| Cell::Count(usize::from(r.report.fixed_point_converged()))),
+    ("inner_residual", |r| Cell::Real(r.report.inner_residual)),
+    ("persistency_dissipation", |r| Cell::Real(r.energy.persistency_dissipation)),
+    ("chatter", |r| Cell::Real(r.chatter)),
+    ("trapped_kinetic", |r| Cell::Real(r.trapped_kinetic)),
+];
+
+/// The history.csv header line (without the newline).
+pub fn history_header() -> String {
+    HISTORY.iter().map(|(name, _)| *name).collect::<Vec<_>>().join(",")
+}
+
+/// The contact.csv columns (the README's output contract), then our additions.
+pub const CONTACT_COLUMNS: &str = "step,t,node,x,y,u_n,u_t,v_t,p,lambda,friction,status,friction_bound";
 
 /// A light copy of a history row for the charts.
 #[derive(Debug, Clone, Copy)]
@@ -62,7 +102,7 @@ pub struct Writer {
     every: usize,
     pub rows: Vec<ChartRow>,
     /// the contact nodes of every frame: (step, t, records), for the contact charts
-    pub contact_frames: Vec<(usize, f64, Vec<crate::simulation::NodeRecord>)>,
+    pub contact_frames: Vec<(usize, f64, Vec<NodeRecord>)>,
 }
 
 fn csv_io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
@@ -72,7 +112,7 @@ fn csv_io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
 impl Writer {
     /// Create the folder (and frames/, plots/), remove stale outputs of an earlier run, and
     /// open the CSV files with their headers.
-    pub fn create(dir: &Path, sim: &Simulation) -> Result<Writer> {
+    pub fn create(dir: &Path, problem: &Problem) -> Result<Writer> {
         for sub in ["", "frames", "plots"] {
             let d = dir.join(sub);
             std::fs::create_dir_all(&d).map_err(|e| Error::io(&d, e))?;
@@ -87,9 +127,9 @@ impl Writer {
         }
         let hp = dir.join("history.csv");
         let mut history = BufWriter::new(File::create(&hp).map_err(csv_io(&hp))?);
-        writeln!(history, "{HISTORY_COLUMNS}").map_err(csv_io(&hp))?;
+        writeln!(history, "{}", history_header()).map_err(csv_io(&hp))?;
         let cp = dir.join("contact.csv");
-        let contact = if sim.problem.contact.is_some() {
+        let contact = if problem.contact.is_some() {
             let mut w = BufWriter::new(File::create(&cp).map_err(csv_io(&cp))?);
             writeln!(w, "{CONTACT_COLUMNS}").map_err(csv_io(&cp))?;
             Some(w)
@@ -103,7 +143,7 @@ impl Writer {
             history,
             contact,
             frames: Vec::new(),
-            every: sim.problem.scene.output.every.max(1) as usize,
+            every: problem.model.output_every,
             rows: Vec::new(),
             contact_frames: Vec::new(),
         })
@@ -114,41 +154,15 @@ impl Writer {
     }
 
     /// Record a step: a history row always; a frame and contact rows every `every` steps and
-    /// when `last` is set.
-    pub fn record(&mut self, rec: &StepRecord, sim: &Simulation, last: bool) -> Result<()> {
-        let e = &rec.energy;
-        let r = &rec.report;
+    /// when `last` is set. `state` is the simulation's state after the step (for the frame).
+    pub fn record(&mut self, rec: &StepRecord, problem: &Problem, state: &State, last: bool) -> Result<()> {
         let hp = self.dir.join("history.csv");
-        writeln!(
-            self.history,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            rec.step,
-            rec.t,
-            e.kinetic,
-            e.elastic,
-            e.compliance,
-            e.external_work,
-            e.viscous_dissipation,
-            e.friction_dissipation,
-            e.constraint_dissipation,
-            e.residual,
-            rec.normal_force,
-            rec.tangential_force,
-            rec.max_penetration,
-            rec.contact_nodes,
-            rec.slip_nodes,
-            rec.stick_nodes,
-            r.inner_iterations,
-            r.fixed_point_iterations,
-            rec.energy_scale,
-            r.fixed_point_converged as u8,
-            r.inner_residual,
-            e.persistency_dissipation,
-            rec.chatter,
-            rec.trapped_kinetic
-        )
-        .map_err(csv_io(&hp))?;
+        for (j, (_, value)) in HISTORY.iter().enumerate() {
+            let sep = if j + 1 == HISTORY.len() { "\n" } else { "," };
+            write!(self.history, "{}{sep}", value(rec)).map_err(csv_io(&hp))?;
+        }
         self.history.flush().map_err(csv_io(&hp))?;
+        let e = &rec.energy;
         self.rows.push(ChartRow {
             t: rec.t,
             kinetic: e.kinetic,
@@ -163,13 +177,12 @@ impl Writer {
             tangential_force: rec.tangential_force,
         });
         if rec.step % self.every == 0 || last {
-            self.frame(rec, sim)?;
+            self.frame(rec, problem, state)?;
         }
         Ok(())
     }
 
-    fn frame(&mut self, rec: &StepRecord, sim: &Simulation) -> Result<()> {
-        let p = sim.problem;
+    fn frame(&mut self, rec: &StepRecord, p: &Problem, state: &State) -> Result<()> {
         let mut contact = vec![(0.0, 0.0, 0.0, 0.0, -1); p.mesh.nodes.len()];
         if let (Some(c), Some(w)) = (&p.contact, self.contact.as_mut()) {
             let cp = self.dir.join("contact.csv");
@@ -201,8 +214,8 @@ impl Writer {
         if !rec.nodes.is_empty() {
             self.contact_frames.push((rec.step, rec.t, rec.nodes.clone()));
         }
-        let u = p.dofs.expand(&sim.u);
-        let v = p.dofs.expand(&sim.v);
+        let u = p.dofs.expand(&state.u);
+        let v = p.dofs.expand(&state.v);
         let frame = vtu::Frame { mesh: &p.mesh, material: &p.material, u: &u, v: &v, contact: &contact };
         let name = format!("frames/frame_{:05}.vtu", rec.step);
         write_atomic(&self.dir.join(&name), vtu::vtu(&frame).as_bytes())?;
@@ -211,10 +224,9 @@ impl Writer {
     }
 
     /// Write summary.json and the charts.
-    pub fn finish(&mut self, summary: &Summary, sim: &Simulation) -> Result<()> {
-        let json = serde_json::to_string_pretty(summary).map_err(|e| Error::Output(format!("summary.json: {e}")))?;
-        write_atomic(&self.dir.join("summary.json"), json.as_bytes())?;
-        self.charts(sim)
+    pub fn finish(&mut self, summary: &Summary, problem: &Problem, state: &State) -> Result<()> {
+        self.write_summary(summary)?;
+        self.charts(problem, state)
     }
 
     /// Write only the summary (used when a run fails).
@@ -223,41 +235,36 @@ impl Writer {
         write_atomic(&self.dir.join("summary.json"), json.as_bytes())
     }
 
-    /// Write plots/: energy.svg and deformed.svg always; with contact, forces.svg,
+    /// Write plots/: energy.svg (the terms of (E.1) over its residual) and deformed.svg always; with contact, forces.svg,
     /// contact_status.svg and normal_stress.svg (stale ones of an earlier run are removed
     /// when the scene has no contact).
-    fn charts(&self, sim: &Simulation) -> Result<()> {
+    fn charts(&self, p: &Problem, state: &State) -> Result<()> {
         use plots::Series;
         let save = |name: &str, svg: std::result::Result<String, String>| -> Result<()> {
             let file = format!("plots/{name}");
             let svg = svg.map_err(|e| Error::Output(format!("{file}: {e}")))?;
             write_atomic(&self.dir.join(&file), svg.as_bytes())
         };
-        let s = |name: &str, f: fn(&ChartRow) -> f64, secondary: bool| Series {
-            name: name.into(),
-            points: self.rows.iter().map(|r| (r.t, f(r))).collect(),
-            secondary,
-        };
-        let energy = plots::line_chart(
-            "Energy balance (E.1)",
-            "t [s]",
-            "energy [J/m]",
-            Some("(E.1) residual per step [J/m]"),
+        let s = |name: &str, f: fn(&ChartRow) -> f64| Series { name: name.into(), points: self.rows.iter().map(|r| (r.t, f(r))).collect() };
+        let terms = [
+            s("kinetic", |r| r.kinetic),
+            s("elastic", |r| r.elastic),
+            s("compliance", |r| r.compliance),
+            s("external work", |r| r.work),
+            s("viscous dissipation", |r| r.viscous),
+            s("friction dissipation", |r| r.friction),
+            s("constraint dissipation", |r| r.constraint),
+        ];
+        let residual = [s("(E.1) residual", |r| r.residual)];
+        let energy = plots::stacked_chart(
             &[
-                s("kinetic", |r| r.kinetic, false),
-                s("elastic", |r| r.elastic, false),
-                s("compliance", |r| r.compliance, false),
-                s("external work", |r| r.work, false),
-                s("viscous dissipation", |r| r.viscous, false),
-                s("friction dissipation", |r| r.friction, false),
-                s("constraint dissipation", |r| r.constraint, false),
-                s("residual", |r| r.residual, true),
+                (plots::Panel { title: "Energy balance (E.1)", x_desc: "t [s]", y_desc: "energy [J/m]", series: &terms, hlines: &[] }, 2.0),
+                (plots::Panel { title: "(E.1) residual per step", x_desc: "t [s]", y_desc: "residual [J/m]", series: &residual, hlines: &[] }, 1.0),
             ],
-            &[],
+            &plots::Options::default(),
         );
         save("energy.svg", energy)?;
-        let p = sim.problem;
-        save("deformed.svg", contact_charts::deformed(&p.mesh, &p.dofs.expand(&sim.u), p.time(sim.n)))?;
+        save("deformed.svg", contact_charts::deformed(&p.mesh, &p.dofs.expand(&state.u), p.time(state.n)))?;
         let Some(c) = &p.contact else {
             for stale in ["forces.svg", "contact_status.svg", "normal_stress.svg"] {
                 let _ = std::fs::remove_file(self.dir.join("plots").join(stale));
@@ -267,7 +274,7 @@ impl Writer {
         let p_g = contact_charts::p_at_bound(c);
         let gamma3: f64 = c.omega.iter().sum();
         save("forces.svg", contact_charts::forces(&self.rows, p_g.map(|q| q * gamma3)))?;
-        let along = contact_charts::Along::of(&p.mesh, c, &p.scene.boundary.contact);
+        let along = contact_charts::Along::of(&p.mesh, c, &p.model.contact_sides);
         save("contact_status.svg", contact_charts::contact_status(&self.contact_frames, &along))?;
         save("normal_stress.svg", contact_charts::normal_stress(&self.contact_frames, &along, p_g))
     }

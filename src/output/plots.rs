@@ -1,4 +1,6 @@
-//! SVG charts (plotters, SVG backend only): line charts with an optional secondary axis.
+//! SVG charts (plotters, SVG backend only): line charts, one panel or stacked panels sharing
+//! the time axis, with tick labels written as plain numbers (60, 0.25) and in scientific
+//! notation only where an axis spans values too large or too small for that.
 
 use plotters::prelude::*;
 
@@ -8,8 +10,6 @@ pub use plotters::prelude::SeriesLabelPosition;
 pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64)>,
-    /// drawn against the right-hand axis
-    pub secondary: bool,
 }
 
 /// Presentation options of [`line_chart_with`] beyond the data; the default is the plain
@@ -64,17 +64,33 @@ pub fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// A line chart as an SVG document. `hlines` are labelled horizontal reference lines on the
-/// primary axis.
-pub fn line_chart(
-    title: &str,
-    x_desc: &str,
-    y_desc: &str,
-    y2_desc: Option<&str>,
-    series: &[Series],
-    hlines: &[(String, f64)],
-) -> Result<String, String> {
-    line_chart_with(title, x_desc, y_desc, y2_desc, series, hlines, &Options::default())
+/// A tick label for an axis spanning [lo, hi]: a plain number with as many decimals as the
+/// tick spacing needs (60, 2.5, 0.125), or scientific notation when the axis reaches values
+/// ≥ 1e5 or lies entirely below 1e-3 in magnitude.
+pub fn tick_label(v: f64, lo: f64, hi: f64) -> String {
+    let big = lo.abs().max(hi.abs());
+    if big >= 1e5 || (big < 1e-3 && big > 0.0) {
+        return format!("{v:.2e}");
+    }
+    // ticks are about a tenth of the span apart: show the digits that tell them apart
+    let step = (hi - lo).abs() / 10.0;
+    let decimals = if step > 0.0 { (-step.log10().floor()).clamp(0.0, 8.0) as usize } else { 0 };
+    let s = format!("{v:.decimals$}");
+    if s.trim_start_matches('-').chars().all(|c| c == '0' || c == '.') { "0".into() } else { s }
+}
+
+/// One panel of a chart: title, axis names, series and labelled horizontal lines.
+pub struct Panel<'a> {
+    pub title: &'a str,
+    pub x_desc: &'a str,
+    pub y_desc: &'a str,
+    pub series: &'a [Series],
+    pub hlines: &'a [(String, f64)],
+}
+
+/// A line chart as an SVG document. `hlines` are labelled horizontal reference lines.
+pub fn line_chart(title: &str, x_desc: &str, y_desc: &str, series: &[Series], hlines: &[(String, f64)]) -> Result<String, String> {
+    line_chart_with(title, x_desc, y_desc, series, hlines, &Options::default())
 }
 
 /// [`line_chart`] with presentation [`Options`] (point markers, legend position).
@@ -82,88 +98,87 @@ pub fn line_chart_with(
     title: &str,
     x_desc: &str,
     y_desc: &str,
-    y2_desc: Option<&str>,
     series: &[Series],
     hlines: &[(String, f64)],
     opts: &Options,
 ) -> Result<String, String> {
+    stacked_chart(&[(Panel { title, x_desc, y_desc, series, hlines }, 1.0)], opts)
+}
+
+/// Panels stacked top to bottom on one SVG page, each taking its share of the height (the
+/// shares are relative weights); the same presentation options for all.
+pub fn stacked_chart(panels: &[(Panel, f64)], opts: &Options) -> Result<String, String> {
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (960, 540)).into_drawing_area();
+        let height = if panels.len() > 1 { 720 } else { 540 };
+        let root = SVGBackend::with_string(&mut svg, (960, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let prim = series.iter().filter(|s| !s.secondary);
-        let (x0, x1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
-        let (y0, mut y1) = range(prim.flat_map(|s| s.points.iter().map(|p| p.1)).chain(hlines.iter().map(|h| h.1)));
-        if opts.headroom > 0.0 && (y1 + opts.headroom * (y1 - y0)).is_finite() {
-            y1 += opts.headroom * (y1 - y0);
-        }
-        let (z0, z1) = range(series.iter().filter(|s| s.secondary).flat_map(|s| s.points.iter().map(|p| p.1)));
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(80)
-            .right_y_label_area_size(if y2_desc.is_some() { 80 } else { 0 })
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|e| e.to_string())?
-            .set_secondary_coord(x0..x1, z0..z1);
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc(y_desc)
-            .y_label_formatter(&|v| format!("{v:.3e}"))
-            .draw()
-            .map_err(|e| e.to_string())?;
-        if let Some(d) = y2_desc {
-            chart
-                .configure_secondary_axes()
-                .y_desc(d)
-                .y_label_formatter(&|v| format!("{v:.1e}"))
-                .draw()
-                .map_err(|e| e.to_string())?;
-        }
-        for (k, s) in series.iter().enumerate() {
-            let color = PALETTE[k % PALETTE.len()];
-            let style = ShapeStyle::from(&color).stroke_width(2);
-            let pts = s.points.iter().copied().filter(|p| p.0.is_finite() && p.1.is_finite());
-            if opts.markers {
-                let dots = pts.clone().map(|p| Circle::new(p, 3, color.filled()));
-                if s.secondary {
-                    chart.draw_secondary_series(dots).map_err(|e| e.to_string())?;
-                } else {
-                    chart.draw_series(dots).map_err(|e| e.to_string())?;
-                }
-            }
-            if s.secondary {
-                chart
-                    .draw_secondary_series(LineSeries::new(pts, style))
-                    .map_err(|e| e.to_string())?
-                    .label(format!("{} (right axis)", s.name))
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        let total: f64 = panels.iter().map(|p| p.1).sum();
+        let mut rest = root;
+        for (k, (panel, share)) in panels.iter().enumerate() {
+            let area = if k + 1 == panels.len() {
+                rest.clone()
             } else {
-                chart
-                    .draw_series(LineSeries::new(pts, style))
-                    .map_err(|e| e.to_string())?
-                    .label(s.name.clone())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
-            }
+                let (top, bottom) = rest.split_vertically((f64::from(height) * share / total).round() as u32);
+                rest = bottom;
+                top
+            };
+            draw_panel(&area, panel, opts)?;
         }
-        for (label, y) in hlines.iter().filter(|h| h.1.is_finite()) {
-            let style = ShapeStyle::from(&BLACK).stroke_width(1);
-            chart
-                .draw_series(LineSeries::new(vec![(x0, *y), (x1, *y)], style))
-                .map_err(|e| e.to_string())?
-                .label(label.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
-        }
-        chart
-            .configure_series_labels()
-            .position(opts.legend.clone())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| e.to_string())?;
-        root.present().map_err(|e| e.to_string())?;
+        rest.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)
+}
+
+/// Draw one panel on `area`.
+fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>, p: &Panel, opts: &Options) -> Result<(), String> {
+    let (x0, x1) = range(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.0)));
+    let (y0, mut y1) = range(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.1)).chain(p.hlines.iter().map(|h| h.1)));
+    if opts.headroom > 0.0 && (y1 + opts.headroom * (y1 - y0)).is_finite() {
+        y1 += opts.headroom * (y1 - y0);
+    }
+    let mut chart = ChartBuilder::on(area)
+        .caption(p.title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc(p.x_desc)
+        .y_desc(p.y_desc)
+        .x_label_formatter(&|v| tick_label(*v, x0, x1))
+        .y_label_formatter(&|v| tick_label(*v, y0, y1))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    for (k, s) in p.series.iter().enumerate() {
+        let color = PALETTE[k % PALETTE.len()];
+        let style = ShapeStyle::from(&color).stroke_width(2);
+        let pts = s.points.iter().copied().filter(|q| q.0.is_finite() && q.1.is_finite());
+        if opts.markers {
+            chart.draw_series(pts.clone().map(|q| Circle::new(q, 3, color.filled()))).map_err(|e| e.to_string())?;
+        }
+        chart
+            .draw_series(LineSeries::new(pts, style))
+            .map_err(|e| e.to_string())?
+            .label(s.name.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+    }
+    for (label, y) in p.hlines.iter().filter(|h| h.1.is_finite()) {
+        let style = ShapeStyle::from(&BLACK).stroke_width(1);
+        chart
+            .draw_series(LineSeries::new(vec![(x0, *y), (x1, *y)], style))
+            .map_err(|e| e.to_string())?
+            .label(label.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+    }
+    chart
+        .configure_series_labels()
+        .position(opts.legend.clone())
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    Ok(())
 }

@@ -8,7 +8,8 @@ use std::path::Path;
 
 use super::{write_atomic, ChartRow, Writer};
 use crate::error::{Error, Result};
-use crate::simulation::{NodeRecord, Simulation};
+use crate::problem::Problem;
+use crate::simulation::NodeRecord;
 use crate::step::NodeStatus;
 
 /// Keep the header and the rows whose first field (the step) is ≤ `step`; returns the rows.
@@ -45,7 +46,7 @@ fn column(header: &str, name: &str) -> Result<usize> {
 
 impl Writer {
     /// Reopen `dir` to continue after checkpoint step `step`.
-    pub fn reopen(dir: &Path, sim: &Simulation, step: usize) -> Result<Writer> {
+    pub fn reopen(dir: &Path, problem: &Problem, step: usize) -> Result<Writer> {
         let hp = dir.join("history.csv");
         let header = std::fs::read_to_string(&hp).map_err(|e| Error::io(&hp, e))?.lines().next().unwrap_or("").to_string();
         let rows = cut_csv(&hp, step)?;
@@ -86,11 +87,7 @@ impl Writer {
         let mut contact_frames: Vec<(usize, f64, Vec<NodeRecord>)> = Vec::new();
         for r in &crow {
             let st: usize = r[0].parse().unwrap_or(0);
-            let status = match r.get(11).map(String::as_str) {
-                Some("stick") => NodeStatus::Stick,
-                Some("slip") => NodeStatus::Slip,
-                _ => NodeStatus::Separated,
-            };
+            let status = r.get(11).and_then(|s| NodeStatus::from_name(s)).unwrap_or(NodeStatus::Separated);
             let rec = NodeRecord {
                 u_n: num(r, 5),
                 u_t: num(r, 6),
@@ -120,7 +117,7 @@ impl Writer {
             names.sort();
             for (n, name) in names {
                 if n <= step {
-                    frames.push((sim.problem.time(n), format!("frames/{name}")));
+                    frames.push((problem.time(n), format!("frames/{name}")));
                 } else {
                     let _ = std::fs::remove_file(dir.join("frames").join(&name));
                 }
@@ -131,9 +128,9 @@ impl Writer {
         Ok(Writer {
             dir: dir.to_path_buf(),
             history: open(&hp)?,
-            contact: if sim.problem.contact.is_some() { Some(open(&cp)?) } else { None },
+            contact: if problem.contact.is_some() { Some(open(&cp)?) } else { None },
             frames,
-            every: sim.problem.scene.output.every.max(1) as usize,
+            every: problem.model.output_every,
             rows: chart_rows,
             contact_frames,
         })

@@ -3,10 +3,14 @@
 
 use serde::Serialize;
 
+use crate::failure::RunStatus;
 use crate::fem::assemble::nodal_masses;
 use crate::model::laws::FrictionCoefficient;
 use crate::problem::Problem;
-use crate::scene::{Bound, Enforcement, FrictionBound};
+use crate::model::contact::ContactModel;
+use crate::model::kinds::{self, Bound, FrictionBound};
+use crate::model::{ContactParams, Enforcement};
+use crate::scheme::ContactKinematics;
 
 /// The model a scene switches on — printed by `dyncontact check`, stored in summary.json.
 #[derive(Debug, Clone, Serialize)]
@@ -38,24 +42,24 @@ pub struct ModelInfo {
 
 impl ModelInfo {
     pub fn of(p: &Problem) -> ModelInfo {
-        let s = &p.scene;
+        let s = &p.model;
         let m = &s.material;
-        let material = if m.viscosity.theta > 0.0 || m.viscosity.zeta > 0.0 {
-            format!("Kelvin–Voigt: E = {}, ν = {}, ρ = {}, θ = {}, ζ = {}", m.young, m.poisson, m.density, m.viscosity.theta, m.viscosity.zeta)
+        let material = if m.theta > 0.0 || m.zeta > 0.0 {
+            format!("Kelvin–Voigt: E = {}, ν = {}, ρ = {}, θ = {}, ζ = {}", m.young, m.poisson, m.density, m.theta, m.zeta)
         } else {
             format!("elastic (no viscosity): E = {}, ν = {}, ρ = {}", m.young, m.poisson, m.density)
         };
         let mut info = ModelInfo {
-            plane: format!("{:?}", s.domain.plane).to_lowercase(),
+            plane: kinds::name(&s.plane),
             material,
             contact: "none (no contact side): one linear solve per step".into(),
             normal_law: "-".into(),
             constraint: "-".into(),
             friction: "-".into(),
             friction_bound: "-".into(),
-            scheme: format!("{:?}", s.time.scheme),
-            inner_solver: format!("{:?}", s.solver.inner).to_lowercase(),
-            mass: format!("{:?}", s.solver.mass).to_lowercase(),
+            scheme: kinds::name(&s.time.scheme),
+            inner_solver: kinds::name(&s.solver.inner),
+            mass: kinds::name(&s.solver.mass),
             nodes: p.mesh.nodes.len(),
             triangles: p.mesh.triangles.len(),
             velocity_unknowns: p.dofs.n_free,
@@ -68,28 +72,39 @@ impl ModelInfo {
             ck_limiting_node: None,
             ck_note: "no velocity-dependent friction: every step problem is convex".into(),
         };
-        let (Some(c), Some(cs)) = (&p.contact, &s.contact) else { return info };
-        info.contact = format!("on sides {}: {} contact nodes", s.boundary.contact.join(", "), c.n());
-        info.contact_nodes = c.n();
-        info.normal_law = if cs.compliance > 0.0 {
+        if let (Some(c), Some(cs)) = (&p.contact, &s.contact) {
+            info.describe_contact(p, c, cs);
+        }
+        info
+    }
+
+    /// The contact lines: sides, normal law, constraint, friction and its bound.
+    fn describe_contact(&mut self, p: &Problem, c: &ContactModel, cs: &ContactParams) {
+        self.contact = format!("on sides {}: {} contact nodes", p.model.contact_sides.join(", "), c.n());
+        self.contact_nodes = c.n();
+        self.normal_law = if cs.compliance > 0.0 {
             format!("normal compliance p(r) = {} r_+", cs.compliance)
         } else {
             "no compliance (p ≡ 0)".into()
         };
-        info.constraint = match (bound_str(p), cs.enforcement) {
+        let g_finite = match cs.bound {
+            Bound::Finite(g) => Some(g),
+            Bound::Infinite => None,
+        };
+        self.constraint = match (g_finite, cs.enforcement) {
             (None, _) => "none (g = inf): pure normal compliance, no multipliers".into(),
             (Some(g), Enforcement::Exact) if cs.compliance == 0.0 && g == 0.0 => {
                 "Signorini (g = 0, p ≡ 0): exact, one multiplier λ per contact node".into()
             }
             (Some(g), Enforcement::Exact) => format!("u_ν ≤ g = {g}, exact (Problem P): one multiplier λ per contact node"),
-            (Some(g), Enforcement::Penalty) => {
-                format!("penalty (Problem P_ε): p_ε = p + (r − {g})_+/ε with ε = {}, no multipliers", cs.penalty.unwrap_or(0.0))
+            (Some(g), Enforcement::Penalty { epsilon }) => {
+                format!("penalty (Problem P_ε): p_ε = p + (r − {g})_+/ε with ε = {epsilon}, no multipliers")
             }
         };
         if c.constraint.is_some() {
-            info.multipliers = c.n();
+            self.multipliers = c.n();
         }
-        info.friction = match &c.friction {
+        self.friction = match &c.friction {
             None => "none: frictionless, no fixed point".into(),
             Some(FrictionCoefficient::Constant(mu)) => format!("constant μ = {mu}: one convex solve per step"),
             Some(FrictionCoefficient::Exponential { a, b, alpha }) => {
@@ -98,35 +113,36 @@ impl ModelInfo {
             Some(FrictionCoefficient::Table(pts)) => format!("table with {} points: fixed point on S (F.1)", pts.len()),
         };
         if c.friction.is_some() {
-            info.friction_unknowns = c.n();
-            info.friction_bound = match (cs.friction_bound, bound_str(p)) {
+            self.friction_unknowns = c.n();
+            self.friction_bound = match (cs.friction_bound, g_finite) {
                 (FrictionBound::Capped, Some(g)) => format!("μ(‖v̄‖) p(min(r_+, {g})) (capped)"),
                 _ => "μ(‖v̄‖) p(r) (uncapped)".into(),
             };
-            let masses = nodal_masses(&p.mesh, &p.material, p.scene.solver.mass, &p.dofs, &c.nodes).unwrap_or_default();
-            let a_v = match s.time.scheme {
-                crate::scene::SchemeKind::BackwardEuler => 1.0,
-                _ => 0.5,
-            };
-            if let Some((k, i)) = c.convex_step_limit(&masses, a_v).filter(|_| !masses.is_empty()) {
-                info.ck_step_limit = Some(k);
-                info.ck_limiting_node = Some(c.nodes[i]);
-                info.ck_note = if k == 0.0 {
-                    "the modified mass puts zero mass on the contact nodes: the inertia no longer convexifies the \
-                     friction term, so (C.k) admits no step; F.1 still applies"
-                        .into()
-                } else {
-                    String::new()
-                };
-            } else if !c.p_tau.sup().is_finite() && c.friction.as_ref().is_some_and(|m| m.lipschitz() > 0.0) {
-                info.ck_note = "p_τ is unbounded (g = inf or uncapped): no step size makes the step problem convex for every \
-                                state; F.1 still applies (a majorization–minimization for velocity-weakening μ)"
-                    .into();
-            } else {
-                info.ck_note = "μ is constant or p_τ ≡ 0: every step problem is convex".into();
-            }
+            self.convexity_limit(p, c);
         }
-        info
+    }
+
+    /// (C.k) for the scene: the step limit, the limiting node, or why there is none.
+    fn convexity_limit(&mut self, p: &Problem, c: &ContactModel) {
+        let masses = nodal_masses(&p.mesh, &p.material, p.model.solver.mass, &p.dofs, &c.nodes).unwrap_or_default();
+        let a_v = ContactKinematics::of(p.model.time.scheme, p.k).a_v;
+        if let Some((k, i)) = c.convex_step_limit(&masses, a_v).filter(|_| !masses.is_empty()) {
+            self.ck_step_limit = Some(k);
+            self.ck_limiting_node = Some(c.nodes[i]);
+            self.ck_note = if k == 0.0 {
+                "the modified mass puts zero mass on the contact nodes: the inertia no longer convexifies the \
+                 friction term, so (C.k) admits no step; F.1 still applies"
+                    .into()
+            } else {
+                String::new()
+            };
+        } else if !c.p_tau.sup().is_finite() && c.friction.as_ref().is_some_and(|m| m.lipschitz() > 0.0) {
+            self.ck_note = "p_τ is unbounded (g = inf or uncapped): no step size makes the step problem convex for every \
+                            state; F.1 still applies (a majorization–minimization for velocity-weakening μ)"
+                .into();
+        } else {
+            self.ck_note = "μ is constant or p_τ ≡ 0: every step problem is convex".into();
+        }
     }
 
     /// Human-readable lines for `dyncontact check`.
@@ -189,14 +205,6 @@ impl ModelInfo {
     }
 }
 
-fn bound_str(p: &Problem) -> Option<f64> {
-    let c = p.scene.contact.as_ref()?;
-    match p.scene.bound_of(c).ok()? {
-        Bound::Finite(g) => Some(g),
-        Bound::Infinite => None,
-    }
-}
-
 /// Wall-clock split of a run in seconds.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct Timing {
@@ -216,8 +224,8 @@ pub struct Timing {
 pub struct Summary {
     pub scene: String,
     pub description: String,
-    /// "completed" | "failed" | "interrupted"
-    pub status: String,
+    /// completed | failed | interrupted (running while the run goes on)
+    pub status: RunStatus,
     pub failure: Option<String>,
     pub model: ModelInfo,
     pub steps_completed: usize,

@@ -1,4 +1,4 @@
-//! Time schemes (model.md §4.2, decision 3): the midpoint rule in velocity form (S.1–S.2, the
+//! Time schemes (spec/model.md §4.2, decision 3): the midpoint rule in velocity form (S.1–S.2, the
 //! default), the trapezoidal variant (identical without contact; end-point-averaged contact
 //! forces) and backward Euler in velocity (first order, the baseline).
 //!
@@ -9,12 +9,12 @@ use crate::error::Result;
 use crate::fem::Operators;
 use crate::linalg::{self, Cholesky, SpMat};
 use crate::model::laws::NormalForceRule;
-use crate::scene::SchemeKind;
+use crate::model::kinds::SchemeKind;
 
 /// How the contact quantities of one step depend on the unknown contact velocity y = H w:
 /// d^{n+1} = d^n + a_d (y_ν + b_d v_ν^n) and v̄ = a_v (y_τ + b_v v_τ^n).
 #[derive(Debug, Clone, Copy)]
-pub struct ContactRule {
+pub struct ContactKinematics {
     /// d^{n+1} = d^n + a_d (y_ν + b_d v_ν^n)
     pub a_d: f64,
     pub b_d: f64,
@@ -99,15 +99,22 @@ impl StepOperator {
         }
     }
 
+    /// The contact kinematics of this scheme and step.
+    pub fn contact_kinematics(&self) -> ContactKinematics {
+        ContactKinematics::of(self.kind, self.k)
+    }
+}
+
+impl ContactKinematics {
     /// The contact kinematics of this scheme (decisions 2 and 3): friction at v^{n+½} and
     /// p_τ at the predictor d^n + (k/2) v_ν^n of d^{n+½} for midpoint and trapezoid; all
     /// terms at t_{n+1} for backward Euler.
-    pub fn contact_rule(&self) -> ContactRule {
-        let k = self.k;
-        match self.kind {
-            SchemeKind::Midpoint => ContactRule { a_d: 0.5 * k, b_d: 1.0, a_v: 0.5, b_v: 1.0, force: NormalForceRule::DiscreteGradient, p_d: 0.5 * k },
-            SchemeKind::Trapezoid => ContactRule { a_d: 0.5 * k, b_d: 1.0, a_v: 0.5, b_v: 1.0, force: NormalForceRule::Average, p_d: 0.5 * k },
-            SchemeKind::BackwardEuler => ContactRule { a_d: k, b_d: 0.0, a_v: 1.0, b_v: 0.0, force: NormalForceRule::EndPoint, p_d: k },
+    pub fn of(kind: SchemeKind, k: f64) -> ContactKinematics {
+        match kind {
+            SchemeKind::Midpoint => ContactKinematics { a_d: 0.5 * k, b_d: 1.0, a_v: 0.5, b_v: 1.0, force: NormalForceRule::DiscreteGradient, p_d: 0.5 * k },
+            SchemeKind::Trapezoid => ContactKinematics { a_d: 0.5 * k, b_d: 1.0, a_v: 0.5, b_v: 1.0, force: NormalForceRule::Average, p_d: 0.5 * k },
+            SchemeKind::BackwardEuler => ContactKinematics { a_d: k, b_d: 0.0, a_v: 1.0, b_v: 0.0, force: NormalForceRule::EndPoint, p_d: k },
         }
     }
 }
+

@@ -1,5 +1,5 @@
 //! The inner solver `conic`: the frozen-S step problem (S.6) handed to Clarabel, the
-//! independent twin of `newton` (ARCHITECTURE.md, "two solvers that must agree").
+//! independent twin of `newton` (the README's design notes: two solvers that must agree).
 //!
 //! Condensed on the contact DOFs, (S.6) is: minimize over (r, y)
 //!   ½ rᵀ W r + Σ_i (ω_i S_i/a_v) |v̄_i(y)| + Σ_i (ω_i/a_d) F_i(d_i^{n+1}(y))
@@ -29,6 +29,7 @@ use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 
 use super::{ContactSolution, NodeStatus, StepData};
+use crate::failure::{ConicFailure, ConicStatus};
 use crate::linalg;
 use crate::model::laws::NormalForceRule;
 
@@ -39,21 +40,24 @@ pub struct ConicSettings {
     pub tolerance: f64,
     /// majorization–minimization rounds for the logarithmic branches
     pub max_rounds: usize,
+    /// print Clarabel's iteration log (for debugging a stalled program)
+    pub verbose: bool,
 }
 
 impl Default for ConicSettings {
     fn default() -> Self {
-        ConicSettings { tolerance: 1e-10, max_rounds: 100 }
+        ConicSettings { tolerance: 1e-10, max_rounds: 100, verbose: false }
     }
 }
 
-/// Why the conic solve failed.
-#[derive(Debug, Clone)]
-pub struct ConicFailure {
-    pub iterations: usize,
-    pub residual: f64,
-    pub reason: String,
-}
+/// Clarabel's tolerance on the KKT ratio and its iteration cap per program (the gap and
+/// feasibility tolerances come from `ConicSettings::tolerance`).
+pub const CLARABEL_TOL_KTRATIO: f64 = 1e-8;
+pub const CLARABEL_MAX_ITER: u32 = 400;
+/// Node status from an interior-point solution: separated below this fraction of the largest
+/// contact force, in stick below this fraction of the velocity scale (times a_v).
+pub const SEPARATION_FLOOR: f64 = 1e-8;
+pub const STICK_FLOOR: f64 = 1e-7;
 
 /// A growing sparse problem: variables, objective, and constraint rows by cone.
 #[derive(Default)]
@@ -152,7 +156,7 @@ impl Majorized {
 pub fn solve(step: &StepData, s: &[f64], set: &ConicSettings) -> Result<ContactSolution, ConicFailure> {
     let n = step.n();
     let mut pieces = Vec::new();
-    if step.rule == NormalForceRule::DiscreteGradient {
+    if step.force_rule == NormalForceRule::DiscreteGradient {
         for i in 0..n {
             for h in &step.law.hinges {
                 let a = step.nodes[i].d_n - h.s;
@@ -202,9 +206,9 @@ pub fn solve(step: &StepData, s: &[f64], set: &ConicSettings) -> Result<ContactS
         }
     }
     Err(ConicFailure {
+        status: ConicStatus::MajorizationUnsettled { rounds: set.max_rounds },
         iterations,
         residual: moved / z_scale.max(f64::MIN_POSITIVE),
-        reason: format!("majorization did not settle in {} rounds", set.max_rounds),
     })
 }
 
@@ -246,6 +250,8 @@ impl Active {
     }
 }
 
+/// One conic program (the majorized S.6 at touching points `z_l`) solved by Clarabel, in units
+/// of the velocity scale `v`; returns (y, r, interior-point iterations).
 fn solve_once(
     step: &StepData,
     s: &[f64],
@@ -255,6 +261,39 @@ fn solve_once(
     v: f64,
     active: &Active,
 ) -> Result<(Vec<f64>, Vec<f64>, usize), ConicFailure> {
+    let (b, r, y) = program(step, s, pieces, z_l, v, active);
+    let (p, q, a, bb, cones) = b.build();
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(set.verbose)
+        .tol_gap_abs(set.tolerance)
+        .tol_gap_rel(set.tolerance)
+        .tol_feas(set.tolerance)
+        .tol_ktratio(CLARABEL_TOL_KTRATIO)
+        .max_iter(CLARABEL_MAX_ITER)
+        .build()
+        .map_err(|e| ConicFailure { status: ConicStatus::Settings(format!("{e:?}")), iterations: 0, residual: f64::NAN })?;
+    let mut solver = DefaultSolver::new(&p, &q, &a, &bb, &cones, settings)
+        .map_err(|e| ConicFailure { status: ConicStatus::Setup(format!("{e:?}")), iterations: 0, residual: f64::NAN })?;
+    solver.solve();
+    let sol = &solver.solution;
+    match sol.status {
+        SolverStatus::Solved | SolverStatus::AlmostSolved => {}
+        other => {
+            return Err(ConicFailure {
+                status: ConicStatus::Stopped(other),
+                iterations: sol.iterations as usize,
+                residual: sol.r_prim.max(sol.r_dual),
+            });
+        }
+    }
+    let yv: Vec<f64> = y.iter().map(|&j| v * sol.x[j]).collect();
+    let rv: Vec<f64> = r.iter().map(|&j| v * sol.x[j]).collect();
+    Ok((yv, rv, sol.iterations as usize))
+}
+
+/// The program of [`solve_once`]: variables r (forces) and y (contact velocities), the
+/// objective ½ rᵀ W r + friction + normal-force pieces, and the constraints by cone.
+fn program(step: &StepData, s: &[f64], pieces: &[Majorized], z_l: &[f64], v: f64, active: &Active) -> (Builder, Vec<usize>, Vec<usize>) {
     let n = step.n();
     let m = 2 * n;
     let mut b = Builder::default();
@@ -263,13 +302,13 @@ fn solve_once(
     // ½ rᵀ W r (upper triangle)
     for j in 0..m {
         for i in 0..=j {
-            b.p.push((r[i], r[j], step.w[(i, j)]));
+            b.p.push((r[i], r[j], step.delassus[(i, j)]));
         }
     }
     // y + W r = y_free
     for j in 0..m {
         let mut row = vec![(y[j], 1.0)];
-        row.extend((0..m).map(|l| (r[l], step.w[(j, l)])));
+        row.extend((0..m).map(|l| (r[l], step.delassus[(j, l)])));
         b.zero.push((row, step.y_free[j] / v));
     }
     let ad = step.a_d;
@@ -293,7 +332,7 @@ fn solve_once(
             let a = nd.d_n - h.s;
             let z0 = nd.d_aff - h.s;
             // exact quadratic part: lin·z + quad·z_+²
-            let (lin, quad) = match step.rule {
+            let (lin, quad) = match step.force_rule {
                 NormalForceRule::DiscreteGradient => (0.5 * h.c * a.max(0.0), if a >= 0.0 { 0.25 * h.c } else { 0.0 }),
                 NormalForceRule::Average => (0.5 * h.c * a.max(0.0), 0.25 * h.c),
                 NormalForceRule::EndPoint => (0.0, 0.5 * h.c),
@@ -326,33 +365,7 @@ fn solve_once(
             b.le(vec![(xi, -1.0)], 0.0);
         }
     }
-    let (p, q, a, bb, cones) = b.build();
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(std::env::var_os("DYNCONTACT_CLARABEL_VERBOSE").is_some())
-        .tol_gap_abs(set.tolerance)
-        .tol_gap_rel(set.tolerance)
-        .tol_feas(set.tolerance)
-        .tol_ktratio(1e-8)
-        .max_iter(400)
-        .build()
-        .map_err(|e| ConicFailure { iterations: 0, residual: f64::NAN, reason: format!("Clarabel settings: {e:?}") })?;
-    let mut solver = DefaultSolver::new(&p, &q, &a, &bb, &cones, settings)
-        .map_err(|e| ConicFailure { iterations: 0, residual: f64::NAN, reason: format!("Clarabel setup: {e:?}") })?;
-    solver.solve();
-    let sol = &solver.solution;
-    match sol.status {
-        SolverStatus::Solved | SolverStatus::AlmostSolved => {}
-        other => {
-            return Err(ConicFailure {
-                iterations: sol.iterations as usize,
-                residual: sol.r_prim.max(sol.r_dual),
-                reason: format!("Clarabel stopped with status {other:?}"),
-            });
-        }
-    }
-    let yv: Vec<f64> = y.iter().map(|&j| v * sol.x[j]).collect();
-    let rv: Vec<f64> = r.iter().map(|&j| v * sol.x[j]).collect();
-    Ok((yv, rv, sol.iterations as usize))
+    (b, r, y)
 }
 
 /// Multipliers, forces and status from the conic solution.
@@ -364,17 +377,13 @@ fn finish(step: &StepData, s: &[f64], y: Vec<f64>, r: Vec<f64>, iterations: usiz
         .map(|i| if step.nodes[i].bound.is_some() { (r[2 * i] / step.nodes[i].omega - q[i]).max(0.0) } else { 0.0 })
         .collect();
     let t: Vec<f64> = (0..n).map(|i| if step.friction { r[2 * i + 1] / step.nodes[i].omega } else { 0.0 }).collect();
+    // an interior point reaches the active sets only to its tolerance: a node is separated when
+    // its force is below SEPARATION_FLOOR of the largest, in stick when |v̄| ≤ STICK_FLOOR a_v V
     let f_max = (0..n).fold(0.0f64, |m, i| m.max(q[i] + lambda[i]));
     let status = (0..n)
         .map(|i| {
-            let force = q[i] + lambda[i];
-            if force <= 1e-8 * f_max {
-                NodeStatus::Separated
-            } else if step.friction && s[i] > 0.0 && step.slip(i, &y).abs() <= 1e-7 * step.a_v * scale {
-                NodeStatus::Stick
-            } else {
-                NodeStatus::Slip
-            }
+            let stick = step.friction && s[i] > 0.0 && step.slip(i, &y).abs() <= STICK_FLOOR * step.a_v * scale;
+            NodeStatus::classify(q[i] + lambda[i], SEPARATION_FLOOR * f_max, stick)
         })
         .collect();
     // relative consistency of y with y_free − W r (the equality constraint)

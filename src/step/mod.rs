@@ -1,4 +1,4 @@
-//! The per-step contact problem (model.md §4.3–§4.5) on the contact DOFs only.
+//! The per-step contact problem (spec/model.md §4.3–§4.5) on the contact DOFs only.
 //!
 //! With A_k factored and W = H A_k⁻¹ Hᵀ (the Delassus operator, computed once), the step
 //! (S.2)–(S.5) reduces to: find the contact velocities y = H w, multipliers λ and friction
@@ -36,12 +36,12 @@ pub struct NodeData {
 /// The frozen-S contact problem of one step, condensed on the contact DOFs.
 pub struct StepData<'a> {
     /// Delassus operator W = H A_k⁻¹ Hᵀ, components interleaved (ν_1, τ_1, ν_2, τ_2, …)
-    pub w: &'a Mat<f64>,
+    pub delassus: &'a Mat<f64>,
     pub y_free: Vec<f64>,
     pub nodes: Vec<NodeData>,
     pub a_d: f64,
     pub a_v: f64,
-    pub rule: NormalForceRule,
+    pub force_rule: NormalForceRule,
     pub law: &'a NormalLaw,
     /// friction is modelled (t variables exist)
     pub friction: bool,
@@ -56,6 +56,27 @@ pub enum NodeStatus {
 }
 
 impl NodeStatus {
+    /// The one rule for a node's status after a step: separated when its contact force
+    /// q_i + λ_i is at most `separated_below` (0 for the exact active sets of Newton, a small
+    /// fraction of the largest force for an interior point), else stick or slip as the solver's
+    /// friction set says.
+    pub fn classify(force: f64, separated_below: f64, stick: bool) -> NodeStatus {
+        if force <= separated_below {
+            NodeStatus::Separated
+        } else if stick {
+            NodeStatus::Stick
+        } else {
+            NodeStatus::Slip
+        }
+    }
+    pub const ALL: [NodeStatus; 3] = [NodeStatus::Separated, NodeStatus::Stick, NodeStatus::Slip];
+
+    /// The status named `name` in contact.csv.
+    pub fn from_name(name: &str) -> Option<NodeStatus> {
+        NodeStatus::ALL.into_iter().find(|s| s.as_str() == name)
+    }
+
+    /// The contact.csv name of the status.
     pub fn as_str(self) -> &'static str {
         match self {
             NodeStatus::Separated => "separated",
@@ -101,11 +122,11 @@ impl StepData<'_> {
     }
     /// q_i(y)
     pub fn q(&self, i: usize, y: &[f64]) -> f64 {
-        self.rule.force(self.law, self.nodes[i].d_n, self.d_end(i, y))
+        self.force_rule.force(self.law, self.nodes[i].d_n, self.d_end(i, y))
     }
     /// ∂q_i/∂y_ν,i
     pub fn dq(&self, i: usize, y: &[f64]) -> f64 {
-        self.a_d * self.rule.force_db(self.law, self.nodes[i].d_n, self.d_end(i, y))
+        self.a_d * self.force_rule.force_db(self.law, self.nodes[i].d_n, self.d_end(i, y))
     }
     /// (S.4) The nodal constraint d_i^{n+1} ≤ g as a bound on the contact velocity:
     /// d^{n+1} ≤ g ⟺ y_ν,i ≤ β_i = (g − d_aff)/a_d; its multiplier is ω_i λ_i ≥ 0.
@@ -129,7 +150,7 @@ impl StepData<'_> {
     /// y_free − W r.
     pub fn response(&self, r: &[f64]) -> Vec<f64> {
         let m = r.len();
-        (0..m).map(|j| self.y_free[j] - (0..m).map(|l| self.w[(j, l)] * r[l]).sum::<f64>()).collect()
+        (0..m).map(|j| self.y_free[j] - (0..m).map(|l| self.delassus[(j, l)] * r[l]).sum::<f64>()).collect()
     }
     /// A velocity scale for relative tests: the largest of the free velocity, `y`, and the
     /// velocities of the kinematics (v^n terms in d^{n+1} and v̄).

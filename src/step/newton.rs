@@ -1,17 +1,18 @@
 //! The inner solver `newton`: Alart–Curnier semismooth Newton on the frozen-S step problem
-//! (model.md §4.4), condensed on the contact DOFs.
+//! (spec/model.md §4.4), condensed on the contact DOFs.
 //!
 //! All residuals are written in velocity units so one norm and one tolerance apply:
 //!   (N.1) F_y = y − y_free + W r(y, λ, t)
 //!   (N.2) F_λ,i = (λ_i − [λ_i + ρ_ν,i (y_ν,i − β_i)]_+) / ρ_ν,i
 //!   (N.3) F_t,i = (t_i − Proj_[−S_i, S_i](t_i + ρ_τ,i v̄_i)) / (ρ_τ,i a_v)
-//! where y_ν ≤ β_i ⟺ d^{n+1} ≤ g, and ρ_ν = r_ν a_d, ρ_τ = r_τ relate to model.md's r_ν, r_τ.
+//! where y_ν ≤ β_i ⟺ d^{n+1} ≤ g, and ρ_ν = r_ν a_d, ρ_τ = r_τ relate to spec/model.md's r_ν, r_τ.
 //! The solution does not depend on ρ (tested); the default ρ_ν,i = 1/(ω_i W_νν,ii) and
 //! ρ_τ,i = 1/(a_v ω_i W_ττ,ii) make the trial values exact for an isolated node.
 
 use faer::Mat;
 
 use super::{ContactSolution, NodeStatus, StepData};
+use crate::failure::{NewtonFailure, NewtonStatus};
 use crate::linalg;
 use crate::model::laws::FrictionCoefficient;
 
@@ -55,14 +56,10 @@ impl Default for NewtonSettings {
     }
 }
 
-/// Why Newton stopped without converging.
-#[derive(Debug, Clone)]
-pub struct NewtonFailure {
-    pub iterations: usize,
-    /// ‖F‖_∞ / velocity scale at the last iterate
-    pub residual: f64,
-    pub reason: String,
-}
+/// Backtracking line search on ½‖F‖²: at most this many halvings of the step length …
+pub const LINE_SEARCH_HALVINGS: usize = 30;
+/// … accepting the first step length α with ½‖F(x + α d)‖² ≤ (1 − ARMIJO α) ½‖F(x)‖².
+pub const ARMIJO: f64 = 1e-4;
 
 struct Params {
     rho_n: Vec<f64>,
@@ -148,8 +145,17 @@ pub fn solve_unfrozen(
     solve_with(step, &FrictionBound::Law { mu, p_hat }, lambda0, t0, set)
 }
 
+/// An iterate of the Newton solve: contact velocities, multipliers, friction forces, and the
+/// residual F at them.
+struct Iterate {
+    y: Vec<f64>,
+    lambda: Vec<f64>,
+    t: Vec<f64>,
+    f: Vec<f64>,
+}
+
 /// Semismooth Newton for either friction bound (frozen: the convex problem of F.1; law: the
-/// unfrozen problem of N.4).
+/// unfrozen problem of N.4): stop test, Newton direction on the reduced system, line search.
 pub fn solve_with(
     step: &StepData,
     bound: &FrictionBound,
@@ -158,148 +164,174 @@ pub fn solve_with(
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
     let s = bound;
-    let n = step.n();
-    let m = 2 * n;
-    let p = Params {
-        rho_n: (0..n).map(|i| set.scale_normal / (step.nodes[i].omega * step.w[(2 * i, 2 * i)])).collect(),
-        rho_t: (0..n)
-            .map(|i| set.scale_tangent / (step.a_v * step.nodes[i].omega * step.w[(2 * i + 1, 2 * i + 1)]))
-            .collect(),
-    };
-    let mut lambda: Vec<f64> = (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda0[i].max(0.0) } else { 0.0 }).collect();
-    let s_start = s.values(step, &step.y_free);
-    let mut t: Vec<f64> = (0..n).map(|i| if step.friction { t0[i].clamp(-s_start[i], s_start[i]) } else { 0.0 }).collect();
-    let mut y = step.response(&step.forces(&step.y_free, &lambda, &t));
-
-    let mut f = residual(step, s, &p, &y, &lambda, &t);
+    let p = Params::new(step, set);
+    let mut x = initial_iterate(step, s, &p, lambda0, t0);
     let mut prev_sets: Option<(Vec<bool>, Vec<bool>)> = None;
     let mut prev_ok = false;
     for it in 0..=set.max_iterations {
-        let scale = step.velocity_scale(&y);
-        let res = linalg::norm_inf(&f);
+        let scale = step.velocity_scale(&x.y);
+        let res = linalg::norm_inf(&x.f);
         let ok = res <= set.tolerance * scale;
-        let cur_sets = sets(step, s, &p, &y, &lambda, &t);
+        let cur_sets = sets(step, s, &p, &x.y, &x.lambda, &x.t);
         let stable = prev_sets.as_ref() == Some(&cur_sets);
         if ok && (stable || prev_ok || it == 0 && res == 0.0) {
-            let q: Vec<f64> = (0..n).map(|i| step.q(i, &y)).collect();
-            let status = (0..n)
-                .map(|i| {
-                    if q[i] <= 0.0 && lambda[i] <= 0.0 {
-                        NodeStatus::Separated
-                    } else if cur_sets.1[i] {
-                        NodeStatus::Stick
-                    } else {
-                        NodeStatus::Slip
-                    }
-                })
-                .collect();
-            return Ok(ContactSolution { y, lambda, t, q, status, iterations: it, residual: if scale > 0.0 { res / scale } else { res } });
+            return Ok(solution(step, x, &cur_sets.1, it, if scale > 0.0 { res / scale } else { res }));
         }
         if it == set.max_iterations {
             break;
         }
         prev_ok = ok;
-        let (active, stick) = cur_sets.clone();
-        prev_sets = Some(cur_sets);
-
-        // --- Newton direction on the reduced system (one unknown per contact component) ---
-        // prescribed-velocity components (active normal, stick) carry a force unknown Δm;
-        // the others carry a velocity unknown Δy with the force change known.
-        let mut dy = vec![0.0; m];
-        let mut dm = vec![0.0; m]; // Δλ_i at 2i, Δt_i at 2i+1
-        let mut prescribed = vec![false; m];
-        let mut g = vec![0.0; m]; // ∂q/∂y on normal components
-        for i in 0..n {
-            let (jn, jt) = (2 * i, 2 * i + 1);
-            g[jn] = step.dq(i, &y);
-            if active[i] {
-                prescribed[jn] = true;
-                dy[jn] = f[m + i]; // F_λ = β − y on the active set
-            } else {
-                dm[jn] = -lambda[i];
-            }
-            if step.friction {
-                if stick[i] {
-                    prescribed[jt] = true;
-                    dy[jt] = f[m + n + i]; // F_t = y_stick − y on the stick set
-                } else {
-                    // slip: t_new = σ S(v̄); with the unfrozen bound (N.4) S varies with y_τ,
-                    // which adds ω σ S'(v̄) a_v to the column of Δy_τ
-                    let vbar = step.slip(i, &y);
-                    let sigma = (t[i] + p.rho_t[i] * vbar).signum();
-                    let (si, dsi) = s.at(i, vbar);
-                    dm[jt] = si * sigma - t[i];
-                    g[jt] = sigma * dsi * step.a_v;
-                }
-            }
-        }
-        // J x = rhs with x_l = Δm_l (prescribed) or Δy_l (free)
-        let omega = |l: usize| step.nodes[l / 2].omega;
-        let mut jac = Mat::<f64>::zeros(m, m);
-        let mut rhs: Vec<f64> = f[..m].iter().map(|v| -v).collect();
-        for l in 0..m {
-            let wl = omega(l);
-            if prescribed[l] {
-                for j in 0..m {
-                    jac[(j, l)] = step.w[(j, l)] * wl;
-                    rhs[j] -= step.w[(j, l)] * wl * g[l] * dy[l];
-                }
-                rhs[l] -= dy[l];
-            } else {
-                for j in 0..m {
-                    jac[(j, l)] = step.w[(j, l)] * wl * g[l];
-                    rhs[j] -= step.w[(j, l)] * wl * dm[l];
-                }
-                jac[(l, l)] += 1.0;
-            }
-        }
-        let Some(x) = linalg::dense_solve(&jac, &rhs) else {
-            return Err(NewtonFailure { iterations: it, residual: res / scale.max(f64::MIN_POSITIVE), reason: "singular Newton matrix".into() });
+        let Some((dy, dm)) = direction(step, s, &p, &x, &cur_sets) else {
+            return Err(NewtonFailure {
+                status: NewtonStatus::SingularJacobian,
+                iterations: it,
+                residual: res / scale.max(f64::MIN_POSITIVE),
+            });
         };
-        for l in 0..m {
-            if prescribed[l] {
-                dm[l] = x[l];
-            } else {
-                dy[l] = x[l];
-            }
-        }
-
-        // --- line search on ½‖F‖² ---
-        let merit0 = 0.5 * linalg::dot(&f, &f);
-        let mut best: Option<(f64, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>)> = None;
-        let mut alpha = 1.0;
-        for _ in 0..30 {
-            let yt: Vec<f64> = (0..m).map(|l| y[l] + alpha * dy[l]).collect();
-            let lt: Vec<f64> = (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda[i] + alpha * dm[2 * i] } else { 0.0 }).collect();
-            let tt: Vec<f64> = (0..n).map(|i| if step.friction { t[i] + alpha * dm[2 * i + 1] } else { 0.0 }).collect();
-            let ft = residual(step, s, &p, &yt, &lt, &tt);
-            let merit = 0.5 * linalg::dot(&ft, &ft);
-            let accept = merit <= (1.0 - 1e-4 * alpha) * merit0;
-            if best.as_ref().is_none_or(|b| merit < b.0) {
-                best = Some((merit, yt, lt, tt, ft));
-            }
-            if accept {
-                break;
-            }
-            alpha *= 0.5;
-        }
-        let (merit, yt, lt, tt, ft) = best.unwrap_or((merit0, y.clone(), lambda.clone(), t.clone(), f.clone()));
-        if merit < merit0 {
-            (y, lambda, t, f) = (yt, lt, tt, ft);
-        } else {
-            // no decrease along the Newton direction: take the full step (semismooth Newton on a
-            // piecewise-linear system may need to cross a kink) and let the cap guard cycling
-            y = (0..m).map(|l| y[l] + dy[l]).collect();
-            lambda = (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda[i] + dm[2 * i] } else { 0.0 }).collect();
-            t = (0..n).map(|i| if step.friction { t[i] + dm[2 * i + 1] } else { 0.0 }).collect();
-            f = residual(step, s, &p, &y, &lambda, &t);
-        }
+        prev_sets = Some(cur_sets);
+        x = line_search(step, s, &p, x, &dy, &dm);
     }
-    let scale = step.velocity_scale(&y);
-    let res = linalg::norm_inf(&f);
+    let scale = step.velocity_scale(&x.y);
+    let res = linalg::norm_inf(&x.f);
     Err(NewtonFailure {
+        status: if res.is_finite() { NewtonStatus::MaxIterations } else { NewtonStatus::NonFinite },
         iterations: set.max_iterations,
         residual: if scale > 0.0 { res / scale } else { res },
-        reason: format!("no convergence in {} iterations", set.max_iterations),
     })
+}
+
+impl Params {
+    /// ρ_ν,i = 1/(ω_i W_νν,ii) and ρ_τ,i = 1/(a_v ω_i W_ττ,ii), times the settings' scales.
+    fn new(step: &StepData, set: &NewtonSettings) -> Params {
+        let n = step.n();
+        Params {
+            rho_n: (0..n).map(|i| set.scale_normal / (step.nodes[i].omega * step.delassus[(2 * i, 2 * i)])).collect(),
+            rho_t: (0..n)
+                .map(|i| set.scale_tangent / (step.a_v * step.nodes[i].omega * step.delassus[(2 * i + 1, 2 * i + 1)]))
+                .collect(),
+        }
+    }
+}
+
+/// The start: the warm-started λ (≥ 0) and t (inside the bound at the free motion), and the
+/// contact velocities they give.
+fn initial_iterate(step: &StepData, s: &FrictionBound, p: &Params, lambda0: &[f64], t0: &[f64]) -> Iterate {
+    let n = step.n();
+    let lambda: Vec<f64> = (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda0[i].max(0.0) } else { 0.0 }).collect();
+    let s_start = s.values(step, &step.y_free);
+    let t: Vec<f64> = (0..n).map(|i| if step.friction { t0[i].clamp(-s_start[i], s_start[i]) } else { 0.0 }).collect();
+    let y = step.response(&step.forces(&step.y_free, &lambda, &t));
+    let f = residual(step, s, p, &y, &lambda, &t);
+    Iterate { y, lambda, t, f }
+}
+
+/// The converged iterate as a solution, with each node's status.
+fn solution(step: &StepData, x: Iterate, stick: &[bool], iterations: usize, residual: f64) -> ContactSolution {
+    let n = step.n();
+    let q: Vec<f64> = (0..n).map(|i| step.q(i, &x.y)).collect();
+    // exact active sets: a node is separated when it carries no force at all
+    let status = (0..n).map(|i| NodeStatus::classify(q[i] + x.lambda[i], 0.0, stick[i])).collect();
+    ContactSolution { y: x.y, lambda: x.lambda, t: x.t, q, status, iterations, residual }
+}
+
+/// The Newton direction (Δy, Δm) on the reduced system, one unknown per contact component:
+/// prescribed-velocity components (active normal, stick) carry a force unknown Δm (Δλ_i at 2i,
+/// Δt_i at 2i+1); the others carry a velocity unknown Δy with the force change known.
+/// None when the reduced matrix is singular.
+fn direction(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, sets: &(Vec<bool>, Vec<bool>)) -> Option<(Vec<f64>, Vec<f64>)> {
+    let (n, m) = (step.n(), 2 * step.n());
+    let (active, stick) = sets;
+    let (y, lambda, t, f) = (&x.y, &x.lambda, &x.t, &x.f);
+    let mut dy = vec![0.0; m];
+    let mut dm = vec![0.0; m];
+    let mut prescribed = vec![false; m];
+    let mut g = vec![0.0; m]; // ∂q/∂y on normal components
+    for i in 0..n {
+        let (jn, jt) = (2 * i, 2 * i + 1);
+        g[jn] = step.dq(i, y);
+        if active[i] {
+            prescribed[jn] = true;
+            dy[jn] = f[m + i]; // F_λ = β − y on the active set
+        } else {
+            dm[jn] = -lambda[i];
+        }
+        if step.friction {
+            if stick[i] {
+                prescribed[jt] = true;
+                dy[jt] = f[m + n + i]; // F_t = y_stick − y on the stick set
+            } else {
+                // slip: t_new = σ S(v̄); with the unfrozen bound (N.4) S varies with y_τ,
+                // which adds ω σ S'(v̄) a_v to the column of Δy_τ
+                let vbar = step.slip(i, y);
+                let sigma = (t[i] + p.rho_t[i] * vbar).signum();
+                let (si, dsi) = s.at(i, vbar);
+                dm[jt] = si * sigma - t[i];
+                g[jt] = sigma * dsi * step.a_v;
+            }
+        }
+    }
+    // J x = rhs with x_l = Δm_l (prescribed) or Δy_l (free)
+    let w = step.delassus;
+    let omega = |l: usize| step.nodes[l / 2].omega;
+    let mut jac = Mat::<f64>::zeros(m, m);
+    let mut rhs: Vec<f64> = f[..m].iter().map(|v| -v).collect();
+    for l in 0..m {
+        let wl = omega(l);
+        if prescribed[l] {
+            for j in 0..m {
+                jac[(j, l)] = w[(j, l)] * wl;
+                rhs[j] -= w[(j, l)] * wl * g[l] * dy[l];
+            }
+            rhs[l] -= dy[l];
+        } else {
+            for j in 0..m {
+                jac[(j, l)] = w[(j, l)] * wl * g[l];
+                rhs[j] -= w[(j, l)] * wl * dm[l];
+            }
+            jac[(l, l)] += 1.0;
+        }
+    }
+    let sol = linalg::dense_solve(&jac, &rhs)?;
+    for l in 0..m {
+        if prescribed[l] {
+            dm[l] = sol[l];
+        } else {
+            dy[l] = sol[l];
+        }
+    }
+    Some((dy, dm))
+}
+
+/// Backtracking line search on ½‖F‖² along (Δy, Δm): the first Armijo step, else the best
+/// decrease seen; with no decrease at all the full step is taken (semismooth Newton on a
+/// piecewise-linear system may need to cross a kink) and the iteration cap guards cycling.
+fn line_search(step: &StepData, s: &FrictionBound, p: &Params, x: Iterate, dy: &[f64], dm: &[f64]) -> Iterate {
+    let (n, m) = (step.n(), 2 * step.n());
+    let at = |alpha: f64| {
+        let y: Vec<f64> = (0..m).map(|l| x.y[l] + alpha * dy[l]).collect();
+        let lambda: Vec<f64> =
+            (0..n).map(|i| if step.nodes[i].bound.is_some() { x.lambda[i] + alpha * dm[2 * i] } else { 0.0 }).collect();
+        let t: Vec<f64> = (0..n).map(|i| if step.friction { x.t[i] + alpha * dm[2 * i + 1] } else { 0.0 }).collect();
+        let f = residual(step, s, p, &y, &lambda, &t);
+        Iterate { y, lambda, t, f }
+    };
+    let merit0 = 0.5 * linalg::dot(&x.f, &x.f);
+    let mut best: Option<(f64, Iterate)> = None;
+    let mut alpha = 1.0;
+    for _ in 0..LINE_SEARCH_HALVINGS {
+        let trial = at(alpha);
+        let merit = 0.5 * linalg::dot(&trial.f, &trial.f);
+        let accept = merit <= (1.0 - ARMIJO * alpha) * merit0;
+        if best.as_ref().is_none_or(|b| merit < b.0) {
+            best = Some((merit, trial));
+        }
+        if accept {
+            break;
+        }
+        alpha *= 0.5;
+    }
+    match best {
+        Some((merit, trial)) if merit < merit0 => trial,
+        _ => at(1.0),
+    }
 }

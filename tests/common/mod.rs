@@ -13,7 +13,7 @@ pub fn fixture(name: &str) -> Scene {
 
 pub fn problem(scene: Scene) -> Problem {
     let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes");
-    Problem::new(scene, &dir).unwrap_or_else(|e| panic!("problem: {e}"))
+    Problem::from_scene(&scene, &dir).unwrap_or_else(|e| panic!("problem: {e}"))
 }
 
 /// Run to the end in memory and return every record (t = 0 first).
@@ -24,9 +24,7 @@ pub fn records(p: &Problem) -> Vec<StepRecord> {
 pub fn records_with(p: &Problem, settings: Settings) -> Vec<StepRecord> {
     let mut sim = Simulation::with_settings(p, settings).unwrap_or_else(|e| panic!("setup: {e}"));
     let mut out = vec![sim.initial_record()];
-    for _ in 0..p.steps {
-        out.push(sim.step().unwrap_or_else(|e| panic!("step: {e}")));
-    }
+    out.extend(sim.steps().map(|rec| rec.unwrap_or_else(|e| panic!("step: {e}"))));
     out
 }
 
@@ -44,9 +42,9 @@ pub fn measured(test: &str, quantity: &str, value: f64, expected: &str) {
 
 /// L² distance of two free-DOF fields on the mesh of `p` (consistent mass with ρ = 1).
 pub fn l2_diff(p: &Problem, a: &[f64], b: &[f64]) -> f64 {
-    let mut mat = dyncontact::model::material::Material::from_scene(&p.scene.material, p.scene.domain.plane);
+    let mut mat = p.material;
     mat.rho = 1.0;
-    let (m, _, _) = dyncontact::fem::assemble::assemble_full(&p.mesh, &mat, dyncontact::scene::MassKind::Consistent)
+    let (m, _, _) = dyncontact::fem::assemble::assemble_full(&p.mesh, &mat, dyncontact::model::kinds::MassKind::Consistent)
         .expect("assembly");
     let m = dyncontact::fem::assemble::restrict(&m, &p.dofs).expect("restrict");
     let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();

@@ -8,7 +8,7 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
-use dyncontact::checkpoint::State;
+use dyncontact::simulation::State;
 use dyncontact::fem::Operators;
 use dyncontact::problem::Problem;
 use dyncontact::scene::Scene;
@@ -21,7 +21,7 @@ fn academic(cells: [i64; 2]) -> Problem {
     let mut s = Scene::default_scene();
     s.domain.cells = Some(cells);
     s.validate().expect("valid scene");
-    Problem::new(s, Path::new(".")).expect("problem")
+    Problem::from_scene(&s, Path::new(".")).expect("problem")
 }
 
 /// Assembly of the operators M, K, C on the free DOFs (`Operators::new`): the setup cost that
@@ -32,7 +32,7 @@ fn assembly(c: &mut Criterion) {
         let p = academic(cells);
         let nodes: Vec<usize> = p.contact.as_ref().map(|c| c.nodes.clone()).unwrap_or_default();
         g.bench_function(format!("operators {}x{}", cells[0], cells[1]), |b| {
-            b.iter(|| Operators::new(&p.mesh, &p.material, p.scene.solver.mass, &p.dofs, black_box(&nodes)).expect("assembly"))
+            b.iter(|| Operators::new(&p.mesh, &p.material, p.model.solver.mass, &p.dofs, black_box(&nodes)).expect("assembly"))
         });
     }
     g.finish();
@@ -41,8 +41,8 @@ fn assembly(c: &mut Criterion) {
 /// A simulation of the academic scene (32×16, k = 5e-4) advanced to t = 0.25 s.
 fn advanced(p: &Problem) -> Simulation<'_> {
     let mut sim = Simulation::new(p).expect("setup");
-    for _ in 0..500 {
-        sim.step().expect("step");
+    for rec in sim.steps().take(500) {
+        rec.expect("step");
     }
     sim
 }
@@ -55,7 +55,7 @@ fn time_step(c: &mut Criterion) {
     let mut sim = Simulation::new(&p).expect("setup");
     c.bench_function("time step academic 32x16", |b| {
         b.iter_batched(
-            || base.state(),
+            || base.state.clone(),
             |state: State| {
                 sim.restore(state).expect("restore");
                 sim.step().expect("step")
@@ -76,7 +76,7 @@ fn contact_solve(c: &mut Criterion) {
     let set = NewtonSettings::default();
     let (_, s, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).expect("F.1");
     c.bench_function(&format!("newton::solve {} contact nodes", data.n()), |b| {
-        b.iter(|| newton::solve(black_box(&data), &s, &sim.lambda, &sim.t_fric, &set).expect("newton"))
+        b.iter(|| newton::solve(black_box(&data), &s, &sim.state.lambda, &sim.state.t_fric, &set).expect("newton"))
     });
 }
 

@@ -1,4 +1,4 @@
-//! `dyncontact study penalty`: the ε → 0 study of model.md §5.3. The exact problem P (the
+//! `dyncontact study penalty`: the ε → 0 study of spec/model.md §5.3. The exact problem P (the
 //! constraint with multipliers) and the penalty problem P_ε are run on the same mesh and step;
 //! for each ε it reports
 //!   e_V(ε) = max_n ‖u_ε^n − u^n‖_V / max_n ‖u^n‖_V   (‖v‖_V = ‖ε(v)‖_{L²}),
@@ -15,11 +15,12 @@ use plotters::prelude::*;
 use crate::error::{Error, Result};
 use crate::fem::assemble::{assemble_full, restrict};
 use crate::linalg::{self, SpMat};
-use crate::model::material::Material;
-use crate::output::write_atomic;
+use crate::model::kinds::{Bound, EnforcementKind, MassKind};
 use crate::problem::Problem;
-use crate::scene::{Bound, Enforcement, MassKind, Scene};
-use crate::simulation::Simulation;
+use crate::scene::Scene;
+use crate::simulation::{NodeRecord, Simulation};
+
+use super::harness::{self, loglog_slope};
 
 /// One row of the study.
 #[derive(Debug, Clone, Copy)]
@@ -41,28 +42,15 @@ pub struct PenaltyStudy {
     pub reference_wall_time_s: f64,
 }
 
-/// The default ε list of model.md §5.3.
+/// The default ε list of spec/model.md §5.3.
 pub const DEFAULT_EPS: [f64; 6] = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
-
-/// Least-squares slope of log10(y) against log10(x) over the positive pairs.
-pub fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
-    let pts: Vec<(f64, f64)> = x.iter().zip(y).filter(|(a, b)| **a > 0.0 && **b > 0.0).map(|(a, b)| (a.log10(), b.log10())).collect();
-    let n = pts.len() as f64;
-    if pts.len() < 2 {
-        return f64::NAN;
-    }
-    let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    sxy / sxx
-}
 
 /// ‖·‖_V (strain) and ‖·‖_{L²} (ρ = 1) Gram matrices on the free DOFs of `p`.
 fn norm_matrices(p: &Problem) -> Result<(SpMat, SpMat)> {
-    let mut unit = Material::from_scene(&p.scene.material, p.scene.domain.plane);
+    let mut unit = p.material;
     // ε(v):ε(v) = ε_xx² + ε_yy² + γ²/2: the operator with λ = 0, μ = ½ (and ρ = 1 for L²)
     unit.lambda = 0.0;
-    unit.mu = 0.5;
+    unit.mu_lame = 0.5;
     unit.theta = 0.0;
     unit.zeta = 0.0;
     unit.rho = 1.0;
@@ -76,14 +64,14 @@ fn norm(a: &SpMat, x: &[f64]) -> f64 {
 
 /// (E.0) The penetration beyond the bound of one step, max_i (u_ν,i − g)_+: the energy
 /// estimate of P_ε bounds it by C ε^½ (the study measures the rate).
-pub fn penetration_beyond_bound(nodes: &[crate::simulation::NodeRecord], g: f64) -> f64 {
+pub fn penetration_beyond_bound(nodes: &[NodeRecord], g: f64) -> f64 {
     nodes.iter().map(|n| (n.u_n - g).max(0.0)).fold(0.0, f64::max)
 }
 
 /// Run the study for `scene` (its contact section must have a finite penetration bound).
 pub fn penalty_study(scene: &Scene, scene_dir: &Path, eps_list: &[f64]) -> Result<PenaltyStudy> {
     let c = scene.contact.as_ref().ok_or_else(|| Error::scene("contact", "the penalty study needs a scene with contact"))?;
-    if scene.bound_of(c)? == Bound::Infinite {
+    if Scene::bound_of(c)? == Bound::Infinite {
         return Err(Error::scene("contact.penetration_bound", "the penalty study needs a finite g (it penalizes u_ν > g)"));
     }
     if let Some(e) = eps_list.iter().find(|e| !(e.is_finite() && **e > 0.0)) {
@@ -91,10 +79,10 @@ pub fn penalty_study(scene: &Scene, scene_dir: &Path, eps_list: &[f64]) -> Resul
     }
     let mut exact_scene = scene.clone();
     if let Some(c) = exact_scene.contact.as_mut() {
-        c.enforcement = Enforcement::Exact;
+        c.enforcement = EnforcementKind::Exact;
         c.penalty = None;
     }
-    let exact = Problem::new(exact_scene, scene_dir)?;
+    let exact = Problem::from_scene(&exact_scene, scene_dir)?;
     let g = match exact.contact.as_ref().map(|c| c.bound) {
         Some(Bound::Finite(g)) => g,
         _ => return Err(Error::scene("contact.penetration_bound", "must be finite")),
@@ -104,9 +92,11 @@ pub fn penalty_study(scene: &Scene, scene_dir: &Path, eps_list: &[f64]) -> Resul
     let clock = Instant::now();
     let mut sim = Simulation::new(&exact)?;
     let mut reference = Vec::with_capacity(exact.steps);
-    for _ in 0..exact.steps {
-        sim.step()?;
-        reference.push((sim.u.clone(), sim.v.clone()));
+    let mut steps = sim.steps();
+    while let Some(rec) = steps.next() {
+        rec?;
+        let state = &steps.simulation().state;
+        reference.push((state.u.clone(), state.v.clone()));
     }
     let reference_wall_time_s = clock.elapsed().as_secs_f64();
     let u_max = reference.iter().map(|(u, _)| norm(&kv, u)).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
@@ -115,17 +105,20 @@ pub fn penalty_study(scene: &Scene, scene_dir: &Path, eps_list: &[f64]) -> Resul
     for &eps in eps_list {
         let mut s = scene.clone();
         if let Some(c) = s.contact.as_mut() {
-            c.enforcement = Enforcement::Penalty;
+            c.enforcement = EnforcementKind::Penalty;
             c.penalty = Some(eps);
         }
-        let pen = Problem::new(s, scene_dir)?;
+        let pen = Problem::from_scene(&s, scene_dir)?;
         let clock = Instant::now();
         let mut sim = Simulation::new(&pen)?;
         let (mut e_v, mut e_h, mut delta): (f64, f64, f64) = (0.0, 0.0, 0.0);
+        let mut steps = sim.steps();
         for (u_ref, v_ref) in &reference {
-            let rec = sim.step()?;
-            let du: Vec<f64> = sim.u.iter().zip(u_ref).map(|(a, b)| a - b).collect();
-            let dv: Vec<f64> = sim.v.iter().zip(v_ref).map(|(a, b)| a - b).collect();
+            let Some(rec) = steps.next() else { break };
+            let rec = rec?;
+            let state = &steps.simulation().state;
+            let du: Vec<f64> = state.u.iter().zip(u_ref).map(|(a, b)| a - b).collect();
+            let dv: Vec<f64> = state.v.iter().zip(v_ref).map(|(a, b)| a - b).collect();
             e_v = e_v.max(norm(&kv, &du));
             e_h = e_h.max(norm(&mh, &dv));
             delta = delta.max(penetration_beyond_bound(&rec.nodes, g));
@@ -146,11 +139,10 @@ pub fn penalty_study(scene: &Scene, scene_dir: &Path, eps_list: &[f64]) -> Resul
 impl PenaltyStudy {
     /// study/penalty.csv.
     pub fn csv(&self) -> String {
-        let mut s = String::from("eps,e_V,e_H,delta,wall_time_s\n");
-        for r in &self.rows {
-            s.push_str(&format!("{},{},{},{},{}\n", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s));
-        }
-        s
+        harness::csv_table(
+            "eps,e_V,e_H,delta,wall_time_s",
+            self.rows.iter().map(|r| [r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s].map(|x| x.to_string()).to_vec()),
+        )
     }
 
     /// study/penalty.svg: e_V, e_H and δ against ε on log–log axes.
@@ -158,7 +150,7 @@ impl PenaltyStudy {
         let mut svg = String::new();
         {
             let root = SVGBackend::with_string(&mut svg, (900, 560)).into_drawing_area();
-            let err = |e: &dyn std::fmt::Display| Error::Output(format!("study/penalty.svg: {e}"));
+            let err = harness::chart_error("study/penalty.svg");
             root.fill(&WHITE).map_err(|e| err(&e))?;
             let pos = |v: f64| v.is_finite() && v > 0.0;
             let xs: Vec<f64> = self.rows.iter().map(|r| r.eps).filter(|v| pos(*v)).collect();
@@ -211,9 +203,7 @@ impl PenaltyStudy {
 
     /// Write study/penalty.csv and study/penalty.svg under `dir`.
     pub fn write(&self, dir: &Path, title: &str) -> Result<()> {
-        let d = dir.join("study");
-        std::fs::create_dir_all(&d).map_err(|e| Error::io(&d, e))?;
-        write_atomic(&d.join("penalty.csv"), self.csv().as_bytes())?;
-        write_atomic(&d.join("penalty.svg"), self.svg(title)?.as_bytes())
+        let svg = self.svg(title)?;
+        harness::write_files(&dir.join("study"), &[("penalty.csv", self.csv().as_bytes()), ("penalty.svg", svg.as_bytes())])
     }
 }

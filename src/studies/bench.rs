@@ -32,13 +32,17 @@ use plotters::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::output::plots::PALETTE;
+use crate::failure::ContactFailure;
+use crate::model::kinds::{self, InnerSolver, MassKind, SchemeKind};
+use crate::model::Model;
 use crate::output::{write_atomic, ModelInfo};
 use crate::problem::Problem;
-use crate::scene::{InnerSolver, MassKind, SchemeKind, Scene};
+use crate::scene::Scene;
 use crate::simulation::Simulation;
-use crate::step::fixed_point::{InnerFailure, Inner};
+use crate::step::fixed_point::Inner;
 use crate::step::newton::NewtonSettings;
-use crate::study::loglog_slope;
+
+use super::harness::{self, loglog_slope};
 
 /// Options of the benchmark.
 #[derive(Debug, Clone, Default)]
@@ -141,37 +145,13 @@ struct RunSpec {
     level: Level,
 }
 
-fn scheme_name(s: SchemeKind) -> &'static str {
-    match s {
-        SchemeKind::Midpoint => "midpoint",
-        SchemeKind::Trapezoid => "trapezoid",
-        SchemeKind::BackwardEuler => "backward-euler",
-    }
-}
-
-fn inner_name(i: InnerSolver) -> &'static str {
-    match i {
-        InnerSolver::Newton => "newton",
-        InnerSolver::Conic => "conic",
-        InnerSolver::NewtonUnfrozen => "newton-unfrozen",
-    }
-}
-
-fn mass_name(m: MassKind) -> &'static str {
-    match m {
-        MassKind::Lumped => "lumped",
-        MassKind::Consistent => "consistent",
-        MassKind::Modified => "modified",
-    }
-}
-
 impl RunSpec {
     fn label(&self) -> String {
-        format!("{}/{}/{} {}x{} k={:e}", scheme_name(self.scheme), inner_name(self.inner), mass_name(self.mass), self.level.cells[0], self.level.cells[1], self.level.k)
+        format!("{}/{}/{} {}x{} k={:e}", kinds::name(&self.scheme), kinds::name(&self.inner), kinds::name(&self.mass), self.level.cells[0], self.level.cells[1], self.level.k)
     }
 
-    /// The academic scene at this configuration, shortened to `t_end` and validated.
-    fn scene(&self, t_end: f64) -> Result<Scene> {
+    /// The academic scene at this configuration, shortened to `t_end`, validated.
+    fn model(&self, t_end: f64) -> Result<Model> {
         let mut s = Scene::default_scene();
         s.domain.cells = Some(self.level.cells);
         s.time.step = self.level.k;
@@ -179,8 +159,7 @@ impl RunSpec {
         s.time.scheme = self.scheme;
         s.solver.inner = self.inner;
         s.solver.mass = self.mass;
-        s.validate()?;
-        Ok(s)
+        s.validate()
     }
 }
 
@@ -201,7 +180,7 @@ struct RunStats {
     wall_time_s: f64,
     /// the time loop alone
     step_time_s: f64,
-    /// Σ of sim.timing[1] (contact solve incl. F.1) over the steps
+    /// Σ of the contact solve time (F.1 included) over the steps
     contact_time_s: f64,
     setup_delassus_s: f64,
     newton_iterations: usize,
@@ -229,7 +208,7 @@ fn probe_dofs(p: &Problem) -> Result<Vec<[Option<usize>; 2]>> {
 /// run's own factor of A_k; the best of 5 batches of the mean time per solve (robust to other
 /// processes on the machine).
 fn floor_time(sim: &Simulation) -> f64 {
-    let base: Vec<f64> = (0..sim.u.len()).map(|i| 1.0 + (i % 7) as f64).collect();
+    let base: Vec<f64> = (0..sim.state.u.len()).map(|i| 1.0 + (i % 7) as f64).collect();
     let mut x = base.clone();
     let clock = Instant::now();
     sim.stepper.solve_in_place(&mut x);
@@ -254,18 +233,21 @@ fn simulate(p: &Problem, probes: &[[Option<usize>; 2]]) -> Result<(Trajectory, R
     let mut sim = Simulation::new(p)?;
     let setup = clock.elapsed().as_secs_f64();
     let mut traj = Trajectory { k: p.k, forces: Vec::with_capacity(p.steps), probes: Vec::with_capacity(p.steps) };
-    let mut st = RunStats { steps: p.steps, setup_delassus_s: sim.setup_timing[2], ..RunStats::default() };
-    for _ in 0..p.steps {
+    let mut st = RunStats { steps: p.steps, setup_delassus_s: sim.setup_timing.delassus, ..RunStats::default() };
+    let mut steps = sim.steps();
+    loop {
         let clock = Instant::now();
-        let rec = sim.step()?;
+        let Some(rec) = steps.next() else { break };
+        let rec = rec?;
         st.step_time_s += clock.elapsed().as_secs_f64();
-        st.contact_time_s += sim.timing[1];
+        st.contact_time_s += rec.timing.contact_solve;
         st.newton_iterations += rec.report.inner_iterations;
         st.fixed_point_iterations += rec.report.fixed_point_iterations;
         st.unfrozen += usize::from(rec.report.unfrozen);
-        st.fallbacks += usize::from(rec.report.fallback);
+        st.fallbacks += usize::from(rec.report.fallback.is_some());
         traj.forces.push([rec.normal_force, rec.tangential_force]);
-        traj.probes.push(probes.iter().flat_map(|d| d.map(|i| i.map_or(0.0, |i| sim.u[i]))).collect());
+        let u = &steps.simulation().state.u;
+        traj.probes.push(probes.iter().flat_map(|d| d.map(|i| i.map_or(0.0, |i| u[i]))).collect());
     }
     st.wall_time_s = setup + st.step_time_s;
     st.floor_s = floor_time(&sim);
@@ -362,15 +344,11 @@ impl WorkRow {
     }
 }
 
-/// A CSV field without separators or line breaks.
-fn csv_text(s: &str) -> String {
-    s.replace([',', '\n', '\r'], ";")
-}
 
 /// Run one configuration and measure its errors against the reference; a failed run becomes a
 /// row whose status says why (the conic twin can stall, and that is a result).
 fn work_row(spec: RunSpec, plan: &Plan, reference: &Trajectory) -> Result<WorkRow> {
-    let p = Problem::new(spec.scene(plan.t_end)?, Path::new("."))?;
+    let p = Problem::new(spec.model(plan.t_end)?, Path::new("."))?;
     let probes = probe_dofs(&p)?;
     match simulate(&p, &probes) {
         Ok((traj, stats)) => Ok(WorkRow {
@@ -420,9 +398,9 @@ fn work_csv(rows: &[WorkRow]) -> String {
         let _ = writeln!(
             s,
             "{},{},{},{}x{},{:e},{},{:.6e},{:.6e},{:.6e},{:.4},{:.6e},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{}",
-            scheme_name(r.spec.scheme),
-            inner_name(r.spec.inner),
-            mass_name(r.spec.mass),
+            kinds::name(&r.spec.scheme),
+            kinds::name(&r.spec.inner),
+            kinds::name(&r.spec.mass),
             r.spec.level.cells[0],
             r.spec.level.cells[1],
             r.spec.level.k,
@@ -438,7 +416,7 @@ fn work_csv(rows: &[WorkRow]) -> String {
             r.error_force[1],
             r.error_force[2],
             r.error_impulse,
-            csv_text(&r.status)
+            harness::csv_field(&r.status)
         );
     }
     s
@@ -466,7 +444,7 @@ fn groups(rows: &[WorkRow]) -> Vec<Vec<&WorkRow>> {
 }
 
 fn group_label(r: &WorkRow) -> String {
-    format!("{}/{}/{}", scheme_name(r.spec.scheme), inner_name(r.spec.inner), mass_name(r.spec.mass))
+    format!("{}/{}/{}", kinds::name(&r.spec.scheme), kinds::name(&r.spec.inner), kinds::name(&r.spec.mass))
 }
 
 /// The colour of a scheme × mass pair (newton and conic share it; the line style differs).
@@ -483,22 +461,12 @@ fn group_color(r: &WorkRow) -> RGBColor {
 /// An error measure of a work–precision row.
 type Measure = fn(&WorkRow) -> f64;
 
-fn svg_err(file: &'static str) -> impl Fn(&dyn std::fmt::Display) -> Error {
-    move |e| Error::Output(format!("{file}: {e}"))
-}
-
-/// A padded log-scale range of the positive finite values (a decade when there are none).
-fn log_range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (lo, hi) = vals.filter(|v| v.is_finite() && *v > 0.0).fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
-    if lo.is_finite() { (lo / 1.6, hi * 1.6) } else { (0.1, 1.0) }
-}
-
 /// One log–log panel of work_precision.svg: `error` of each group against wall time.
 fn work_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, rows: &[WorkRow], error: Measure, y_desc: &str, legend: bool) -> Result<()> {
-    let err = svg_err("work_precision.svg");
+    let err = harness::chart_error("work_precision.svg");
     let ok: Vec<&WorkRow> = rows.iter().filter(|r| r.ok()).collect();
-    let (x0, x1) = log_range(ok.iter().map(|r| r.stats.wall_time_s));
-    let (y0, y1) = log_range(ok.iter().map(|r| error(r)));
+    let (x0, x1) = harness::log_range(ok.iter().map(|r| r.stats.wall_time_s));
+    let (y0, y1) = harness::log_range(ok.iter().map(|r| error(r)));
     let mut chart = ChartBuilder::on(area)
         .caption(y_desc, ("sans-serif", 18))
         .margin(10)
@@ -551,7 +519,7 @@ fn work_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, rows: &[WorkRow], error
 /// time, log–log, one line per scheme × inner × mass (newton solid with circles, conic dashed
 /// with triangles).
 fn work_svg(rows: &[WorkRow], title: &str) -> Result<String> {
-    let err = svg_err("work_precision.svg");
+    let err = harness::chart_error("work_precision.svg");
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (1950, 640)).into_drawing_area();
@@ -594,15 +562,14 @@ struct Agreement {
 }
 
 /// The academic scene on the race mesh with decay α, step k and an inner solver, validated.
-fn race_scene(race: &RacePlan, decay: f64, k: f64, inner: InnerSolver) -> Result<Scene> {
+fn race_model(race: &RacePlan, decay: f64, k: f64, inner: InnerSolver) -> Result<Model> {
     let mut s = Scene::default_scene();
     s.domain.cells = Some(race.cells);
     s.time.end = race.t_end;
     s.time.step = k;
     s.solver.inner = inner;
     s.contact.as_mut().ok_or_else(|| Error::scene("contact", "the race needs the academic scene's contact"))?.friction.decay = Some(decay);
-    s.validate()?;
-    Ok(s)
+    s.validate()
 }
 
 /// The scene's own friction decay α (the race's base law).
@@ -629,7 +596,7 @@ fn race_cases(race: &RacePlan) -> Result<Vec<RaceCase>> {
     let mut cases = Vec::new();
     for &f in &race.decay_factors {
         let decay = alpha0 * f;
-        let probe = Problem::new(race_scene(race, decay, race.beyond[0], InnerSolver::Newton)?, Path::new("."))?;
+        let probe = Problem::new(race_model(race, decay, race.beyond[0], InnerSolver::Newton)?, Path::new("."))?;
         let ck_limit = ModelInfo::of(&probe).ck_step_limit;
         let mut ks: Vec<f64> = ck_limit.map(step_inside).into_iter().chain(race.beyond.iter().copied()).collect();
         ks.sort_by(f64::total_cmp);
@@ -641,11 +608,8 @@ fn race_cases(race: &RacePlan) -> Result<Vec<RaceCase>> {
     Ok(cases)
 }
 
-fn inner_failure(e: InnerFailure) -> Error {
-    Error::Output(format!(
-        "bench race: the {} solver failed in fixed-point iteration {} after {} iterations (residual {:.2e}): {}",
-        e.solver, e.fixed_point_iteration, e.iterations, e.residual, e.reason
-    ))
+fn inner_failure(e: ContactFailure) -> Error {
+    Error::Output(format!("bench race: {}", crate::failure::StepFailureCause::Contact(e)))
 }
 
 /// The Newton settings of a simulation whose inner solver is `newton`.
@@ -666,8 +630,8 @@ fn agreement(p: &Problem) -> Result<Agreement> {
     let mut a = Agreement::default();
     for _ in 0..p.steps {
         {
-            let (w, _) = sim.free_velocity();
-            let (data, p_hat) = sim.step_data(c.restrict(&w)).ok_or_else(|| Error::Output("bench race: no contact data".into()))?;
+            let (v_free, _) = sim.free_velocity();
+            let (data, p_hat) = sim.step_data(c.restrict(&v_free)).ok_or_else(|| Error::Output("bench race: no contact data".into()))?;
             let (f1, _, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).map_err(inner_failure)?;
             let (un, _, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).map_err(inner_failure)?;
             let vs = data.velocity_scale(&f1.y).max(1e-300);
@@ -688,14 +652,14 @@ fn agreement(p: &Problem) -> Result<Agreement> {
 fn race_rows(race: &RacePlan, case: &RaceCase) -> Result<Vec<RaceRow>> {
     let mut rows = Vec::new();
     for method in [InnerSolver::Newton, InnerSolver::NewtonUnfrozen] {
-        let p = Problem::new(race_scene(race, case.decay, case.k, method)?, Path::new("."))?;
+        let p = Problem::new(race_model(race, case.decay, case.k, method)?, Path::new("."))?;
         let (stats, status) = match simulate(&p, &[]) {
             Ok((_, st)) => (st, "ok".to_string()),
             Err(e) => (RunStats { steps: p.steps, ..RunStats::default() }, format!("failed: {e}")),
         };
         rows.push(RaceRow { case: case.clone(), method, stats, agreement: Agreement::default(), status });
     }
-    let p = Problem::new(race_scene(race, case.decay, case.k, InnerSolver::Newton)?, Path::new("."))?;
+    let p = Problem::new(race_model(race, case.decay, case.k, InnerSolver::Newton)?, Path::new("."))?;
     let agreement = match agreement(&p) {
         Ok(a) => a,
         Err(e) => {
@@ -728,12 +692,12 @@ fn race_csv(rows: &[RaceRow]) -> String {
         let _ = writeln!(
             s,
             "{},{},{:e},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.4},{:.4},{},{},{:.6e},{:.3e},{:.3e},{},{}",
-            csv_text(&r.case.label),
+            harness::csv_field(&r.case.label),
             r.case.decay,
             r.case.k,
             r.case.ck_limit.map_or("".into(), |l| format!("{l:.6e}")),
             r.inside().map_or("", |b| if b { "yes" } else { "no" }),
-            inner_name(r.method),
+            kinds::name(&r.method),
             st.steps,
             st.wall_time_s,
             r.per_step(st.step_time_s),
@@ -746,7 +710,7 @@ fn race_csv(rows: &[RaceRow]) -> String {
             r.agreement.max_dv,
             r.agreement.max_df,
             r.agreement.differing,
-            csv_text(&r.status)
+            harness::csv_field(&r.status)
         );
     }
     s
@@ -754,7 +718,7 @@ fn race_csv(rows: &[RaceRow]) -> String {
 
 /// One bar panel of race.csv: `value` per case, F.1 and N.4 side by side.
 fn race_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, rows: &[RaceRow], value: fn(&RaceRow) -> f64, y_desc: &str) -> Result<()> {
-    let err = svg_err("race.svg");
+    let err = harness::chart_error("race.svg");
     let labels: Vec<String> = rows.iter().step_by(2).map(|r| format!("{}{}", r.case.label, if r.inside() == Some(true) { " (C.k)" } else { "" })).collect();
     let y1 = rows.iter().map(value).filter(|v| v.is_finite()).fold(0.0f64, f64::max).max(1e-12) * 1.15;
     let n = labels.len();
@@ -806,7 +770,7 @@ fn race_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, rows: &[RaceRow], value
 
 /// race.svg: contact-solve time and Newton iterations (dense LU factorizations) per step.
 fn race_svg(rows: &[RaceRow], title: &str) -> Result<String> {
-    let err = svg_err("race.svg");
+    let err = harness::chart_error("race.svg");
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (1400, 560)).into_drawing_area();
@@ -900,7 +864,7 @@ fn race_report(race: &RacePlan, rows: &[RaceRow]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "race (issue 7): newton (F.1) vs newton-unfrozen (N.4), academic scene {}x{}, T = {} s",
+        "race: newton (F.1) vs newton-unfrozen (N.4), academic scene {}x{}, T = {} s",
         race.cells[0], race.cells[1], race.t_end
     );
     let _ = writeln!(
@@ -911,7 +875,7 @@ fn race_report(race: &RacePlan, rows: &[RaceRow]) -> String {
     for r in rows {
         let st = &r.stats;
         if r.status != "ok" {
-            let _ = writeln!(s, "{:<22} {:<16} {}", r.case.label, inner_name(r.method), r.status);
+            let _ = writeln!(s, "{:<22} {:<16} {}", r.case.label, kinds::name(&r.method), r.status);
             continue;
         }
         let _ = writeln!(
@@ -920,7 +884,7 @@ fn race_report(race: &RacePlan, rows: &[RaceRow]) -> String {
             r.case.label,
             r.case.ck_limit.map_or("-".into(), |l| format!("{l:.3e}")),
             r.inside().map_or("-", |b| if b { "yes" } else { "no" }),
-            inner_name(r.method),
+            kinds::name(&r.method),
             1e3 * r.per_step(st.step_time_s),
             1e3 * r.per_step(st.contact_time_s),
             r.per_step(st.newton_iterations as f64),
@@ -956,7 +920,7 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
 
     let reference_spec = RunSpec { scheme: SchemeKind::Midpoint, inner: InnerSolver::Newton, mass: MassKind::Lumped, level: plan.reference };
     progress(&format!("reference {}", reference_spec.label()));
-    let p_ref = Problem::new(reference_spec.scene(plan.t_end)?, Path::new("."))?;
+    let p_ref = Problem::new(reference_spec.model(plan.t_end)?, Path::new("."))?;
     let (reference, ref_stats) = simulate(&p_ref, &probe_dofs(&p_ref)?)?;
 
     let mut rows = Vec::new();
@@ -1009,7 +973,7 @@ pub fn convergence(scheme: SchemeKind, levels: usize, t_end: f64) -> Result<Vec<
         s.time.step = l.k;
         s.time.end = t_end;
         s.time.scheme = scheme;
-        let p = Problem::new(s, Path::new("."))?;
+        let p = Problem::from_scene(&s, Path::new("."))?;
         let probes = probe_dofs(&p)?;
         Ok((p, probes))
     };

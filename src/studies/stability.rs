@@ -27,11 +27,15 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::energy::EnergyTerms;
 use crate::error::{Error, Result};
+use crate::failure::StepFailureCause;
+use crate::model::kinds::{self, EnforcementKind, InnerSolver, MassKind, SchemeKind};
 use crate::output::summary::ModelInfo;
 use crate::output::write_atomic;
 use crate::problem::Problem;
-use crate::scene::{Enforcement, InnerSolver, MassKind, Scene, SchemeKind};
+use crate::scene::Scene;
 use crate::simulation::Simulation;
+
+use super::harness;
 
 /// Options of the stability sweep.
 #[derive(Debug, Clone, Default)]
@@ -323,7 +327,7 @@ impl Case {
                     s.material.viscosity.zeta = 0.0;
                 }
                 if let Some(c) = s.contact.as_mut() {
-                    c.enforcement = Enforcement::Penalty;
+                    c.enforcement = EnforcementKind::Penalty;
                     c.penalty = Some(v);
                 }
             }
@@ -359,7 +363,6 @@ pub struct Measured {
     /// the (C.k) limit for this run's scheme: `ck_limit` is derived for the midpoint slip
     /// rate v̄ = (v^n + v^{n+1})/2; backward Euler's friction sees v^{n+1}, which doubles the
     /// concave part of the step functional and halves the limit
-    pub ck_limit_scheme: Option<f64>,
     /// fixed-point iterations (convex solves) per step: mean and max over completed steps
     pub fp_mean: f64,
     pub fp_max: usize,
@@ -397,7 +400,7 @@ pub fn classify(stop: Option<&Error>, non_finite: bool, m: &Measured, energy_con
         return RunClass::NonFinite;
     }
     match stop {
-        Some(Error::Solver(f)) if f.what.contains("non-finite") => return RunClass::NonFinite,
+        Some(Error::Solver(f)) if matches!(f.cause, StepFailureCause::NonFinite { .. }) => return RunClass::NonFinite,
         Some(Error::Solver(_)) => return RunClass::NewtonFailed,
         Some(_) => return RunClass::ClearError,
         None => {}
@@ -416,7 +419,7 @@ pub fn classify(stop: Option<&Error>, non_finite: bool, m: &Measured, energy_con
 /// Run `scene` to its end (or its first error) and classify the run.
 pub fn run_scene(scene: &Scene, energy_conserving: bool) -> Measured {
     let clock = Instant::now();
-    let mut m = Measured::empty(scene.steps(), scene.time.step);
+    let mut m = Measured::empty((scene.time.end / scene.time.step).round() as usize, scene.time.step);
     let (stop, non_finite) = simulate(scene, &mut m);
     if let Some(e) = &stop {
         m.note = e.to_string();
@@ -440,7 +443,6 @@ impl Measured {
             steps_planned: steps,
             k,
             ck_limit: None,
-            ck_limit_scheme: None,
             fp_mean: 0.0,
             fp_max: 0,
             fp_capped_steps: 0,
@@ -461,27 +463,22 @@ impl Measured {
 /// The time loop of [`run_scene`]: fills `m`, returns the stopping error and whether a
 /// non-finite value reached the caller.
 fn simulate(scene: &Scene, m: &mut Measured) -> (Option<Error>, bool) {
-    if let Err(e) = scene.validate() {
-        return (Some(e), false);
-    }
-    let problem = match Problem::new(scene.clone(), Path::new(".")) {
+    let problem = match Problem::from_scene(scene, Path::new(".")) {
         Ok(p) => p,
         Err(e) => return (Some(e), false),
     };
     m.ck_limit = ModelInfo::of(&problem).ck_step_limit;
-    // ModelInfo's (C.k) already carries the scheme's slip-rate factor (halved for backward Euler)
-    m.ck_limit_scheme = m.ck_limit;
     m.steps_planned = problem.steps;
     let mut sim = match Simulation::new(&problem) {
         Ok(s) => s,
         Err(e) => return (Some(e), false),
     };
-    let e0 = stored(&sim.energy);
-    m.final_energy = sim.energy;
+    let e0 = stored(&sim.state.energy);
+    m.final_energy = sim.state.energy;
     let (mut fp_sum, mut cum_defect) = (0usize, 0.0f64);
     let mut out = (None, false);
-    for _ in 0..problem.steps {
-        let rec = match sim.step() {
+    for rec in sim.steps() {
+        let rec = match rec {
             Ok(r) => r,
             Err(e) => {
                 out.0 = Some(e);
@@ -509,10 +506,10 @@ fn simulate(scene: &Scene, m: &mut Measured) -> (Option<Error>, bool) {
         let r = &rec.report;
         fp_sum += r.fixed_point_iterations;
         m.fp_max = m.fp_max.max(r.fixed_point_iterations);
-        m.fp_capped_steps += usize::from(!r.fixed_point_converged);
+        m.fp_capped_steps += usize::from(!r.fixed_point_converged());
         m.newton_total += r.inner_iterations;
         m.newton_max = m.newton_max.max(r.inner_iterations);
-        m.fallbacks += usize::from(r.fallback);
+        m.fallbacks += usize::from(r.fallback.is_some());
         let scale = rec.energy_scale.max(f64::MIN_POSITIVE);
         m.max_defect = m.max_defect.max(e.residual.abs() / scale);
         cum_defect += e.residual;
@@ -588,33 +585,9 @@ pub fn sweep(opts: &StabilityOptions) -> Vec<RunResult> {
         .collect()
 }
 
-fn csv_field(s: &str) -> String {
-    let one_line = s.replace(['\n', '\r'], " ");
-    if one_line.contains([',', '"']) { format!("\"{}\"", one_line.replace('"', "\"\"")) } else { one_line }
-}
-
-fn variant_name(v: &Variant) -> (&'static str, &'static str, &'static str) {
-    let scheme = match v.scheme {
-        SchemeKind::Midpoint => "midpoint",
-        SchemeKind::Trapezoid => "trapezoid",
-        SchemeKind::BackwardEuler => "backward-euler",
-    };
-    let mass = match v.mass {
-        MassKind::Lumped => "lumped",
-        MassKind::Consistent => "consistent",
-        MassKind::Modified => "modified",
-    };
-    let inner = match v.inner {
-        InnerSolver::Newton => "newton",
-        InnerSolver::Conic => "conic",
-        InnerSolver::NewtonUnfrozen => "newton-unfrozen",
-    };
-    (scheme, mass, inner)
-}
-
 /// The CSV header of stability.csv.
 pub const CSV_HEADER: &str = "sweep,parameter,value,variant,scheme,mass,persistency,inner,class,steps_completed,steps_planned,k,\
-ck_limit,ck_limit_scheme,fp_mean,fp_max,fp_capped_steps,newton_total,newton_max_step,unfrozen_fallbacks,max_e1_defect,energy_drift,\
+ck_limit,fp_mean,fp_max,fp_capped_steps,newton_total,newton_max_step,unfrozen_fallbacks,max_e1_defect,energy_drift,\
 max_energy_gain,wall_time_s,note";
 
 /// stability.csv: one row per run.
@@ -622,10 +595,11 @@ pub fn csv(rows: &[RunResult]) -> String {
     let mut s = String::from(CSV_HEADER);
     s.push('\n');
     for r in rows {
-        let (scheme, mass, inner) = variant_name(&r.case.variant);
+        let v = &r.case.variant;
+        let (scheme, mass, inner) = (kinds::name(&v.scheme), kinds::name(&v.mass), kinds::name(&v.inner));
         let m = &r.m;
         s.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{},{},{:.3e},{:.4e},{:.4e},{:.4},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{},{},{:.3e},{:.4e},{:.4e},{:.4},{}\n",
             r.case.sweep.key(),
             r.case.sweep.parameter(),
             r.case.value,
@@ -639,7 +613,6 @@ pub fn csv(rows: &[RunResult]) -> String {
             m.steps_planned,
             m.k,
             m.ck_limit.map(|v| format!("{v:.4e}")).unwrap_or_default(),
-            m.ck_limit_scheme.map(|v| format!("{v:.4e}")).unwrap_or_default(),
             m.fp_mean,
             m.fp_max,
             m.fp_capped_steps,
@@ -650,7 +623,7 @@ pub fn csv(rows: &[RunResult]) -> String {
             m.drift,
             m.max_gain,
             m.wall_time_s,
-            csv_field(&m.note)
+            harness::csv_field(&m.note)
         ));
     }
     s
@@ -692,7 +665,7 @@ pub fn svg(rows: &[RunResult]) -> Result<String> {
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, (w as u32, h as u32)).into_drawing_area();
-        let err = |e: &dyn std::fmt::Display| Error::Output(format!("stability.svg: {e}"));
+        let err = harness::chart_error("stability.svg");
         root.fill(&WHITE).map_err(|e| err(&e))?;
         let font = |size: i32| ("sans-serif", size).into_font();
         let centered = |size: i32| TextStyle::from(font(size)).pos(Pos::new(HPos::Center, VPos::Center));
@@ -727,7 +700,7 @@ pub fn svg(rows: &[RunResult]) -> Result<String> {
                         }
                         _ => format!("fp ≤ {}", m.fp_max),
                     };
-                    if m.ck_limit_scheme.is_some_and(|ck| m.k > ck) {
+                    if m.ck_limit.is_some_and(|ck| m.k > ck) {
                         let corner = vec![(cx + cell_w - 12, cy + 1), (cx + cell_w - 1, cy + 1), (cx + cell_w - 1, cy + 12)];
                         root.draw(&Polygon::new(corner, RED_CORNER.filled())).map_err(|e| err(&e))?;
                     }

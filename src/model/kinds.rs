@@ -1,0 +1,92 @@
+//! The enumerated choices of a scene (the README's scene contract), shared by the TOML schema
+//! (`crate::scene`) and the typed model: serde names each variant as the scene file writes it,
+//! and [`name`] gives that same name back for outputs, so there is one enum→name table.
+
+use serde::{Deserialize, Serialize};
+
+/// The scene-file name of a unit variant (`SchemeKind::BackwardEuler` → "backward-euler"):
+/// serde's own renaming, so outputs and messages use exactly the words of the scene file.
+pub fn name<T: Serialize>(kind: &T) -> String {
+    match serde_json::to_value(kind) {
+        Ok(serde_json::Value::String(s)) => s,
+        _ => String::from("?"),
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DomainKind {
+    Rectangle,
+    Gmsh,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Plane {
+    #[default]
+    Strain,
+    Stress,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum EnforcementKind {
+    #[default]
+    Exact,
+    Penalty,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum FrictionBound {
+    #[default]
+    Capped,
+    Uncapped,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum FrictionLaw {
+    #[default]
+    None,
+    Constant,
+    Exponential,
+    Table,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum SchemeKind {
+    #[default]
+    Midpoint,
+    Trapezoid,
+    BackwardEuler,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum InnerSolver {
+    #[default]
+    Newton,
+    Conic,
+    /// (N.4) Newton on the unfrozen friction bound, F.1 as fallback
+    #[serde(rename = "newton-unfrozen")]
+    NewtonUnfrozen,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum MassKind {
+    #[default]
+    Lumped,
+    Consistent,
+    /// (R.1) lumped, with zero mass on the contact nodes (redistributed)
+    Modified,
+}
+
+/// The penetration bound g: finite, or none ("inf", pure normal compliance).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Bound {
+    Finite(f64),
+    Infinite,
+}
