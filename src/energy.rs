@@ -1,4 +1,4 @@
-//! The discrete energy balance (E.1) of model.md §6, computed from increments (decision 10):
+//! The discrete energy balance (E.1) of spec/model.md §6, computed from increments (decision 10):
 //!
 //! E^{n+1} − E^n = work − viscous − friction − constraint, with
 //! E = ½ vᵀMv + ½ uᵀKu + Σ ω_i P(d_i) (P includes the penalty energy for Problem P_ε).

@@ -13,13 +13,14 @@
 //! - [`step`]: the per-step contact problem: Delassus operator, Newton (N.1–N.4), conic twin, F.1
 //! - [`energy`]: the discrete energy balance (E.1)
 //! - [`simulation`]: the time loop (`Simulation::steps`, the one loop every caller drives)
-//! - [`failure`]: why a solver or a run stopped (enums), and their messages
+//! - [`failure`]: why a solver or a run stopped (enums), and their messages; [`defaults`]: every tuning constant
 //! - [`output`]: history.csv, contact.csv, summary.json, VTU frames, SVG charts
 //! - [`run`], [`checkpoint`]: a run with its outputs, checkpoints and resume
 //! - [`studies`]: the ε-study, the stability map, the benchmarks (on the public API only)
 //! - [`linalg`]: thin wrappers over faer; [`reference`]: closed forms; [`variational`]: V.1/V.2 checks
 
 pub mod checkpoint;
+pub mod defaults;
 pub mod energy;
 pub mod error;
 pub mod failure;

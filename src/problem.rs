@@ -202,7 +202,7 @@ fn build_contact(c: &ContactParams, sides: &[String], mesh: &Mesh, dofs: &Dofs, 
     let mut node_dofs = Vec::with_capacity(side.nodes.len());
     for &v in &side.nodes {
         match (dofs.map[2 * v], dofs.map[2 * v + 1]) {
-            (Some(dx), Some(dy)) => node_dofs.push([dx, dy]),
+            (Some(dx), Some(dy)) => node_dofs.extend([dx, dy]),
             _ => return Err(Error::scene("boundary.contact", format!("contact node {v} has a clamped DOF"))),
         }
     }

@@ -1,4 +1,4 @@
-//! Closed-form reference solutions of model.md §7, used by the tests and the benchmarks.
+//! Closed-form reference solutions of spec/model.md §7, used by the tests and the benchmarks.
 
 /// (B.1) Elastic bar (0, L) hitting a rigid wall with speed v0 at t = 0 (Signorini, g = 0,
 /// p ≡ 0): the contact force per unit area is ρ c v0 on [0, 2L/c] and 0 afterwards,
@@ -8,7 +8,7 @@ pub fn bar_impact_force(rho: f64, young: f64, length: f64, v0: f64, t: f64) -> f
     if (0.0..=2.0 * length / c).contains(&t) { rho * c * v0 } else { 0.0 }
 }
 
-/// Closed form of the bar hitting a compliant layer of stiffness k_n and depth g (model.md §7.2),
+/// Closed form of the bar hitting a compliant layer of stiffness k_n and depth g (spec/model.md §7.2),
 /// valid before the reflected wave returns (t < 2L/c).
 #[derive(Debug, Clone, Copy)]
 pub struct CompliantLayer {

@@ -10,6 +10,7 @@
 
 use serde::{Deserialize, Deserializer};
 
+use crate::defaults;
 use crate::error::{Error, Result};
 use crate::model::expr::{Expr, VecExpr};
 pub use crate::model::kinds::{
@@ -107,7 +108,7 @@ pub struct Loads {
     #[serde(default = "zero_pair", deserialize_with = "pair")]
     pub body: [String; 2],
     /// f3: a known surface load on Γ3 (all contact sides), on top of the contact forces —
-    /// for manufactured solutions with contact (model.md §7.5)
+    /// for manufactured solutions with contact (spec/model.md §7.5)
     #[serde(default = "zero_pair", deserialize_with = "pair")]
     pub contact_surface: [String; 2],
     #[serde(default)]
@@ -264,16 +265,16 @@ pub struct Solver {
 }
 
 fn d_newton_tol() -> f64 {
-    1e-10
+    defaults::NEWTON_TOLERANCE
 }
 fn d_fp_tol() -> f64 {
-    1e-8
+    defaults::FIXED_POINT_TOLERANCE
 }
 fn d_iters() -> i64 {
-    50
+    defaults::MAX_ITERATIONS as i64
 }
 fn d_one() -> f64 {
-    1.0
+    defaults::RELAXATION
 }
 
 impl Default for Solver {
@@ -285,7 +286,7 @@ impl Default for Solver {
             fixed_point_tolerance: d_fp_tol(),
             max_newton_iterations: d_iters(),
             max_fixed_point_iterations: d_iters(),
-            relaxation: 1.0,
+            relaxation: d_one(),
             persistency: false,
         }
     }
@@ -299,7 +300,7 @@ pub struct Output {
 }
 
 fn d_every() -> i64 {
-    10
+    defaults::OUTPUT_EVERY as i64
 }
 
 impl Default for Output {
@@ -698,26 +699,7 @@ fn validate_friction(f: &Friction) -> Result<Option<FrictionCoefficient>> {
             let Some(pts) = &f.points else {
                 return e(&format!("{p}.points"), "missing: law = \"table\" needs points = [[r0, mu0], [r1, mu1], ...]".into());
             };
-            if pts.is_empty() {
-                return e(&format!("{p}.points"), "is empty; give at least one [slip rate, mu] pair".into());
-            }
-            if pts[0][0] != 0.0 {
-                return e(&format!("{p}.points[0][0]"), format!("the first slip rate must be 0 (μ(0) is the static value), got {}", pts[0][0]));
-            }
-            for (i, [r, mu]) in pts.iter().enumerate() {
-                if !(r.is_finite() && mu.is_finite()) {
-                    return e(&format!("{p}.points[{i}]"), "must be finite numbers".into());
-                }
-                if *mu < 0.0 {
-                    return e(&format!("{p}.points[{i}][1]"), format!("μ must be >= 0, got {mu}"));
-                }
-                if i > 0 && *r <= pts[i - 1][0] {
-                    return e(
-                        &format!("{p}.points[{i}][0]"),
-                        format!("slip rates must increase strictly, got {} after {}", r, pts[i - 1][0]),
-                    );
-                }
-            }
+            validate_table(pts)?;
         }
     }
     Ok(match f.law {
@@ -730,6 +712,33 @@ fn validate_friction(f: &Friction) -> Result<Option<FrictionCoefficient>> {
         }),
         FrictionLaw::Table => f.points.clone().map(FrictionCoefficient::Table),
     })
+}
+
+/// The points of `law = "table"`: μ(0) first, finite, μ ≥ 0, slip rates strictly increasing.
+fn validate_table(pts: &[[f64; 2]]) -> Result<()> {
+    let e = |p: &str, m: String| Err(Error::scene(p, m));
+    let p = "contact.friction";
+    if pts.is_empty() {
+        return e(&format!("{p}.points"), "is empty; give at least one [slip rate, mu] pair".into());
+    }
+    if pts[0][0] != 0.0 {
+        return e(&format!("{p}.points[0][0]"), format!("the first slip rate must be 0 (μ(0) is the static value), got {}", pts[0][0]));
+    }
+    for (i, [r, mu]) in pts.iter().enumerate() {
+        if !(r.is_finite() && mu.is_finite()) {
+            return e(&format!("{p}.points[{i}]"), "must be finite numbers".into());
+        }
+        if *mu < 0.0 {
+            return e(&format!("{p}.points[{i}][1]"), format!("μ must be >= 0, got {mu}"));
+        }
+        if i > 0 && *r <= pts[i - 1][0] {
+            return e(
+                &format!("{p}.points[{i}][0]"),
+                format!("slip rates must increase strictly, got {} after {}", r, pts[i - 1][0]),
+            );
+        }
+    }
+    Ok(())
 }
 
 fn one_paragraph(s: &str) -> String {

@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use faer::Mat;
 
+use crate::defaults::CONIC_TOLERANCE_FLOOR;
 use crate::energy::{self, EnergyTerms, StepEnergy};
 use crate::error::{Error, Result};
 use crate::failure::{ContactFailure, SolverFailure, StepFailureCause};
@@ -28,12 +29,21 @@ use crate::step::{delassus, ContactSolution, NodeData, NodeStatus, StepData};
 /// stick (dir = τ) over the step, set the end-point velocity component v_c^{n+1} = 0 instead
 /// of the −v_c^n that (S.1) gives; returns the kinetic energy removed, ½ m (v_c^{n+1})² ≥ 0
 /// (diagonal mass m), which (E.1) books as the persistency dissipation.
-pub fn persist_velocity(v_new: &mut [f64], dofs: [usize; 2], dir: [f64; 2], m: f64) -> f64 {
-    let [dx, dy] = dofs;
-    let vc = dir[0] * v_new[dx] + dir[1] * v_new[dy];
-    v_new[dx] -= vc * dir[0];
-    v_new[dy] -= vc * dir[1];
+pub fn persist_velocity(v_new: &mut [f64], dofs: &[usize], dir: &[f64; 3], m: f64) -> f64 {
+    let vc = component(v_new, dofs, dir);
+    for (c, &dof) in dofs.iter().enumerate() {
+        v_new[dof] -= vc * dir[c];
+    }
     0.5 * m * vc * vc
+}
+
+/// e · v at a node with DOFs `dofs` (d of them).
+fn component(v: &[f64], dofs: &[usize], e: &[f64; 3]) -> f64 {
+    let mut s = e[0] * v[dofs[0]];
+    for (c, &dof) in dofs.iter().enumerate().skip(1) {
+        s += e[c] * v[dof];
+    }
+    s
 }
 
 /// Per-node contact quantities after a step (contact.csv).
@@ -138,7 +148,7 @@ impl Settings {
         };
         let inner = match s.inner {
             InnerSolver::Newton => Inner::Newton(newton),
-            InnerSolver::Conic => Inner::Conic(ConicSettings { tolerance: s.newton_tolerance.max(1e-12), ..ConicSettings::default() }),
+            InnerSolver::Conic => Inner::Conic(ConicSettings { tolerance: s.newton_tolerance.max(CONIC_TOLERANCE_FLOOR), ..ConicSettings::default() }),
             InnerSolver::NewtonUnfrozen => Inner::NewtonUnfrozen(newton),
         };
         Settings {
@@ -384,7 +394,7 @@ impl<'p> Simulation<'p> {
             rec.nodes.push(NodeRecord {
                 u_n: d_new[i],
                 u_t: c.components(i, u_new).1,
-                v_t: k.a_v * (sol.y[2 * i + 1] + k.b_v * c.components(i, &self.state.v).1),
+                v_t: k.a_v * (sol.y[c.dim * i + 1] + k.b_v * c.components(i, &self.state.v).1),
                 p: sol.q[i],
                 lambda: sol.lambda[i],
                 friction: -sol.t[i],
@@ -404,15 +414,16 @@ impl<'p> Simulation<'p> {
         for i in 0..c.n() {
             let now_active = cs.sol.lambda[i] > 0.0;
             let now_stick = cs.sol.status[i] == NodeStatus::Stick;
-            let [dx, dy] = c.dofs[i];
-            let m = self.ops.m_lumped[dx];
-            for (persistent, dir) in [(self.state.active[i] && now_active, c.normals[i]), (self.state.stick[i] && now_stick, c.tangent(i))] {
-                if !persistent {
-                    continue;
-                }
-                let vc = dir[0] * v_new[dx] + dir[1] * v_new[dy];
+            let dofs = c.node_dofs(i);
+            let m = self.ops.m_lumped[dofs[0]];
+            let frame = &c.frames[i];
+            // the normal component if the node stayed on the constraint, the tangential ones if it stayed in stick
+            let normal = (self.state.active[i] && now_active).then_some(&frame.normal);
+            let tangents = frame.tangents[..c.dim - 1].iter().filter(|_| self.state.stick[i] && now_stick);
+            for dir in normal.into_iter().chain(tangents) {
+                let vc = component(v_new, dofs, dir);
                 if persistency {
-                    removed += persist_velocity(v_new, [dx, dy], dir, m);
+                    removed += persist_velocity(v_new, dofs, dir, m);
                 } else {
                     rec.chatter = rec.chatter.max(vc.abs());
                     rec.trapped_kinetic += 0.5 * m * vc * vc;
@@ -446,12 +457,12 @@ impl<'p> Simulation<'p> {
             .map(|i| NodeData {
                 omega: c.omega[i],
                 d_n: d_n[i],
-                d_aff: d_n[i] + k.a_d * k.b_d * vn[2 * i],
-                v_aff: k.a_v * k.b_v * vn[2 * i + 1],
+                d_aff: d_n[i] + k.a_d * k.b_d * vn[c.dim * i],
+                v_aff: k.a_v * k.b_v * vn[c.dim * i + 1],
                 bound: c.constraint,
             })
             .collect();
-        let p_tau_hat: Vec<f64> = (0..c.n()).map(|i| c.p_tau.p_tau(d_n[i] + k.p_d * vn[2 * i])).collect();
+        let p_tau_hat: Vec<f64> = (0..c.n()).map(|i| c.p_tau.p_tau(d_n[i] + k.p_d * vn[c.dim * i])).collect();
         let data = StepData {
             delassus: w,
             y_free,
@@ -461,6 +472,7 @@ impl<'p> Simulation<'p> {
             force_rule: k.force,
             law: &c.normal,
             friction: c.friction.is_some(),
+            dim: c.dim,
         };
         Some((data, p_tau_hat))
     }

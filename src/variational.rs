@@ -1,4 +1,4 @@
-//! The variational forms of model.md §3 in their discrete (midpoint) form, evaluated on a
+//! The variational forms of spec/model.md §3 in their discrete (midpoint) form, evaluated on a
 //! computed step: the margin by which a test function z satisfies the inequality. A
 //! non-negative margin for every admissible z is what "the discrete solution solves the
 //! discrete inequality" means; the tests draw random admissible z.
@@ -93,9 +93,10 @@ pub fn admissible(pair: &StepPair, z: &mut [f64]) {
         let (zn, _) = c.components(i, z);
         let excess = zn - (g - d1[i]);
         if excess > 0.0 {
-            let [dx, dy] = c.dofs[i];
-            z[dx] -= excess * c.normals[i][0];
-            z[dy] -= excess * c.normals[i][1];
+            let n = c.frames[i].normal;
+            for (k, &dof) in c.node_dofs(i).iter().enumerate() {
+                z[dof] -= excess * n[k];
+            }
         }
     }
 }

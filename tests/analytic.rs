@@ -1,4 +1,4 @@
-//! Closed-form benchmarks of model.md §7: the bar hitting a rigid wall (B.1), the bar hitting
+//! Closed-form benchmarks of spec/model.md §7: the bar hitting a rigid wall (B.1), the bar hitting
 //! a compliant layer of finite depth, exactly and with the penalty (B.2), and the block
 //! sliding with velocity-weakening friction (B.3). Each scene is a fixture with its closed
 //! form derived in its header; each test states the tolerance the mesh and the step allow.
@@ -56,7 +56,7 @@ fn b1_bar_impact_matches_closed_form() {
 /// (B.1) (E.1) The energy lost at the impact (the constraint dissipation of exact
 /// enforcement) is the kinetic energy of the contact node stopped by the wall: it falls like
 /// h under refinement at a fixed Courant number c k/h = 0.25 (order 1 ± 0.1), and it does
-/// *not* fall with k alone at fixed h (model.md §6 expected it would; measured: it grows by
+/// *not* fall with k alone at fixed h (spec/model.md §6 expected it would; measured: it grows by
 /// ~15% per halving of k at 100 cells — pinned here as the scheme's known behaviour).
 #[test]
 fn b1_impact_dissipation_falls_with_h_not_with_k() {
@@ -156,7 +156,7 @@ fn mean_velocity_x(sim: &Simulation) -> f64 {
 }
 
 /// (B.3) (P.6) The pulled block slides with the closed-form velocity
-/// v(s) = (1/α) ln[(c2 + (c1 − c2) e^{α c1 s/m})/c1] (model.md §7.3): within 3e-3 absolute
+/// v(s) = (1/α) ln[(c2 + (c1 − c2) e^{α c1 s/m})/c1] (spec/model.md §7.3): within 3e-3 absolute
 /// (2% of the velocity at s = 0.2) over s ∈ [0, 0.2]. The bound: the block's elastic
 /// transient (~1 ms) shifts the start by at most 1 ms × the largest acceleration c1/m = 2,
 /// i.e. 2e-3, and the rocking mode the pull excites modulates N by ±20% at a 3 ms period,

@@ -1,4 +1,4 @@
-//! The command line (SCENES.md): `run` writes every output with the contract's columns,
+//! The command line (the README's scene and output contract): `run` writes every output with the contract's columns,
 //! `check` prints the model and (C.k), bad input exits 1 with a message naming the key.
 
 use std::path::{Path, PathBuf};

@@ -1,4 +1,4 @@
-//! The contact step (model.md §4.3–§4.5): model no more than a scene needs, the twin inner
+//! The contact step (spec/model.md §4.3–§4.5): model no more than a scene needs, the twin inner
 //! solvers, the fixed point (F.1) as a majorization–minimization, and the Alart–Curnier
 //! parameters' irrelevance to the solution (N.1–N.3).
 

@@ -6,7 +6,7 @@
 
 mod common;
 
-use dyncontact::studies::bench::convergence;
+use dyncontact::studies::convergence::convergence;
 use dyncontact::scene::SchemeKind;
 
 fn orders(e: &[f64]) -> Vec<f64> {
@@ -19,7 +19,7 @@ fn orders(e: &[f64]) -> Vec<f64> {
 fn academic_scene_converges_under_refinement() {
     for scheme in [SchemeKind::Midpoint, SchemeKind::BackwardEuler] {
         let rows = convergence(scheme, 3, 0.3).expect("study");
-        let col = |f: fn(&dyncontact::studies::bench::ConvergenceRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+        let col = |f: fn(&dyncontact::studies::convergence::ConvergenceRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
         let (force, imp, disp) = (col(|r| r.error_force), col(|r| r.error_impulse), col(|r| r.error_disp));
         println!("{scheme:?}: force {force:?} orders {:?}", orders(&force));
         println!("{scheme:?}: impulse {imp:?} orders {:?}", orders(&imp));

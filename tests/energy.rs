@@ -1,4 +1,4 @@
-//! (E.1) The discrete energy balance of model.md §6, checked at every step.
+//! (E.1) The discrete energy balance of spec/model.md §6, checked at every step.
 //!
 //! For the midpoint scheme the balance is an identity of the scheme: with exact linear
 //! solves its defect is round-off (~1e-16 of the energy scale), and with contact it is

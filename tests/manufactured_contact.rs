@@ -1,4 +1,4 @@
-//! (B.5) Dynamic manufactured solutions *with contact* (model.md §7.5 recipe), on the unit
+//! (B.5) Dynamic manufactured solutions *with contact* (spec/model.md §7.5 recipe), on the unit
 //! square clamped at the top (y = 1), contact on the bottom (ν = (0, −1), τ = (1, 0)):
 //!
 //!   u = (1 − y) (A(t) + c x², −D(x, t)),  A = 0.05 t + 0.01 sin 3t,  D = δ0 + e x + η sin 2t,

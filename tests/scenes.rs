@@ -1,4 +1,4 @@
-//! The scene contract of SCENES.md, tested from the outside: malformed scenes are refused with
+//! The scene contract of the README, tested from the outside: malformed scenes are refused with
 //! messages that name the key path, every shipped scene loads, and defaults are what the
 //! contract says. `cargo test --test scenes -- --nocapture` prints the table of messages, which
 //! doubles as documentation of what a user sees.
@@ -472,7 +472,7 @@ fn every_fixture_scene_loads() {
     assert!(failures.is_empty(), "fixture scenes that do not load:\n  {}", failures.join("\n  "));
 }
 
-/// A scene with only [domain], [material] and [time] gets the defaults SCENES.md documents.
+/// A scene with only [domain], [material] and [time] gets the defaults the README documents.
 #[test]
 fn defaults_follow_the_contract() {
     let text = r#"

@@ -1,10 +1,10 @@
-//! (E.0) The ε → 0 study of model.md §5.3 on the academic scene at a coarse setting
+//! (E.0) The ε → 0 study of spec/model.md §5.3 on the academic scene at a coarse setting
 //! (16 × 8 cells, k = 1e-3, T = 1): the penalty problem P_ε against the exact problem P.
 //!
 //! Expected and why: the energy estimate of P_ε (E.0) bounds the penetration beyond g by
 //! O(ε^½); B.2 gives O(ε) under steady pressing, while a body arriving at the bound with speed
 //! gives about ½ — so δ's log–log slope must be ≥ 0.5 (measured 0.70). The distance e_V to the
-//! exact solution must fall monotonically as ε → 0 (measured slope 0.21; model.md expected ½ to
+//! exact solution must fall monotonically as ε → 0 (measured slope 0.21; spec/model.md expected ½ to
 //! 1 — reported, not asserted). At the default resolution (32 × 16, k = 5e-4) e_V is *not*
 //! monotone: 1.83e-2 at ε = 1e-5 and 1.95e-2 at 1e-6 — the stick–slip sequence under velocity
 //! weakening reacts to small perturbations; see the issue note.
@@ -29,7 +29,7 @@ fn e0_penalty_study_penetration_and_error_fall_with_eps() {
     }
     println!("slopes: e_V {:.3}, e_H {:.3}, δ {:.3}", st.slope_e_v, st.slope_e_h, st.slope_delta);
     common::measured("study::e0_penalty_study_penetration_and_error_fall_with_eps", "E.0 log–log slope of δ(ε)", st.slope_delta, "≥ 0.5");
-    common::measured("study::e0_penalty_study_penetration_and_error_fall_with_eps", "log–log slope of e_V(ε)", st.slope_e_v, "reported (model.md: ½ to 1)");
+    common::measured("study::e0_penalty_study_penetration_and_error_fall_with_eps", "log–log slope of e_V(ε)", st.slope_e_v, "reported (spec/model.md: ½ to 1)");
     assert!(st.slope_delta >= 0.5, "δ falls slower than ε^½: slope {}", st.slope_delta);
     for w in st.rows.windows(2) {
         assert!(w[1].e_v < w[0].e_v, "e_V does not decrease from ε = {} to {}: {} → {}", w[0].eps, w[1].eps, w[0].e_v, w[1].e_v);

@@ -1,4 +1,4 @@
-//! (V.1) (V.2) The computed steps satisfy the discrete variational inequalities of model.md §3:
+//! (V.1) (V.2) The computed steps satisfy the discrete variational inequalities of spec/model.md §3:
 //! for random test functions z (admissible ones for V.2), the margin
 //! R(z) + Σ ω p_τ ψ⁰(v̄_τ; z_τ) is ≥ 0 (see src/variational.rs).
 //!
@@ -80,9 +80,10 @@ fn v2_exact_steps_satisfy_the_variational_inequality() {
         }
         if let Some(i) = rec.nodes.iter().position(|n| n.lambda > 0.0) {
             let mut z = vec![0.0; p.dofs.n_free];
-            let [dx, dy] = c.dofs[i];
-            z[dx] = c.normals[i][0];
-            z[dy] = c.normals[i][1];
+            let n = c.frames[i].normal;
+            for (k, &dof) in c.node_dofs(i).iter().enumerate() {
+                z[dof] = n[k];
+            }
             let (m, scale) = variational_margin(&pair, &z);
             let expected = -c.omega[i] * rec.nodes[i].lambda;
             assert!((m - expected).abs() <= 1e-8 * scale, "inadmissible z: margin {m:.6e}, expected −ωλ = {expected:.6e}");

@@ -1,4 +1,4 @@
-//! Assembly of M, K, C on the P1 space (model.md §4.1) and the elimination of the clamped
+//! Assembly of M, K, C on the P1 space (spec/model.md §4.1) and the elimination of the clamped
 //! DOFs of Γ1 (P.3).
 
 use crate::error::{Error, Result};

@@ -1,4 +1,4 @@
-//! P1 finite elements (model.md §4.1): DOF numbering with the clamped side eliminated, the
+//! P1 finite elements (spec/model.md §4.1): DOF numbering with the clamped side eliminated, the
 //! matrices M, K, C and the load vector f(t).
 
 pub mod assemble;

@@ -1,4 +1,4 @@
-//! Meshes (model.md §4.1): P1 triangulations with named boundary sides, the structured
+//! Meshes (spec/model.md §4.1): P1 triangulations with named boundary sides, the structured
 //! `rectangle` generator, the Gmsh reader, and nodal boundary data (outward normals ν_i and
 //! weights ω_i = ∫ φ_i over a set of sides).
 

@@ -1,5 +1,5 @@
 //! The contact model a scene switches on (spec/model.md §1, §2, §4.1): the contact nodes of Γ̄3 \ Γ̄1
-//! with their normals, tangents and weights, the gap, and the laws — normal compliance with the
+//! with their frames (normal and tangents) and weights, the gap, and the laws — normal compliance with the
 //! bound g (exact, Problem P) or its penalty (Problem P_ε), and friction.
 
 use crate::mesh::SideNodes;
@@ -8,19 +8,37 @@ use super::kinds::Bound;
 use super::laws::{FrictionBoundLaw, FrictionCoefficient, NormalLaw};
 use super::Enforcement;
 
+/// The local frame of a contact node: the outward unit normal ν and d − 1 unit tangents τ_j,
+/// stored with three components (z = 0 in two dimensions) so that the same code serves d = 2, 3.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Frame {
+    pub normal: [f64; 3],
+    /// τ_1 (and τ_2 in three dimensions); in 2-D τ_1 = (−ν_2, ν_1)
+    pub tangents: [[f64; 3]; 2],
+}
+
+impl Frame {
+    /// The 2-D frame of a unit normal ν: τ = (−ν_2, ν_1).
+    pub fn planar(n: [f64; 2]) -> Frame {
+        Frame { normal: [n[0], n[1], 0.0], tangents: [[-n[1], n[0], 0.0], [0.0; 3]] }
+    }
+}
+
 /// What the foundation does at one contact node.
 #[derive(Debug, Clone)]
 pub struct ContactModel {
+    /// the space dimension d: unknowns per node, and components per contact node (ν, τ_1, …)
+    pub dim: usize,
     /// mesh node of contact node i
     pub nodes: Vec<usize>,
-    /// outward unit normal ν_i
-    pub normals: Vec<[f64; 2]>,
+    /// the frame (ν_i, τ_i) of contact node i
+    pub frames: Vec<Frame>,
     /// weight ω_i = ∫_Γ3 φ_i
     pub omega: Vec<f64>,
     /// gap(x_i): the laws see d_i = u(x_i)·ν_i − gap_i (decision 8)
     pub gap: Vec<f64>,
-    /// free DOFs (x, y) of each contact node (never on Γ̄1)
-    pub dofs: Vec<[usize; 2]>,
+    /// free DOFs of contact node i at [d i, d i + d) (never on Γ̄1)
+    pub dofs: Vec<usize>,
     /// the normal response of the step: p (P.5), or p_ε (Pe.5) with `enforcement = "penalty"`
     pub normal: NormalLaw,
     /// the compliance law p alone (for p_τ and for reporting)
@@ -40,37 +58,51 @@ impl ContactModel {
         self.nodes.len()
     }
 
-    /// Tangent τ_i = (−ν_2, ν_1).
-    pub fn tangent(&self, i: usize) -> [f64; 2] {
-        let n = self.normals[i];
-        [-n[1], n[0]]
+    /// The free DOFs of contact node i (d of them).
+    pub fn node_dofs(&self, i: usize) -> &[usize] {
+        &self.dofs[self.dim * i..self.dim * (i + 1)]
     }
 
-    /// Normal and tangential components (x_ν, x_τ) at contact node i of a free-DOF vector.
+    /// e · x at contact node i for a direction e of its frame (x a free-DOF vector).
+    pub fn project(&self, i: usize, e: &[f64; 3], x: &[f64]) -> f64 {
+        let d = self.node_dofs(i);
+        let mut s = e[0] * x[d[0]];
+        for c in 1..self.dim {
+            s += e[c] * x[d[c]];
+        }
+        s
+    }
+
+    /// Normal and (first) tangential components (x_ν, x_τ) at contact node i of a free-DOF vector.
     pub fn components(&self, i: usize, x: &[f64]) -> (f64, f64) {
-        let [dx, dy] = self.dofs[i];
-        let (n, t) = (self.normals[i], self.tangent(i));
-        (n[0] * x[dx] + n[1] * x[dy], t[0] * x[dx] + t[1] * x[dy])
+        let f = &self.frames[i];
+        (self.project(i, &f.normal, x), self.project(i, &f.tangents[0], x))
     }
 
-    /// H x: the contact components [x_ν,1, x_τ,1, x_ν,2, x_τ,2, …] of a free-DOF vector.
+    /// H x: the contact components [x_ν,1, x_τ,1, (x_τ2,1,) x_ν,2, …] of a free-DOF vector.
     pub fn restrict(&self, x: &[f64]) -> Vec<f64> {
-        let mut y = Vec::with_capacity(2 * self.n());
-        for i in 0..self.n() {
-            let (a, b) = self.components(i, x);
-            y.push(a);
-            y.push(b);
+        let mut y = Vec::with_capacity(self.dim * self.n());
+        for (i, f) in self.frames.iter().enumerate() {
+            y.push(self.project(i, &f.normal, x));
+            for t in &f.tangents[..self.dim - 1] {
+                y.push(self.project(i, t, x));
+            }
         }
         y
     }
 
     /// out += Hᵀ r: scatter contact components r = [r_ν,i, r_τ,i, …] to the free DOFs.
     pub fn scatter_add(&self, r: &[f64], out: &mut [f64]) {
-        for i in 0..self.n() {
-            let [dx, dy] = self.dofs[i];
-            let (n, t) = (self.normals[i], self.tangent(i));
-            out[dx] += n[0] * r[2 * i] + t[0] * r[2 * i + 1];
-            out[dy] += n[1] * r[2 * i] + t[1] * r[2 * i + 1];
+        let dim = self.dim;
+        for (i, f) in self.frames.iter().enumerate() {
+            let ri = &r[dim * i..dim * (i + 1)];
+            for (c, &dof) in self.node_dofs(i).iter().enumerate() {
+                let mut v = f.normal[c] * ri[0];
+                for (j, t) in f.tangents[..dim - 1].iter().enumerate() {
+                    v += t[c] * ri[1 + j];
+                }
+                out[dof] += v;
+            }
         }
     }
 
@@ -80,12 +112,12 @@ impl ContactModel {
     }
 
     /// Assemble from the boundary data of Γ3 (Γ̄1 nodes already excluded) and the free DOFs
-    /// (x, y) of each of its nodes.
+    /// of each of its nodes (d per node, in order).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         side: SideNodes,
         gap: Vec<f64>,
-        node_dofs: Vec<[usize; 2]>,
+        node_dofs: Vec<usize>,
         normal: NormalLaw,
         compliance: NormalLaw,
         constraint: Option<f64>,
@@ -95,8 +127,9 @@ impl ContactModel {
         p_tau: FrictionBoundLaw,
     ) -> ContactModel {
         ContactModel {
+            dim: 2,
             nodes: side.nodes,
-            normals: side.normals,
+            frames: side.normals.iter().map(|&n| Frame::planar(n)).collect(),
             omega: side.omega,
             gap,
             dofs: node_dofs,
@@ -128,7 +161,7 @@ impl ContactModel {
             return None;
         }
         (0..self.n())
-            .map(|i| (masses[self.dofs[i][0]] / (a_v * self.omega[i] * p_bar * l_mu), i))
+            .map(|i| (masses[self.node_dofs(i)[0]] / (a_v * self.omega[i] * p_bar * l_mu), i))
             .min_by(|a, b| a.0.total_cmp(&b.0))
     }
 }

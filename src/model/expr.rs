@@ -1,6 +1,6 @@
 //! Expression strings of the scene format: loads f0, f2, initial data u0, v0 and the gap.
 //!
-//! Grammar (SCENES.md): numbers, the variables `x`, `y`, `t`, the constants `pi`, `e`,
+//! Grammar (the README, Scenes): numbers, the variables `x`, `y`, `t`, the constants `pi`, `e`,
 //! `+ - * / ^` (`^` right-associative, `-x^2 = -(x^2)`), comparisons `< <= > >= == !=`
 //! (1 for true, 0 for false), `&&`, `||`, and the functions
 //! `sin cos tan asin acos atan sinh cosh tanh exp ln log log10 sqrt abs sign floor ceil`

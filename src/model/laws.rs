@@ -1,4 +1,4 @@
-//! Contact laws of model.md §1–§2 and their discrete forms of §4.2:
+//! Contact laws of spec/model.md §1–§2 and their discrete forms of §4.2:
 //! the normal compliance p and its energy P (P.5), the penalty p_ε (Pe.5), the discrete
 //! gradient DP (S.3), the friction-bound normal part p_τ and the coefficient μ (P.6), and the
 //! friction potential ψ (P.8).

@@ -70,7 +70,7 @@ pub fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
 pub fn tick_label(v: f64, lo: f64, hi: f64) -> String {
     let big = lo.abs().max(hi.abs());
     if big >= 1e5 || (big < 1e-3 && big > 0.0) {
-        return format!("{v:.2e}");
+        return format!("{v:.1e}");
     }
     // ticks are about a tenth of the span apart: show the digits that tell them apart
     let step = (hi - lo).abs() / 10.0;

@@ -50,79 +50,10 @@ impl Writer {
         let hp = dir.join("history.csv");
         let header = std::fs::read_to_string(&hp).map_err(|e| Error::io(&hp, e))?.lines().next().unwrap_or("").to_string();
         let rows = cut_csv(&hp, step)?;
-        let num = |r: &[String], c: usize| r.get(c).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN);
-        let col = |n: &str| column(&header, n);
-        let (ct, ck, ce, cc, cw, cv, cf, cx, cr, cn, ctg) = (
-            col("t")?,
-            col("kinetic")?,
-            col("elastic")?,
-            col("compliance")?,
-            col("external_work")?,
-            col("viscous_dissipation")?,
-            col("friction_dissipation")?,
-            col("constraint_dissipation")?,
-            col("energy_residual")?,
-            col("normal_force")?,
-            col("tangential_force")?,
-        );
-        let chart_rows = rows
-            .iter()
-            .map(|r| ChartRow {
-                t: num(r, ct),
-                kinetic: num(r, ck),
-                elastic: num(r, ce),
-                compliance: num(r, cc),
-                work: num(r, cw),
-                viscous: num(r, cv),
-                friction: num(r, cf),
-                constraint: num(r, cx),
-                residual: num(r, cr),
-                normal_force: num(r, cn),
-                tangential_force: num(r, ctg),
-            })
-            .collect();
-        // contact.csv: rows grouped by frame
+        let chart_rows = chart_rows(&header, &rows)?;
         let cp = dir.join("contact.csv");
-        let crow = cut_csv(&cp, step)?;
-        let mut contact_frames: Vec<(usize, f64, Vec<NodeRecord>)> = Vec::new();
-        for r in &crow {
-            let st: usize = r[0].parse().unwrap_or(0);
-            let status = r.get(11).and_then(|s| NodeStatus::from_name(s)).unwrap_or(NodeStatus::Separated);
-            let rec = NodeRecord {
-                u_n: num(r, 5),
-                u_t: num(r, 6),
-                v_t: num(r, 7),
-                p: num(r, 8),
-                lambda: num(r, 9),
-                friction: num(r, 10),
-                bound: num(r, 12),
-                status,
-            };
-            match contact_frames.last_mut() {
-                Some(f) if f.0 == st => f.2.push(rec),
-                _ => contact_frames.push((st, num(r, 1), vec![rec])),
-            }
-        }
-        // frames: keep those of steps ≤ step that exist, remove the rest
-        let mut frames = Vec::new();
-        if let Ok(rd) = std::fs::read_dir(dir.join("frames")) {
-            let mut names: Vec<(usize, String)> = rd
-                .flatten()
-                .filter_map(|e| {
-                    let name = e.file_name().to_string_lossy().to_string();
-                    let n = name.strip_prefix("frame_")?.strip_suffix(".vtu")?.parse::<usize>().ok()?;
-                    Some((n, name))
-                })
-                .collect();
-            names.sort();
-            for (n, name) in names {
-                if n <= step {
-                    frames.push((problem.time(n), format!("frames/{name}")));
-                } else {
-                    let _ = std::fs::remove_file(dir.join("frames").join(&name));
-                }
-            }
-        }
+        let contact_frames = contact_frames(&cut_csv(&cp, step)?);
+        let frames = kept_frames(dir, problem, step);
         write_atomic(&dir.join("series.pvd"), super::vtu::pvd(&frames).as_bytes())?;
         let open = |p: &Path| OpenOptions::new().append(true).open(p).map(BufWriter::new).map_err(|e| Error::io(p, e));
         Ok(Writer {
@@ -135,4 +66,91 @@ impl Writer {
             contact_frames,
         })
     }
+}
+
+/// A number of a CSV row (NaN where missing or unreadable).
+fn num(r: &[String], c: usize) -> f64 {
+    r.get(c).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN)
+}
+
+/// The chart data of history.csv rows, found by column name.
+fn chart_rows(header: &str, rows: &[Vec<String>]) -> Result<Vec<ChartRow>> {
+    let col = |n: &str| column(header, n);
+    let (ct, ck, ce, cc, cw, cv, cf, cx, cr, cn, ctg) = (
+        col("t")?,
+        col("kinetic")?,
+        col("elastic")?,
+        col("compliance")?,
+        col("external_work")?,
+        col("viscous_dissipation")?,
+        col("friction_dissipation")?,
+        col("constraint_dissipation")?,
+        col("energy_residual")?,
+        col("normal_force")?,
+        col("tangential_force")?,
+    );
+    Ok(rows
+        .iter()
+        .map(|r| ChartRow {
+            t: num(r, ct),
+            kinetic: num(r, ck),
+            elastic: num(r, ce),
+            compliance: num(r, cc),
+            work: num(r, cw),
+            viscous: num(r, cv),
+            friction: num(r, cf),
+            constraint: num(r, cx),
+            residual: num(r, cr),
+            normal_force: num(r, cn),
+            tangential_force: num(r, ctg),
+        })
+        .collect())
+}
+
+/// The contact frames of contact.csv rows: (step, t, records), grouped by frame.
+fn contact_frames(crow: &[Vec<String>]) -> Vec<(usize, f64, Vec<NodeRecord>)> {
+    let mut contact_frames: Vec<(usize, f64, Vec<NodeRecord>)> = Vec::new();
+    for r in crow {
+        let st: usize = r[0].parse().unwrap_or(0);
+        let status = r.get(11).and_then(|s| NodeStatus::from_name(s)).unwrap_or(NodeStatus::Separated);
+        let rec = NodeRecord {
+            u_n: num(r, 5),
+            u_t: num(r, 6),
+            v_t: num(r, 7),
+            p: num(r, 8),
+            lambda: num(r, 9),
+            friction: num(r, 10),
+            bound: num(r, 12),
+            status,
+        };
+        match contact_frames.last_mut() {
+            Some(f) if f.0 == st => f.2.push(rec),
+            _ => contact_frames.push((st, num(r, 1), vec![rec])),
+        }
+    }
+    contact_frames
+}
+
+/// The frames of steps ≤ `step` that exist (as (t, path) for series.pvd); later ones are removed.
+fn kept_frames(dir: &Path, problem: &Problem, step: usize) -> Vec<(f64, String)> {
+    let mut frames = Vec::new();
+    if let Ok(rd) = std::fs::read_dir(dir.join("frames")) {
+        let mut names: Vec<(usize, String)> = rd
+            .flatten()
+            .filter_map(|e| {
+                let name = e.file_name().to_string_lossy().to_string();
+                let n = name.strip_prefix("frame_")?.strip_suffix(".vtu")?.parse::<usize>().ok()?;
+                Some((n, name))
+            })
+            .collect();
+        names.sort();
+        for (n, name) in names {
+            if n <= step {
+                frames.push((problem.time(n), format!("frames/{name}")));
+            } else {
+                let _ = std::fs::remove_file(dir.join("frames").join(&name));
+            }
+        }
+    }
+    frames
 }

@@ -3,7 +3,7 @@
 //! forces) and backward Euler in velocity (first order, the baseline).
 //!
 //! The matrix of the velocity unknown w = v^{n+1} is constant for a fixed k, so it is
-//! factored once per run (the fast path of ARCHITECTURE.md).
+//! factored once per run (the fast path of the README's design notes).
 
 use crate::error::Result;
 use crate::fem::Operators;

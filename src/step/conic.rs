@@ -29,6 +29,10 @@ use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 
 use super::{ContactSolution, NodeStatus, StepData};
+use crate::defaults::{
+    CLARABEL_MAX_ITER, CLARABEL_TOL_KTRATIO, CONIC_FAR as FAR, CONIC_MAX_ROUNDS, CONIC_SEPARATION_FLOOR as SEPARATION_FLOOR,
+    CONIC_STICK_FLOOR as STICK_FLOOR, NEWTON_TOLERANCE,
+};
 use crate::failure::{ConicFailure, ConicStatus};
 use crate::linalg;
 use crate::model::laws::NormalForceRule;
@@ -46,18 +50,10 @@ pub struct ConicSettings {
 
 impl Default for ConicSettings {
     fn default() -> Self {
-        ConicSettings { tolerance: 1e-10, max_rounds: 100, verbose: false }
+        ConicSettings { tolerance: NEWTON_TOLERANCE, max_rounds: CONIC_MAX_ROUNDS, verbose: false }
     }
 }
 
-/// Clarabel's tolerance on the KKT ratio and its iteration cap per program (the gap and
-/// feasibility tolerances come from `ConicSettings::tolerance`).
-pub const CLARABEL_TOL_KTRATIO: f64 = 1e-8;
-pub const CLARABEL_MAX_ITER: u32 = 400;
-/// Node status from an interior-point solution: separated below this fraction of the largest
-/// contact force, in stick below this fraction of the velocity scale (times a_v).
-pub const SEPARATION_FLOOR: f64 = 1e-8;
-pub const STICK_FLOOR: f64 = 1e-7;
 
 /// A growing sparse problem: variables, objective, and constraint rows by cone.
 #[derive(Default)]
@@ -174,13 +170,12 @@ pub fn solve(step: &StepData, s: &[f64], set: &ConicSettings) -> Result<ContactS
     let v_scale = step.velocity_scale(&step.y_free);
     if v_scale == 0.0 {
         // at rest with no load: y = 0 and r = 0 solve the problem exactly
-        let m = 2 * n;
+        let m = step.m();
         return Ok(finish(step, s, vec![0.0; m], vec![0.0; m], 0));
     }
     // constraints and pieces inactive by more than FAR velocity scales are left out (a huge
     // right-hand side stalls the interior point, e.g. the bound β = 80 m/s against a motion of
     // 1e-10 m/s at the first step); any the solution reaches is put back and the program re-solved
-    const FAR: f64 = 1e3;
     let nh = step.law.hinges.len();
     let z0 = |i: usize, h: usize| (step.nodes[i].d_aff - step.law.hinges[h].s) / (step.a_d * v_scale);
     let mut active = Active {
@@ -228,7 +223,7 @@ impl Active {
         let nh = step.law.hinges.len();
         let mut changed = false;
         for i in 0..step.n() {
-            if !self.bound[i] && step.beta(i).is_some_and(|b| y[2 * i] > b) {
+            if !self.bound[i] && step.beta(i).is_some_and(|b| y[step.nu(i)] > b) {
                 self.bound[i] = true;
                 changed = true;
             }
@@ -295,7 +290,7 @@ fn solve_once(
 /// objective ½ rᵀ W r + friction + normal-force pieces, and the constraints by cone.
 fn program(step: &StepData, s: &[f64], pieces: &[Majorized], z_l: &[f64], v: f64, active: &Active) -> (Builder, Vec<usize>, Vec<usize>) {
     let n = step.n();
-    let m = 2 * n;
+    let m = step.m();
     let mut b = Builder::default();
     let r: Vec<usize> = (0..m).map(|_| b.var()).collect();
     let y: Vec<usize> = (0..m).map(|_| b.var()).collect();
@@ -314,7 +309,7 @@ fn program(step: &StepData, s: &[f64], pieces: &[Majorized], z_l: &[f64], v: f64
     let ad = step.a_d;
     for i in 0..n {
         let nd = step.nodes[i];
-        let (yn, yt) = (y[2 * i], y[2 * i + 1]);
+        let (yn, yt) = (y[step.nu(i)], y[step.tau(i)]);
         // exact constraint y_ν ≤ β
         if let Some(beta) = step.beta(i).filter(|_| active.bound[i]) {
             b.le(vec![(yn, 1.0)], beta / v);
@@ -352,7 +347,7 @@ fn program(step: &StepData, s: &[f64], pieces: &[Majorized], z_l: &[f64], v: f64
             continue;
         }
         let nd = step.nodes[mj.node];
-        let yn = y[2 * mj.node];
+        let yn = y[step.nu(mj.node)];
         let z0 = nd.d_aff - mj.s;
         let xi = b.var();
         b.p.push((xi, xi, 2.0 * nd.omega * ad * 0.25 * mj.c));
@@ -374,9 +369,9 @@ fn finish(step: &StepData, s: &[f64], y: Vec<f64>, r: Vec<f64>, iterations: usiz
     let scale = step.velocity_scale(&y);
     let q: Vec<f64> = (0..n).map(|i| step.q(i, &y)).collect();
     let lambda: Vec<f64> = (0..n)
-        .map(|i| if step.nodes[i].bound.is_some() { (r[2 * i] / step.nodes[i].omega - q[i]).max(0.0) } else { 0.0 })
+        .map(|i| if step.nodes[i].bound.is_some() { (r[step.nu(i)] / step.nodes[i].omega - q[i]).max(0.0) } else { 0.0 })
         .collect();
-    let t: Vec<f64> = (0..n).map(|i| if step.friction { r[2 * i + 1] / step.nodes[i].omega } else { 0.0 }).collect();
+    let t: Vec<f64> = (0..n).map(|i| if step.friction { r[step.tau(i)] / step.nodes[i].omega } else { 0.0 }).collect();
     // an interior point reaches the active sets only to its tolerance: a node is separated when
     // its force is below SEPARATION_FLOOR of the largest, in stick when |v̄| ≤ STICK_FLOOR a_v V
     let f_max = (0..n).fold(0.0f64, |m, i| m.max(q[i] + lambda[i]));

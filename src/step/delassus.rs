@@ -1,14 +1,14 @@
-//! The Delassus operator W = H A_k⁻¹ Hᵀ (ARCHITECTURE.md, the fast path): the response of
-//! the contact velocities to unit contact forces. Computed once per run with 2 n_c solves.
+//! The Delassus operator W = H A_k⁻¹ Hᵀ (the fast path of the README's design notes): the response of
+//! the contact velocities to unit contact forces. Computed once per run with d n_c solves.
 
 use faer::Mat;
 
 use crate::linalg::Cholesky;
 use crate::model::contact::ContactModel;
 
-/// W (2n_c × 2n_c, symmetric positive definite), components (ν_1, τ_1, ν_2, τ_2, …).
+/// W (d n_c × d n_c, symmetric positive definite), components (ν_1, τ_1, …, ν_2, τ_2, …).
 pub fn delassus(a: &Cholesky, contact: &ContactModel) -> Mat<f64> {
-    let m = 2 * contact.n();
+    let m = contact.dim * contact.n();
     let n = a.dim();
     let mut w = Mat::<f64>::zeros(m, m);
     const BLOCK: usize = 64;

@@ -45,6 +45,8 @@ pub struct StepData<'a> {
     pub law: &'a NormalLaw,
     /// friction is modelled (t variables exist)
     pub friction: bool,
+    /// components per contact node (ν, τ_1, …): the space dimension d
+    pub dim: usize,
 }
 
 /// Contact status of a node after a step (contact.csv `status`).
@@ -112,13 +114,29 @@ impl StepData<'_> {
     pub fn n(&self) -> usize {
         self.nodes.len()
     }
+    /// Unknowns of the condensed problem: d per contact node.
+    pub fn m(&self) -> usize {
+        self.dim * self.n()
+    }
+    /// The index of node i's normal component in y (and in r).
+    pub fn nu(&self, i: usize) -> usize {
+        self.dim * i
+    }
+    /// The index of node i's (first) tangential component in y (and in r).
+    pub fn tau(&self, i: usize) -> usize {
+        self.dim * i + 1
+    }
+    /// The contact node of component l.
+    pub fn node_of(&self, l: usize) -> usize {
+        l / self.dim
+    }
     /// d_i^{n+1}(y)
     pub fn d_end(&self, i: usize, y: &[f64]) -> f64 {
-        self.nodes[i].d_aff + self.a_d * y[2 * i]
+        self.nodes[i].d_aff + self.a_d * y[self.nu(i)]
     }
     /// v̄_i(y), the slip rate the friction law sees
     pub fn slip(&self, i: usize, y: &[f64]) -> f64 {
-        self.nodes[i].v_aff + self.a_v * y[2 * i + 1]
+        self.nodes[i].v_aff + self.a_v * y[self.tau(i)]
     }
     /// q_i(y)
     pub fn q(&self, i: usize, y: &[f64]) -> f64 {
@@ -139,11 +157,11 @@ impl StepData<'_> {
     }
     /// r = [ω(q + λ), ω t] per node.
     pub fn forces(&self, y: &[f64], lambda: &[f64], t: &[f64]) -> Vec<f64> {
-        let mut r = vec![0.0; 2 * self.n()];
+        let mut r = vec![0.0; self.m()];
         for i in 0..self.n() {
             let w = self.nodes[i].omega;
-            r[2 * i] = w * (self.q(i, y) + lambda[i]);
-            r[2 * i + 1] = w * t[i];
+            r[self.nu(i)] = w * (self.q(i, y) + lambda[i]);
+            r[self.tau(i)] = w * t[i];
         }
         r
     }

@@ -12,6 +12,7 @@
 use faer::Mat;
 
 use super::{ContactSolution, NodeStatus, StepData};
+use crate::defaults::{ARMIJO, LINE_SEARCH_HALVINGS, MAX_ITERATIONS, NEWTON_TOLERANCE};
 use crate::failure::{NewtonFailure, NewtonStatus};
 use crate::linalg;
 use crate::model::laws::FrictionCoefficient;
@@ -52,14 +53,10 @@ pub struct NewtonSettings {
 
 impl Default for NewtonSettings {
     fn default() -> Self {
-        NewtonSettings { tolerance: 1e-10, max_iterations: 50, scale_normal: 1.0, scale_tangent: 1.0 }
+        NewtonSettings { tolerance: NEWTON_TOLERANCE, max_iterations: MAX_ITERATIONS, scale_normal: 1.0, scale_tangent: 1.0 }
     }
 }
 
-/// Backtracking line search on ½‖F‖²: at most this many halvings of the step length …
-pub const LINE_SEARCH_HALVINGS: usize = 30;
-/// … accepting the first step length α with ½‖F(x + α d)‖² ≤ (1 − ARMIJO α) ½‖F(x)‖².
-pub const ARMIJO: f64 = 1e-4;
 
 struct Params {
     rho_n: Vec<f64>,
@@ -88,10 +85,10 @@ pub fn friction_residual(t: f64, slip: f64, s: f64, rho_t: f64, a_v: f64) -> f64
 fn residual(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> Vec<f64> {
     let n = step.n();
     let mut f = momentum_residual(step, y, lambda, t);
-    f.reserve(2 * n);
+    f.reserve(2 * n); // F_λ and F_t per node
     for i in 0..n {
         f.push(match step.beta(i) {
-            Some(beta) => normal_residual(lambda[i], y[2 * i], beta, p.rho_n[i]),
+            Some(beta) => normal_residual(lambda[i], y[step.nu(i)], beta, p.rho_n[i]),
             None => 0.0,
         });
     }
@@ -106,7 +103,7 @@ fn residual(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &
 fn sets(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> (Vec<bool>, Vec<bool>) {
     let n = step.n();
     let active = (0..n)
-        .map(|i| step.beta(i).is_some_and(|beta| lambda[i] + p.rho_n[i] * (y[2 * i] - beta) > 0.0))
+        .map(|i| step.beta(i).is_some_and(|beta| lambda[i] + p.rho_n[i] * (y[step.nu(i)] - beta) > 0.0))
         .collect();
     let stick = (0..n)
         .map(|i| {
@@ -205,9 +202,9 @@ impl Params {
     fn new(step: &StepData, set: &NewtonSettings) -> Params {
         let n = step.n();
         Params {
-            rho_n: (0..n).map(|i| set.scale_normal / (step.nodes[i].omega * step.delassus[(2 * i, 2 * i)])).collect(),
+            rho_n: (0..n).map(|i| set.scale_normal / (step.nodes[i].omega * step.delassus[(step.nu(i), step.nu(i))])).collect(),
             rho_t: (0..n)
-                .map(|i| set.scale_tangent / (step.a_v * step.nodes[i].omega * step.delassus[(2 * i + 1, 2 * i + 1)]))
+                .map(|i| set.scale_tangent / (step.a_v * step.nodes[i].omega * step.delassus[(step.tau(i), step.tau(i))]))
                 .collect(),
         }
     }
@@ -239,7 +236,7 @@ fn solution(step: &StepData, x: Iterate, stick: &[bool], iterations: usize, resi
 /// Δt_i at 2i+1); the others carry a velocity unknown Δy with the force change known.
 /// None when the reduced matrix is singular.
 fn direction(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, sets: &(Vec<bool>, Vec<bool>)) -> Option<(Vec<f64>, Vec<f64>)> {
-    let (n, m) = (step.n(), 2 * step.n());
+    let (n, m) = (step.n(), step.m());
     let (active, stick) = sets;
     let (y, lambda, t, f) = (&x.y, &x.lambda, &x.t, &x.f);
     let mut dy = vec![0.0; m];
@@ -247,7 +244,7 @@ fn direction(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, sets: 
     let mut prescribed = vec![false; m];
     let mut g = vec![0.0; m]; // ∂q/∂y on normal components
     for i in 0..n {
-        let (jn, jt) = (2 * i, 2 * i + 1);
+        let (jn, jt) = (step.nu(i), step.tau(i));
         g[jn] = step.dq(i, y);
         if active[i] {
             prescribed[jn] = true;
@@ -272,7 +269,7 @@ fn direction(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, sets: 
     }
     // J x = rhs with x_l = Δm_l (prescribed) or Δy_l (free)
     let w = step.delassus;
-    let omega = |l: usize| step.nodes[l / 2].omega;
+    let omega = |l: usize| step.nodes[step.node_of(l)].omega;
     let mut jac = Mat::<f64>::zeros(m, m);
     let mut rhs: Vec<f64> = f[..m].iter().map(|v| -v).collect();
     for l in 0..m {
@@ -306,12 +303,12 @@ fn direction(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, sets: 
 /// decrease seen; with no decrease at all the full step is taken (semismooth Newton on a
 /// piecewise-linear system may need to cross a kink) and the iteration cap guards cycling.
 fn line_search(step: &StepData, s: &FrictionBound, p: &Params, x: Iterate, dy: &[f64], dm: &[f64]) -> Iterate {
-    let (n, m) = (step.n(), 2 * step.n());
+    let (n, m) = (step.n(), step.m());
     let at = |alpha: f64| {
         let y: Vec<f64> = (0..m).map(|l| x.y[l] + alpha * dy[l]).collect();
         let lambda: Vec<f64> =
-            (0..n).map(|i| if step.nodes[i].bound.is_some() { x.lambda[i] + alpha * dm[2 * i] } else { 0.0 }).collect();
-        let t: Vec<f64> = (0..n).map(|i| if step.friction { x.t[i] + alpha * dm[2 * i + 1] } else { 0.0 }).collect();
+            (0..n).map(|i| if step.nodes[i].bound.is_some() { x.lambda[i] + alpha * dm[step.nu(i)] } else { 0.0 }).collect();
+        let t: Vec<f64> = (0..n).map(|i| if step.friction { x.t[i] + alpha * dm[step.tau(i)] } else { 0.0 }).collect();
         let f = residual(step, s, p, &y, &lambda, &t);
         Iterate { y, lambda, t, f }
     };

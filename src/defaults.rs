@@ -1,0 +1,34 @@
+//! Every default and tuning constant of the solvers, named, documented and set here only. The
+//! scene's defaults (the README's contract) and the solvers' settings both read these.
+
+/// `solver.newton_tolerance`: Newton stops when ‖F‖_∞ ≤ tolerance × the step's velocity scale.
+pub const NEWTON_TOLERANCE: f64 = 1e-10;
+/// `solver.fixed_point_tolerance`: (F.1) stops when S (or y) moves by less than this, relative.
+pub const FIXED_POINT_TOLERANCE: f64 = 1e-8;
+/// `solver.max_newton_iterations` and `solver.max_fixed_point_iterations`.
+pub const MAX_ITERATIONS: usize = 50;
+/// `solver.relaxation`: θ of (F.1) (1: no relaxation).
+pub const RELAXATION: f64 = 1.0;
+/// `output.every`: a frame every this many steps.
+pub const OUTPUT_EVERY: usize = 10;
+
+/// Newton's backtracking line search on ½‖F‖²: at most this many halvings of the step length …
+pub const LINE_SEARCH_HALVINGS: usize = 30;
+/// … accepting the first step length α with ½‖F(x + α d)‖² ≤ (1 − ARMIJO α) ½‖F(x)‖².
+pub const ARMIJO: f64 = 1e-4;
+
+/// The conic twin's gap and feasibility tolerance (Clarabel's tol_gap_abs, tol_gap_rel,
+/// tol_feas) is the Newton tolerance, but never below this (Clarabel's own floor of accuracy).
+pub const CONIC_TOLERANCE_FLOOR: f64 = 1e-12;
+/// Clarabel's tolerance on the KKT ratio and its iteration cap per program.
+pub const CLARABEL_TOL_KTRATIO: f64 = 1e-8;
+pub const CLARABEL_MAX_ITER: u32 = 400;
+/// Majorization–minimization rounds of the conic twin's logarithmic branches.
+pub const CONIC_MAX_ROUNDS: usize = 100;
+/// Constraints and pieces inactive by more than this many velocity scales are left out of the
+/// conic program (a huge right-hand side stalls the interior point) and put back when reached.
+pub const CONIC_FAR: f64 = 1e3;
+/// Node status from an interior-point solution: separated below this fraction of the largest
+/// contact force, in stick below this fraction of the velocity scale (times a_v).
+pub const CONIC_SEPARATION_FLOOR: f64 = 1e-8;
+pub const CONIC_STICK_FLOOR: f64 = 1e-7;
