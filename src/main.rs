@@ -93,6 +93,16 @@ enum StudyKind {
         #[arg(long)]
         quick: bool,
     },
+    /// Where the friction bound is evaluated: the predictor against u_ν^{n+½} of the iterate,
+    /// convergence in k for c_ν = 1e3 … 1e8 on the academic scene and the pulled block.
+    BoundAt {
+        /// output folder (default: target/bound_at)
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// two compliances and two levels (smoke test)
+        #[arg(long)]
+        quick: bool,
+    },
 }
 
 /// println! that never panics: a closed stdout (`dyncontact run | head -1`) is ignored.
@@ -136,6 +146,10 @@ fn main() -> ExitCode {
         Command::Study { study: StudyKind::Stability { out, quick } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/stability"));
             studies::stability::run(&out, &studies::stability::StabilityOptions { quick: *quick }).map(|report| say!("{report}"))
+        }
+        Command::Study { study: StudyKind::BoundAt { out, quick } } => {
+            let out = out.clone().unwrap_or_else(|| PathBuf::from("target/bound_at"));
+            studies::bound_at::run(&out, &studies::bound_at::BoundAtOptions { quick: *quick }).map(|report| say!("{report}"))
         }
         Command::ExportOperators { scene, out } => load(Some(scene)).and_then(|(s, dir)| {
             let problem = Problem::from_scene(&s, &dir)?;
@@ -193,7 +207,7 @@ fn cmd_run(
         summary.fixed_point_iterations_total
     );
     for w in &summary.warnings {
-        say!("warning: {w}");
+        esay!("warning: {w}");
     }
     say!("outputs in {}", out.display());
     Ok(())
@@ -226,7 +240,7 @@ fn cmd_check(scene: &Path) -> Result<(), Error> {
         say!("  {l}");
     }
     for w in info.warnings() {
-        say!("warning: {w}");
+        esay!("warning: {w}");
     }
     Ok(())
 }

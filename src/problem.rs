@@ -195,9 +195,10 @@ fn build_contact(c: &ContactParams, sides: &[String], mesh: &Mesh, dofs: &Dofs, 
         _ => None,
     };
     let p_tau = FrictionBoundLaw { compliance: compliance.clone(), cap };
-    // a friction law whose bound is identically zero (e.g. Signorini: p ≡ 0) does nothing
-    let friction =
-        c.friction.clone().filter(|mu| !(p_tau.compliance.is_zero() || (mu.is_constant() && mu.mu(0.0) == 0.0)));
+    // μ ≡ 0 is frictionless (validation warns); a compliance bound with p ≡ 0 is refused by
+    // validation, and would be frictionless too
+    let zero_bound = c.friction_bound != FrictionBound::Total && p_tau.compliance.is_zero();
+    let friction = c.friction.clone().filter(|mu| !(zero_bound || (mu.is_constant() && mu.mu(0.0) == 0.0)));
     // contact nodes are off Γ̄1 (side_nodes excludes clamped nodes), so both DOFs are free
     let mut node_dofs = Vec::with_capacity(side.nodes.len());
     for &v in &side.nodes {
@@ -206,5 +207,5 @@ fn build_contact(c: &ContactParams, sides: &[String], mesh: &Mesh, dofs: &Dofs, 
             _ => return Err(Error::scene("boundary.contact", format!("contact node {v} has a clamped DOF"))),
         }
     }
-    Ok(ContactModel::new(side, gap, node_dofs, normal, compliance, constraint, c.bound, c.enforcement, friction, p_tau))
+    Ok(ContactModel::new(side, gap, node_dofs, normal, compliance, constraint, c.bound, c.enforcement, friction, (c.friction_bound, c.friction_bound_at), p_tau))
 }

@@ -14,8 +14,9 @@ use crate::defaults;
 use crate::error::{Error, Result};
 use crate::model::expr::{Expr, VecExpr};
 pub use crate::model::kinds::{
-    Bound, DomainKind, EnforcementKind, FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind,
+    Bound, BoundAt, DomainKind, EnforcementKind, FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind,
 };
+use crate::model::kinds;
 use crate::model::laws::FrictionCoefficient;
 use crate::model::{self, ContactParams, Enforcement, MaterialParams, Model, SolverParams, TimeParams};
 
@@ -212,6 +213,8 @@ pub struct Contact {
     #[serde(default)]
     pub friction_bound: FrictionBound,
     #[serde(default)]
+    pub friction_bound_at: BoundAt,
+    #[serde(default)]
     pub friction: Friction,
 }
 
@@ -385,7 +388,43 @@ impl Scene {
             time,
             solver,
             output_every: self.output.every as usize,
+            warnings: self.warnings(),
         })
+    }
+
+    /// Where a valid scene asks for more than the model will switch on, or for a choice that has
+    /// no effect: each is said, never silent.
+    fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        let Some(c) = &self.contact else { return w };
+        if self.boundary.contact.is_empty() {
+            w.push("the [contact] section is not used: boundary.contact names no contact side".to_string());
+            return w;
+        }
+        let f = &c.friction;
+        if f.law == FrictionLaw::Constant && f.coefficient == Some(0.0) {
+            w.push("contact.friction.coefficient = 0: the contact is frictionless".to_string());
+        }
+        if f.law == FrictionLaw::None && (c.friction_bound != FrictionBound::Capped || c.friction_bound_at != BoundAt::Predictor) {
+            w.push("contact.friction_bound and friction_bound_at have no effect: contact.friction.law = \"none\"".to_string());
+        }
+        let infinite = matches!(&c.penetration_bound, NumOrStr::Str(s) if s.trim() == "inf")
+            || matches!(&c.penetration_bound, NumOrStr::Num(g) if g.is_infinite());
+        if f.law != FrictionLaw::None && c.friction_bound == FrictionBound::Capped && infinite {
+            w.push("contact.friction_bound = \"capped\" has no cap with penetration_bound = \"inf\": the bound is μ p(r), uncapped".to_string());
+        }
+        if c.friction_bound == FrictionBound::Total && c.friction_bound_at != BoundAt::Predictor {
+            w.push("contact.friction_bound_at has no effect with friction_bound = \"total\" (the bound is the contact force of the iterate)".to_string());
+        }
+        let bound_moves = c.friction_bound == FrictionBound::Total || c.friction_bound_at == BoundAt::Midpoint;
+        if f.law != FrictionLaw::None && bound_moves && self.solver.inner == InnerSolver::NewtonUnfrozen {
+            w.push(
+                "solver.inner = \"newton-unfrozen\" (N.4) treats the bound at the predictor only: with this friction bound every \
+                 step is solved by the fixed point (F.1) with the frozen Newton"
+                    .to_string(),
+            );
+        }
+        w
     }
 
     /// (P.7) The initial conditions u(0) = u0, u̇(0) = v0 of the scene, as fields in x, y.
@@ -629,7 +668,27 @@ impl Scene {
             );
         }
         let friction = validate_friction(&c.friction)?;
-        Ok(ContactParams { gap, compliance: c.compliance, bound, enforcement, friction_bound: c.friction_bound, friction })
+        let switched_on = friction.as_ref().is_some_and(|mu| !(mu.is_constant() && mu.mu(0.0) == 0.0));
+        if switched_on && c.compliance == 0.0 && c.friction_bound != FrictionBound::Total {
+            return e(
+                "contact.friction_bound",
+                format!(
+                    "is \"{}\", the friction bound μ p_τ(u_ν) with p_τ from the compliance, which is identically 0 with \
+                     compliance = 0: the friction law would be switched off. For Coulomb friction with the whole contact \
+                     force (Signorini–Coulomb with g = 0) set friction_bound = \"total\"; or give compliance > 0",
+                    kinds::name(&c.friction_bound)
+                ),
+            );
+        }
+        Ok(ContactParams {
+            gap,
+            compliance: c.compliance,
+            bound,
+            enforcement,
+            friction_bound: c.friction_bound,
+            friction_bound_at: c.friction_bound_at,
+            friction,
+        })
     }
 
     /// The penetration bound of a contact section.

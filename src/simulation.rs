@@ -17,11 +17,11 @@ use crate::failure::{ContactFailure, SolverFailure, StepFailureCause};
 use crate::fem::Operators;
 use crate::linalg;
 use crate::model::contact::ContactModel;
-use crate::model::kinds::{InnerSolver, SchemeKind};
+use crate::model::kinds::{BoundAt, FrictionBound, InnerSolver, SchemeKind};
 use crate::problem::Problem;
 use crate::scheme::{ContactKinematics, StepOperator};
 use crate::step::conic::ConicSettings;
-use crate::step::fixed_point::{self, FixedPointSettings, Inner, StepReport};
+use crate::step::fixed_point::{self, FixedPointSettings, Inner, NormalPart, StepReport};
 use crate::step::newton::NewtonSettings;
 use crate::step::{delassus, ContactSolution, NodeData, NodeStatus, StepData};
 
@@ -487,11 +487,16 @@ impl<'p> Simulation<'p> {
         inner: &Inner,
         trace: Option<&mut Vec<Vec<f64>>>,
     ) -> std::result::Result<(ContactSolution, Vec<f64>, StepReport), ContactFailure> {
-        let (mu, vn) = match &self.problem.contact {
-            Some(c) => (c.friction.as_ref(), c.restrict(&self.state.v)),
-            None => (None, Vec::new()),
+        let Some(c) = &self.problem.contact else {
+            return fixed_point::solve(data, None, &NormalPart::Total, &[], &[], &[], inner, &self.settings.fixed_point, trace);
         };
-        fixed_point::solve(data, mu, p_tau_hat, &vn, &self.state.lambda, &self.state.t_fric, inner, &self.settings.fixed_point, trace)
+        let normal = match (c.friction_bound, c.bound_at) {
+            (FrictionBound::Total, _) => NormalPart::Total,
+            (_, BoundAt::Midpoint) => NormalPart::Midpoint { law: &c.p_tau, weight: self.kinematics.p_w },
+            (_, BoundAt::Predictor) => NormalPart::Predictor(p_tau_hat),
+        };
+        let vn = c.restrict(&self.state.v);
+        fixed_point::solve(data, c.friction.as_ref(), &normal, &vn, &self.state.lambda, &self.state.t_fric, inner, &self.settings.fixed_point, trace)
     }
 
     /// Continue from a checkpointed state (sizes must match this problem).

@@ -20,8 +20,8 @@ fn mean_over(recs: &[StepRecord], t0: f64, t1: f64, f: impl Fn(&StepRecord) -> f
 /// unit height, contact ends at 2L/c, and the bar leaves with speed v0.
 ///
 /// Tolerances: the force is compared in the mean over [0.1, 1.9] because the midpoint rule
-/// with exact enforcement makes the contact force alternate from step to step (the chatter of
-/// the midpoint chatter; the impulse per pair of steps is right): 1% — the dispersion of 100 P1 cells at
+/// with exact enforcement makes the contact force alternate from step to step (the midpoint
+/// chatter; the impulse per pair of steps is right): 1% — the dispersion of 100 P1 cells at
 /// c k/h = 0.25 smears the wave fronts over a few cells, ~1% of the bar. Release time within
 /// 2 h/c + 2k (the front crosses a cell in h/c). Exit speed within 1%: the constraint
 /// dissipation of the impact (0.77% of the energy, measured) costs 0.4% of the speed.

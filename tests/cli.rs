@@ -64,15 +64,16 @@ fn cli_run_default_scene_writes_outputs() {
 }
 
 /// `dyncontact check` prints the model and the (C.k) limit (3.4722e-4 at the corner node of
-/// the academic mesh, decision 6) and warns that k = 5e-4 exceeds it.
+/// the academic mesh, decision 6) and warns on stderr that k = 5e-4 exceeds it.
 #[test]
 fn check_prints_the_ck_limit_and_warns() {
     let st = Command::new(BIN).arg("check").arg(scene("academic")).output().expect("check");
     assert!(st.status.success());
     let out = String::from_utf8_lossy(&st.stdout);
-    println!("{out}");
+    let err = String::from_utf8_lossy(&st.stderr);
+    println!("{out}{err}");
     assert!(out.contains("(C.k)") && out.contains("3.4722e-4"), "no (C.k) limit in: {out}");
-    assert!(out.contains("warning: time.step = 0.0005 exceeds the (C.k) limit"), "no warning in: {out}");
+    assert!(err.contains("warning: time.step = 0.0005 exceeds the (C.k) limit"), "no warning on stderr: {err}");
     assert!(out.contains("32 contact nodes") && out.contains("32 multipliers"));
 }
 

@@ -4,7 +4,7 @@
 
 use crate::mesh::SideNodes;
 
-use super::kinds::Bound;
+use super::kinds::{Bound, BoundAt, FrictionBound};
 use super::laws::{FrictionBoundLaw, FrictionCoefficient, NormalLaw};
 use super::Enforcement;
 
@@ -50,6 +50,11 @@ pub struct ContactModel {
     pub enforcement: Enforcement,
     /// None: frictionless
     pub friction: Option<FrictionCoefficient>,
+    /// the normal part of the friction bound: p_τ of the compliance (capped or uncapped), or the
+    /// whole contact force (total)
+    pub friction_bound: FrictionBound,
+    /// where p_τ's argument is taken (compliance bounds)
+    pub bound_at: BoundAt,
     pub p_tau: FrictionBoundLaw,
 }
 
@@ -124,6 +129,7 @@ impl ContactModel {
         bound: Bound,
         enforcement: Enforcement,
         friction: Option<FrictionCoefficient>,
+        (friction_bound, bound_at): (FrictionBound, BoundAt),
         p_tau: FrictionBoundLaw,
     ) -> ContactModel {
         ContactModel {
@@ -139,6 +145,8 @@ impl ContactModel {
             bound,
             enforcement,
             friction,
+            friction_bound,
+            bound_at,
             p_tau,
         }
     }
@@ -156,6 +164,10 @@ impl ContactModel {
     /// uncapped with the penalty: no step is small enough for every state).
     pub fn convex_step_limit(&self, masses: &[f64], a_v: f64) -> Option<(f64, usize)> {
         let mu = self.friction.as_ref()?;
+        if self.friction_bound == FrictionBound::Total {
+            // the bound follows the contact force, which no constant bounds
+            return None;
+        }
         let (p_bar, l_mu) = (self.p_tau.sup(), mu.lipschitz());
         if l_mu == 0.0 || p_bar == 0.0 || !p_bar.is_finite() {
             return None;

@@ -39,9 +39,25 @@ pub enum EnforcementKind {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum FrictionBound {
+    /// S = μ(‖v̄‖) p(min(r_+, g)) (P.6)
     #[default]
     Capped,
+    /// S = μ(‖v̄‖) p(r)
     Uncapped,
+    /// S = μ(‖v̄‖) (q + λ): Coulomb's law with the whole contact force of the step (C.1);
+    /// with compliance 0 and g = 0 this is Signorini–Coulomb
+    Total,
+}
+
+/// Where the normal part r of a compliance friction bound is taken (S.5, decision 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum BoundAt {
+    /// the predictor û = u_ν^n + (k/2) v_ν^n (u_ν^n + k v_ν^n for backward Euler), fixed in the step
+    #[default]
+    Predictor,
+    /// u_ν^{n+½} of the current iterate (u_ν^{n+1} for backward Euler), updated in the fixed point (C.2)
+    Midpoint,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]

@@ -230,7 +230,8 @@ impl FrictionCoefficient {
                 if *alpha == 0.0 {
                     a * r
                 } else {
-                    b * r + (a - b) * (1.0 - (-alpha * r).exp()) / alpha
+                    // 1 − e^{−αr} = −expm1(−αr): no cancellation when αr is tiny
+                    b * r + (a - b) * (-(-alpha * r).exp_m1()) / alpha
                 }
             }
             FrictionCoefficient::Constant(c) => c * r,

@@ -9,7 +9,7 @@ pub mod laws;
 pub mod material;
 
 use expr::{Expr, VecExpr};
-use kinds::{Bound, FrictionBound, InnerSolver, MassKind, Plane, SchemeKind};
+use kinds::{Bound, BoundAt, FrictionBound, InnerSolver, MassKind, Plane, SchemeKind};
 use laws::FrictionCoefficient;
 
 /// A validated scene: every range checked, every expression parsed, every law built. It is
@@ -35,6 +35,9 @@ pub struct Model {
     pub solver: SolverParams,
     /// a frame every `output_every` steps
     pub output_every: usize,
+    /// where the model switched on is less than the scene states (or a choice has no effect):
+    /// printed by `check` and `run`, stored in summary.json
+    pub warnings: Vec<String>,
 }
 
 /// The body's geometry.
@@ -103,6 +106,8 @@ pub struct ContactParams {
     pub bound: Bound,
     pub enforcement: Enforcement,
     pub friction_bound: FrictionBound,
+    /// where the normal part of a compliance bound is taken
+    pub friction_bound_at: BoundAt,
     /// None: frictionless (`law = "none"`)
     pub friction: Option<FrictionCoefficient>,
 }

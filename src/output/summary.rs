@@ -8,7 +8,7 @@ use crate::fem::assemble::nodal_masses;
 use crate::model::laws::FrictionCoefficient;
 use crate::problem::Problem;
 use crate::model::contact::ContactModel;
-use crate::model::kinds::{self, Bound, FrictionBound};
+use crate::model::kinds::{self, Bound, BoundAt, FrictionBound};
 use crate::model::{ContactParams, Enforcement};
 use crate::scheme::ContactKinematics;
 
@@ -38,6 +38,9 @@ pub struct ModelInfo {
     pub ck_limiting_node: Option<usize>,
     /// why (C.k) gives no limit, when it does not
     pub ck_note: String,
+    /// where the model switched on is less than the scene states (from validation)
+    #[serde(skip)]
+    pub scene_warnings: Vec<String>,
 }
 
 impl ModelInfo {
@@ -71,6 +74,7 @@ impl ModelInfo {
             ck_step_limit: None,
             ck_limiting_node: None,
             ck_note: "no velocity-dependent friction: every step problem is convex".into(),
+            scene_warnings: s.warnings.clone(),
         };
         if let (Some(c), Some(cs)) = (&p.contact, &s.contact) {
             info.describe_contact(p, c, cs);
@@ -114,9 +118,16 @@ impl ModelInfo {
         };
         if c.friction.is_some() {
             self.friction_unknowns = c.n();
+            let at = match cs.friction_bound_at {
+                BoundAt::Predictor => "r at the predictor u_ν^n + (k/2) v_ν^n",
+                BoundAt::Midpoint => "r = u_ν^{n+½} of the iterate, updated in the fixed point",
+            };
             self.friction_bound = match (cs.friction_bound, g_finite) {
-                (FrictionBound::Capped, Some(g)) => format!("μ(‖v̄‖) p(min(r_+, {g})) (capped)"),
-                _ => "μ(‖v̄‖) p(r) (uncapped)".into(),
+                (FrictionBound::Total, _) => {
+                    "μ(‖v̄‖) (q + λ) (total: Coulomb with the whole contact force, fixed point on S)".into()
+                }
+                (FrictionBound::Capped, Some(g)) => format!("μ(‖v̄‖) p(min(r_+, {g})) (capped), {at}"),
+                _ => format!("μ(‖v̄‖) p(r) (uncapped), {at}"),
             };
             self.convexity_limit(p, c);
         }
@@ -136,6 +147,10 @@ impl ModelInfo {
             } else {
                 String::new()
             };
+        } else if c.friction_bound == FrictionBound::Total {
+            self.ck_note = "the total bound follows the contact force, which no constant bounds: (C.k) gives no limit; F.1 \
+                            iterates on S"
+                .into();
         } else if !c.p_tau.sup().is_finite() && c.friction.as_ref().is_some_and(|m| m.lipschitz() > 0.0) {
             self.ck_note = "p_τ is unbounded (g = inf or uncapped): no step size makes the step problem convex for every \
                             state; F.1 still applies (a majorization–minimization for velocity-weakening μ)"
@@ -177,7 +192,8 @@ impl ModelInfo {
     /// sets (its dense KKT systems grow like n_c^3.6: 0.5 s per step at 65 contact nodes, 6 s at
     /// 129, measured in the dev profile).
     pub fn warnings(&self) -> Vec<String> {
-        let mut w: Vec<String> = self.ck_warning().into_iter().collect();
+        let mut w: Vec<String> = self.scene_warnings.clone();
+        w.extend(self.ck_warning());
         if self.inner_solver == "conic" && self.contact_nodes > 64 {
             w.push(format!(
                 "solver.inner = \"conic\" with {} contact nodes: the conic twin is a cross-check and its cost grows like \

@@ -23,8 +23,11 @@ pub struct ContactKinematics {
     pub b_v: f64,
     /// the normal force of the step
     pub force: NormalForceRule,
-    /// û = d^n + p_d v_ν^n: the (known) point where p_τ is evaluated
+    /// û = d^n + p_d v_ν^n: the (known) point where p_τ is evaluated at the predictor
     pub p_d: f64,
+    /// d̂ = d^n + p_w (d^{n+1} − d^n): where p_τ is evaluated at the iterate (`friction_bound_at =
+    /// "midpoint"`): u_ν^{n+½} (p_w = ½), or u_ν^{n+1} for backward Euler (p_w = 1)
+    pub p_w: f64,
 }
 
 /// The factored step matrix and the pieces of the right-hand side.
@@ -111,9 +114,9 @@ impl ContactKinematics {
     /// terms at t_{n+1} for backward Euler.
     pub fn of(kind: SchemeKind, k: f64) -> ContactKinematics {
         match kind {
-            SchemeKind::Midpoint => ContactKinematics { a_d: 0.5 * k, b_d: 1.0, a_v: 0.5, b_v: 1.0, force: NormalForceRule::DiscreteGradient, p_d: 0.5 * k },
-            SchemeKind::Trapezoid => ContactKinematics { a_d: 0.5 * k, b_d: 1.0, a_v: 0.5, b_v: 1.0, force: NormalForceRule::Average, p_d: 0.5 * k },
-            SchemeKind::BackwardEuler => ContactKinematics { a_d: k, b_d: 0.0, a_v: 1.0, b_v: 0.0, force: NormalForceRule::EndPoint, p_d: k },
+            SchemeKind::Midpoint => ContactKinematics { a_d: 0.5 * k, b_d: 1.0, a_v: 0.5, b_v: 1.0, force: NormalForceRule::DiscreteGradient, p_d: 0.5 * k, p_w: 0.5 },
+            SchemeKind::Trapezoid => ContactKinematics { a_d: 0.5 * k, b_d: 1.0, a_v: 0.5, b_v: 1.0, force: NormalForceRule::Average, p_d: 0.5 * k, p_w: 0.5 },
+            SchemeKind::BackwardEuler => ContactKinematics { a_d: k, b_d: 0.0, a_v: 1.0, b_v: 0.0, force: NormalForceRule::EndPoint, p_d: k, p_w: 1.0 },
         }
     }
 }

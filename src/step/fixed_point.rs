@@ -11,7 +11,7 @@ use super::newton::{self, NewtonSettings};
 use super::{ContactSolution, StepData};
 use crate::failure::{ContactFailure, FixedPointStatus, InnerFailure, NewtonFailure};
 use crate::linalg;
-use crate::model::laws::FrictionCoefficient;
+use crate::model::laws::{FrictionBoundLaw, FrictionCoefficient};
 
 /// Which solver handles each frozen problem.
 #[derive(Debug, Clone, Copy)]
@@ -68,10 +68,47 @@ fn inner_solve(step: &StepData, s_bound: &[f64], lambda0: &[f64], t0: &[f64], in
     }
 }
 
-/// (S.5) The friction bound S_i = μ(‖v̄_i‖) p_τ(û_i), with v̄_i the slip rate of the contact
-/// velocities y and û_i the (fixed) predictor of u_ν,i^{n+½}.
-pub fn friction_bound(step: &StepData, mu: &FrictionCoefficient, p_tau_hat: &[f64], y: &[f64]) -> Vec<f64> {
-    (0..step.n()).map(|i| mu.mu(step.slip(i, y).abs()) * p_tau_hat[i]).collect()
+/// The normal part N_i of the friction bound S_i = μ(‖v̄_i‖) N_i, as the scene chose it.
+#[derive(Debug, Clone, Copy)]
+pub enum NormalPart<'a> {
+    /// (S.5) p_τ(û_i) at the predictor û_i of u_ν,i^{n+½}, fixed during the step
+    Predictor(&'a [f64]),
+    /// p_τ(d̂_i(y)) with d̂ = d^n + w (d^{n+1}(y) − d^n): u_ν^{n+½} of the iterate
+    /// (w = ½; w = 1, the end point, for backward Euler)
+    Midpoint { law: &'a FrictionBoundLaw, weight: f64 },
+    /// q_i(y) + λ_i: the whole contact force of the iterate (Coulomb's law)
+    Total,
+}
+
+impl NormalPart<'_> {
+    /// N_i at the contact velocities y and multipliers λ.
+    pub fn at(&self, step: &StepData, i: usize, y: &[f64], lambda: &[f64]) -> f64 {
+        match self {
+            NormalPart::Predictor(p_hat) => p_hat[i],
+            NormalPart::Midpoint { law, weight } => bound_at_iterate(step, law, *weight, i, y),
+            NormalPart::Total => total_contact_force(step, i, y, lambda),
+        }
+    }
+}
+
+/// (Co.1) The normal part of Coulomb's bound: the whole contact force of the iterate,
+/// N_i = q_i(y) + λ_i (compliance force of the scheme plus the multiplier of the constraint).
+pub fn total_contact_force(step: &StepData, i: usize, y: &[f64], lambda: &[f64]) -> f64 {
+    step.q(i, y) + lambda[i]
+}
+
+/// (Co.2) p_τ at the iterate: N_i = p_τ(d^n + w (d^{n+1}(y) − d^n)), u_ν^{n+½} for w = ½ (the
+/// midpoint rule), u_ν^{n+1} for w = 1 (backward Euler); updated in every (F.1) iteration.
+pub fn bound_at_iterate(step: &StepData, law: &FrictionBoundLaw, weight: f64, i: usize, y: &[f64]) -> f64 {
+    let d_n = step.nodes[i].d_n;
+    law.p_tau(d_n + weight * (step.d_end(i, y) - d_n))
+}
+
+/// (S.5) The friction bound S_i = μ(‖v̄_i‖) N_i, with v̄_i the slip rate of the contact
+/// velocities y and N_i the normal part (p_τ at the predictor, at the iterate's midpoint, or
+/// the whole contact force q_i + λ_i).
+pub fn friction_bound(step: &StepData, mu: &FrictionCoefficient, normal: &NormalPart, y: &[f64], lambda: &[f64]) -> Vec<f64> {
+    (0..step.n()).map(|i| mu.mu(step.slip(i, y).abs()) * normal.at(step, i, y, lambda)).collect()
 }
 
 /// (F.1) Solve one step: fixed point on the frozen friction bound S around the inner solver.
@@ -82,7 +119,7 @@ pub fn friction_bound(step: &StepData, mu: &FrictionCoefficient, p_tau_hat: &[f6
 pub fn solve(
     step: &StepData,
     mu: Option<&FrictionCoefficient>,
-    p_tau_hat: &[f64],
+    normal: &NormalPart,
     y0: &[f64],
     lambda0: &[f64],
     t0: &[f64],
@@ -108,10 +145,11 @@ pub fn solve(
         report.inner_residual = sol.residual;
         return Ok((sol, s_bound, report));
     };
-    if let Inner::NewtonUnfrozen(set) = inner {
+    // (N.4) treats the bound at the predictor only; other bounds go to F.1 directly
+    if let (Inner::NewtonUnfrozen(set), NormalPart::Predictor(p_tau_hat)) = (inner, normal) {
         match newton::solve_unfrozen(step, mu, p_tau_hat, lambda0, t0, set) {
             Ok(sol) => {
-                let s_bound = friction_bound(step, mu, p_tau_hat, &sol.y);
+                let s_bound = friction_bound(step, mu, normal, &sol.y, &sol.lambda);
                 if let Some(tr) = trace.as_deref_mut() {
                     tr.push(sol.y.clone());
                 }
@@ -126,7 +164,7 @@ pub fn solve(
             }
         }
     }
-    iterate(step, mu, p_tau_hat, y0, (lambda0, t0), inner, fp, trace, report)
+    iterate(step, mu, normal, y0, (lambda0, t0), inner, fp, trace, report)
 }
 
 /// The fixed-point iterations of (F.1) proper: solve with S frozen, update S from the new slip
@@ -135,7 +173,7 @@ pub fn solve(
 fn iterate(
     step: &StepData,
     mu: &FrictionCoefficient,
-    p_tau_hat: &[f64],
+    normal: &NormalPart,
     y0: &[f64],
     (lambda0, t0): (&[f64], &[f64]),
     inner: &Inner,
@@ -145,7 +183,7 @@ fn iterate(
 ) -> Result<(ContactSolution, Vec<f64>, StepReport), ContactFailure> {
     let n = step.n();
     let fail = |l: usize| move |inner: InnerFailure| ContactFailure { fixed_point_iteration: l, inner };
-    let mut s_bound = friction_bound(step, mu, p_tau_hat, y0);
+    let mut s_bound = friction_bound(step, mu, normal, y0, lambda0);
     let mut y_prev = y0.to_vec();
     let (mut lam, mut tf) = (lambda0.to_vec(), t0.to_vec());
     let mut last: Option<(ContactSolution, Vec<f64>)> = None;
@@ -157,7 +195,7 @@ fn iterate(
         report.inner_iterations += sol.iterations;
         report.fixed_point_iterations = l;
         report.inner_residual = sol.residual;
-        let s_new = friction_bound(step, mu, p_tau_hat, &sol.y);
+        let s_new = friction_bound(step, mu, normal, &sol.y, &sol.lambda);
         let ds = s_new.iter().zip(&s_bound).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
         let s_scale = linalg::norm_inf(&s_new).max(linalg::norm_inf(&s_bound));
         let dy = sol.y.iter().zip(&y_prev).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
