@@ -416,11 +416,11 @@ impl Scene {
         if c.friction_bound == FrictionBound::Total && c.friction_bound_at != BoundAt::Predictor {
             w.push("contact.friction_bound_at has no effect with friction_bound = \"total\" (the bound is the contact force of the iterate)".to_string());
         }
-        let bound_moves = c.friction_bound == FrictionBound::Total || c.friction_bound_at == BoundAt::Midpoint;
-        if f.law != FrictionLaw::None && bound_moves && self.solver.inner == InnerSolver::NewtonUnfrozen {
+        let at_iterate = c.friction_bound != FrictionBound::Total && c.friction_bound_at == BoundAt::Midpoint;
+        if f.law != FrictionLaw::None && at_iterate && self.solver.inner == InnerSolver::NewtonUnfrozen {
             w.push(
-                "solver.inner = \"newton-unfrozen\" (N.4) treats the bound at the predictor only: with this friction bound every \
-                 step is solved by the fixed point (F.1) with the frozen Newton"
+                "solver.inner = \"newton-unfrozen\" solves the bound at the predictor (N.4) or the total bound (Co.3), not the \
+                 bound at the iterate's midpoint: every step is solved by the fixed point (F.1) with the frozen Newton"
                     .to_string(),
             );
         }

@@ -145,10 +145,16 @@ pub fn solve(
         report.inner_residual = sol.residual;
         return Ok((sol, s_bound, report));
     };
-    // (N.4) treats the bound at the predictor only; other bounds go to F.1 directly
-    if let (Inner::NewtonUnfrozen(set), NormalPart::Predictor(p_tau_hat)) = (inner, normal) {
-        match newton::solve_unfrozen(step, mu, p_tau_hat, lambda0, t0, set) {
-            Ok(sol) => {
+    // (N.4) for the bound at the predictor, (Co.3) for the total bound: Newton on the unfrozen
+    // problem, F.1 as the fallback; the bound at the iterate's midpoint goes to F.1 directly
+    if let Inner::NewtonUnfrozen(set) = inner {
+        let unfrozen = match normal {
+            NormalPart::Predictor(p_tau_hat) => Some(newton::solve_unfrozen(step, mu, p_tau_hat, lambda0, t0, set)),
+            NormalPart::Total => Some(newton::solve_coulomb(step, mu, lambda0, t0, set)),
+            NormalPart::Midpoint { .. } => None,
+        };
+        match unfrozen {
+            Some(Ok(sol)) => {
                 let s_bound = friction_bound(step, mu, normal, &sol.y, &sol.lambda);
                 if let Some(tr) = trace.as_deref_mut() {
                     tr.push(sol.y.clone());
@@ -158,10 +164,11 @@ pub fn solve(
                 report.unfrozen = true;
                 return Ok((sol, s_bound, report));
             }
-            Err(f) => {
+            Some(Err(f)) => {
                 report.inner_iterations = f.iterations;
                 report.fallback = Some(f);
             }
+            None => {}
         }
     }
     iterate(step, mu, normal, y0, (lambda0, t0), inner, fp, trace, report)

@@ -24,19 +24,39 @@ pub enum FrictionBound<'a> {
     Frozen(&'a [f64]),
     /// (N.4) S_i = μ(|v̄_i|) p̂_i, a function of the unknowns (no fixed point)
     Law { mu: &'a FrictionCoefficient, p_hat: &'a [f64] },
+    /// (Co.3) S_i = μ(|v̄_i|)(q_i + λ_i)_+: Coulomb's disk whose radius follows the normal force
+    /// of the iterate (GetFEM's coupled projection), with the slip rate in μ too
+    Coulomb { mu: &'a FrictionCoefficient },
+}
+
+/// The friction bound at node i and its derivatives: with respect to the slip rate v̄_i and
+/// to the normal force N_i = q_i + λ_i.
+#[derive(Debug, Clone, Copy)]
+struct BoundAt {
+    s: f64,
+    ds_dv: f64,
+    ds_dn: f64,
 }
 
 impl FrictionBound<'_> {
-    /// (S_i, dS_i/dv̄_i) at the slip rate v̄.
-    fn at(&self, i: usize, vbar: f64) -> (f64, f64) {
+    /// S_i and its derivatives at the iterate (y, λ).
+    fn at(&self, step: &StepData, i: usize, y: &[f64], lambda: &[f64]) -> BoundAt {
+        let vbar = step.slip(i, y);
         match self {
-            FrictionBound::Frozen(s) => (s[i], 0.0),
-            FrictionBound::Law { mu, p_hat } => (mu.mu(vbar.abs()) * p_hat[i], mu.dmu(vbar.abs()) * vbar.signum() * p_hat[i]),
+            FrictionBound::Frozen(s) => BoundAt { s: s[i], ds_dv: 0.0, ds_dn: 0.0 },
+            FrictionBound::Law { mu, p_hat } => {
+                BoundAt { s: mu.mu(vbar.abs()) * p_hat[i], ds_dv: mu.dmu(vbar.abs()) * vbar.signum() * p_hat[i], ds_dn: 0.0 }
+            }
+            FrictionBound::Coulomb { mu } => {
+                let n = step.q(i, y) + lambda[i];
+                let (m, dm) = (mu.mu(vbar.abs()), mu.dmu(vbar.abs()) * vbar.signum());
+                if n > 0.0 { BoundAt { s: m * n, ds_dv: dm * n, ds_dn: m } } else { BoundAt { s: 0.0, ds_dv: 0.0, ds_dn: 0.0 } }
+            }
         }
     }
-    /// S_i at every node for the slip rates of `y`.
-    pub fn values(&self, step: &StepData, y: &[f64]) -> Vec<f64> {
-        (0..step.n()).map(|i| self.at(i, step.slip(i, y)).0).collect()
+    /// S_i at every node for the iterate (y, λ).
+    pub fn values(&self, step: &StepData, y: &[f64], lambda: &[f64]) -> Vec<f64> {
+        (0..step.n()).map(|i| self.at(step, i, y, lambda).s).collect()
     }
 }
 
@@ -94,7 +114,7 @@ fn residual(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &
     }
     for i in 0..n {
         let vbar = step.slip(i, y);
-        f.push(if step.friction { friction_residual(t[i], vbar, s.at(i, vbar).0, p.rho_t[i], step.a_v) } else { 0.0 });
+        f.push(if step.friction { friction_residual(t[i], vbar, s.at(step, i, y, lambda).s, p.rho_t[i], step.a_v) } else { 0.0 });
     }
     f
 }
@@ -108,7 +128,7 @@ fn sets(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &[f64
     let stick = (0..n)
         .map(|i| {
             let vbar = step.slip(i, y);
-            step.friction && (t[i] + p.rho_t[i] * vbar).abs() <= s.at(i, vbar).0
+            step.friction && (t[i] + p.rho_t[i] * vbar).abs() <= s.at(step, i, y, lambda).s
         })
         .collect();
     (active, stick)
@@ -140,6 +160,21 @@ pub fn solve_unfrozen(
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
     solve_with(step, &FrictionBound::Law { mu, p_hat }, lambda0, t0, set)
+}
+
+/// (Co.3) Semismooth Newton on the coupled Alart–Curnier system of Coulomb's law with the
+/// whole contact force: the bound S_i = μ(|v̄_i|)(q_i + λ_i) is a function of the unknowns inside
+/// the projection of (N.3), so the slip branch carries ∂t_i/∂N_i = σ_i μ(|v̄_i|) (the disk radius
+/// follows the normal force, as in GetFEM's coupled projection) and ∂t_i/∂y_τ,i = σ_i μ' N_i a_v;
+/// no fixed point. Globalized by the line search on ‖F‖₂.
+pub fn solve_coulomb(
+    step: &StepData,
+    mu: &FrictionCoefficient,
+    lambda0: &[f64],
+    t0: &[f64],
+    set: &NewtonSettings,
+) -> Result<ContactSolution, NewtonFailure> {
+    solve_with(step, &FrictionBound::Coulomb { mu }, lambda0, t0, set)
 }
 
 /// An iterate of the Newton solve: contact velocities, multipliers, friction forces, and the
@@ -215,7 +250,7 @@ impl Params {
 fn initial_iterate(step: &StepData, s: &FrictionBound, p: &Params, lambda0: &[f64], t0: &[f64]) -> Iterate {
     let n = step.n();
     let lambda: Vec<f64> = (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda0[i].max(0.0) } else { 0.0 }).collect();
-    let s_start = s.values(step, &step.y_free);
+    let s_start = s.values(step, &step.y_free, &lambda);
     let t: Vec<f64> = (0..n).map(|i| if step.friction { t0[i].clamp(-s_start[i], s_start[i]) } else { 0.0 }).collect();
     let y = step.response(&step.forces(&step.y_free, &lambda, &t));
     let f = residual(step, s, p, &y, &lambda, &t);
@@ -243,6 +278,8 @@ fn direction(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, sets: 
     let mut dm = vec![0.0; m];
     let mut prescribed = vec![false; m];
     let mut g = vec![0.0; m]; // ∂q/∂y on normal components
+    // ∂t_i/∂N_i on slipping nodes whose bound follows the normal force (Co.3), else 0
+    let mut coupling = vec![0.0; n];
     for i in 0..n {
         let (jn, jt) = (step.nu(i), step.tau(i));
         g[jn] = step.dq(i, y);
@@ -261,9 +298,10 @@ fn direction(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, sets: 
                 // which adds ω σ S'(v̄) a_v to the column of Δy_τ
                 let vbar = step.slip(i, y);
                 let sigma = (t[i] + p.rho_t[i] * vbar).signum();
-                let (si, dsi) = s.at(i, vbar);
-                dm[jt] = si * sigma - t[i];
-                g[jt] = sigma * dsi * step.a_v;
+                let b = s.at(step, i, y, lambda);
+                dm[jt] = b.s * sigma - t[i];
+                g[jt] = sigma * b.ds_dv * step.a_v;
+                coupling[i] = sigma * b.ds_dn;
             }
         }
     }
@@ -286,6 +324,18 @@ fn direction(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, sets: 
                 rhs[j] -= w[(j, l)] * wl * dm[l];
             }
             jac[(l, l)] += 1.0;
+        }
+    }
+    // (Co.3) the friction force of a slipping node follows its normal force N = q + λ: the
+    // normal unknown's column also acts through the tangential component
+    for i in (0..n).filter(|&i| coupling[i] != 0.0) {
+        let (jn, jt) = (step.nu(i), step.tau(i));
+        let c = coupling[i] * omega(jt);
+        // ΔN = Δλ + g Δy_ν (normal prescribed: Δλ unknown, Δy_ν known) or g Δy_ν + Δλ_known (free)
+        let (col_factor, known) = if prescribed[jn] { (1.0, g[jn] * dy[jn]) } else { (g[jn], dm[jn]) };
+        for j in 0..m {
+            jac[(j, jn)] += w[(j, jt)] * c * col_factor;
+            rhs[j] -= w[(j, jt)] * c * known;
         }
     }
     let sol = linalg::dense_solve(&jac, &rhs)?;
