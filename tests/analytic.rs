@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{fixture, problem, records};
+use common::{fixture, mean_velocity_x, problem, records};
 use dyncontact::reference::{bar_impact_force, sliding_block_velocity, CompliantLayer};
 use dyncontact::scene::EnforcementKind as Enforcement;
 use dyncontact::simulation::{Simulation, StepRecord};
@@ -143,16 +143,6 @@ fn b2_penalty_overshoot_matches_closed_form() {
     let exact = (l.penalty_overshoot_limit(1e-3) / l.penalty_overshoot_limit(1e-4)).log10();
     println!("B.2 penalty: log-log slope of the overshoot in ε: {slope:.4} (closed form {exact:.4})");
     assert!((slope - exact).abs() <= 0.017, "overshoot slope {slope} vs closed form {exact}");
-}
-
-/// Mean x-velocity of the body (momentum / mass, lumped masses).
-fn mean_velocity_x(sim: &Simulation) -> f64 {
-    let (mut mom, mut mass) = (0.0, 0.0);
-    for (i, m) in sim.ops.m_lumped.iter().enumerate().step_by(2) {
-        mom += m * sim.state.v[i];
-        mass += m;
-    }
-    mom / mass
 }
 
 /// (B.3) (P.6) The pulled block slides with the closed-form velocity

@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{fixture, problem, records};
+use common::{fixture, mean_velocity_x, problem, records};
 use dyncontact::reference::sliding_block_velocity;
 use dyncontact::scene::{BoundAt, FrictionBound, FrictionLaw, NumOrStr, Scene};
 use dyncontact::simulation::Simulation;
@@ -27,16 +27,6 @@ fn signorini_coulomb_block() -> Scene {
     c.penetration_bound = NumOrStr::Num(0.0);
     c.friction_bound = FrictionBound::Total;
     s
-}
-
-/// Mean x-velocity of the body (lumped-mass weighted).
-fn mean_velocity_x(sim: &Simulation) -> f64 {
-    let (mut mom, mut mass) = (0.0, 0.0);
-    for (i, m) in sim.ops.m_lumped.iter().enumerate().step_by(2) {
-        mom += m * sim.state.v[i];
-        mass += m;
-    }
-    mom / mass
 }
 
 /// (Co.1) A scene with friction whose compliance bound is identically zero (compliance 0) is

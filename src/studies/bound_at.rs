@@ -9,8 +9,6 @@
 use std::path::Path;
 use std::time::Instant;
 
-use plotters::prelude::*;
-
 use crate::error::{Error, Result};
 use crate::model::kinds::{self, BoundAt};
 use crate::problem::Problem;
@@ -166,57 +164,18 @@ pub fn report(rows: &[BoundAtRow], wall_time_s: f64) -> String {
 
 /// bound_at.svg: the error at the finest k against c_ν, per case and evaluation point.
 pub fn svg(rows: &[BoundAtRow]) -> Result<String> {
-    let err = harness::chart_error("bound_at.svg");
-    let mut out = String::new();
-    {
-        let root = SVGBackend::with_string(&mut out, (900, 560)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| err(&e))?;
-        let finest: Vec<&BoundAtRow> = rows.iter().filter(|r| rows.iter().all(|o| o.case != r.case || o.k >= r.k)).collect();
-        let (x0, x1) = harness::log_range(finest.iter().map(|r| r.compliance));
-        let (y0, y1) = harness::log_range(finest.iter().map(|r| r.error_tangential));
-        let mut chart = ChartBuilder::on(&root)
-            .caption("friction_bound_at: tangential impulse error at the finest k", ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(45)
-            .y_label_area_size(80)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-            .map_err(|e| err(&e))?;
-        chart
-            .configure_mesh()
-            .x_desc("compliance c_ν")
-            .y_desc("relative error")
-            .x_label_formatter(&|v| format!("{v:.0e}"))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
-            .draw()
-            .map_err(|e| err(&e))?;
-        let mut color = 0;
-        for case in &CASES {
-            for at in [BoundAt::Predictor, BoundAt::Midpoint] {
-                let pts: Vec<(f64, f64)> = finest
-                    .iter()
-                    .filter(|r| r.case == case.name && r.at == at && r.error_tangential > 0.0)
-                    .map(|r| (r.compliance, r.error_tangential))
-                    .collect();
-                let c = crate::output::plots::PALETTE[color % crate::output::plots::PALETTE.len()];
-                color += 1;
-                chart
-                    .draw_series(LineSeries::new(pts.clone(), ShapeStyle::from(&c).stroke_width(2)))
-                    .map_err(|e| err(&e))?
-                    .label(format!("{}, {}", case.name, kinds::name(&at)))
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
-                chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 4, c.filled()))).map_err(|e| err(&e))?;
-            }
+    let finest = |r: &&BoundAtRow| rows.iter().all(|o| o.case != r.case || o.k >= r.k);
+    let mut series = Vec::new();
+    for case in &CASES {
+        for at in [BoundAt::Predictor, BoundAt::Midpoint] {
+            series.push(harness::LogSeries {
+                name: format!("{}, {}", case.name, kinds::name(&at)),
+                points: rows.iter().filter(finest).filter(|r| r.case == case.name && r.at == at).map(|r| (r.compliance, r.error_tangential)).collect(),
+            });
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| err(&e))?;
-        root.present().map_err(|e| err(&e))?;
     }
-    Ok(out)
+    let title = "friction_bound_at: tangential impulse error at the finest k";
+    harness::loglog_chart("bound_at.svg", title, ("compliance c_ν", "relative error"), &series, (1.6, 1.6))
 }
 
 /// Run the study and write its files into `out`.

@@ -55,3 +55,62 @@ pub fn write_files(dir: &Path, files: &[(&str, &[u8])]) -> Result<()> {
     }
     Ok(())
 }
+
+/// One line of a log–log chart: its legend and its points (non-positive ones are left out).
+pub struct LogSeries {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// A log–log line chart with markers (the studies' error charts): `pad` widens the axes by that
+/// factor on each side of the data. An error names `file` when no point is positive.
+pub fn loglog_chart(file: &'static str, title: &str, (x_desc, y_desc): (&str, &str), series: &[LogSeries], pad: (f64, f64)) -> Result<String> {
+    use plotters::prelude::*;
+    let err = chart_error(file);
+    let pos = |p: &(f64, f64)| p.0.is_finite() && p.0 > 0.0 && p.1.is_finite() && p.1 > 0.0;
+    let pts: Vec<(f64, f64)> = series.iter().flat_map(|s| s.points.iter().copied().filter(pos)).collect();
+    let (x0, x1) = (pts.iter().map(|p| p.0).fold(f64::INFINITY, f64::min), pts.iter().map(|p| p.0).fold(0.0, f64::max));
+    let (y0, y1) = (pts.iter().map(|p| p.1).fold(f64::INFINITY, f64::min), pts.iter().map(|p| p.1).fold(0.0, f64::max));
+    if pts.is_empty() {
+        return Err(Error::Output(format!("{file}: no positive values to plot")));
+    }
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 560)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            .build_cartesian_2d((x0 / pad.0..x1 * pad.0).log_scale(), (y0 / pad.1..y1 * pad.1).log_scale())
+            .map_err(|e| err(&e))?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .x_label_formatter(&|v| format!("{v:.0e}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()
+            .map_err(|e| err(&e))?;
+        for (k, s) in series.iter().enumerate() {
+            let color = crate::output::plots::PALETTE[k % crate::output::plots::PALETTE.len()];
+            let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(pos).collect();
+            chart
+                .draw_series(LineSeries::new(pts.clone(), ShapeStyle::from(&color).stroke_width(2)))
+                .map_err(|e| err(&e))?
+                .label(s.name.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+            chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 4, color.filled()))).map_err(|e| err(&e))?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| err(&e))?;
+        root.present().map_err(|e| err(&e))?;
+    }
+    Ok(svg)
+}

@@ -10,8 +10,6 @@
 use std::path::Path;
 use std::time::Instant;
 
-use plotters::prelude::*;
-
 use crate::error::{Error, Result};
 use crate::fem::assemble::{assemble_full, restrict};
 use crate::linalg::{self, SpMat};
@@ -147,58 +145,19 @@ impl PenaltyStudy {
 
     /// study/penalty.svg: e_V, e_H and δ against ε on log–log axes.
     pub fn svg(&self, title: &str) -> Result<String> {
-        let mut svg = String::new();
-        {
-            let root = SVGBackend::with_string(&mut svg, (900, 560)).into_drawing_area();
-            let err = harness::chart_error("study/penalty.svg");
-            root.fill(&WHITE).map_err(|e| err(&e))?;
-            let pos = |v: f64| v.is_finite() && v > 0.0;
-            let xs: Vec<f64> = self.rows.iter().map(|r| r.eps).filter(|v| pos(*v)).collect();
-            let ys: Vec<f64> = self.rows.iter().flat_map(|r| [r.e_v, r.e_h, r.delta]).filter(|v| pos(*v)).collect();
-            let (x0, x1) = (xs.iter().copied().fold(f64::INFINITY, f64::min), xs.iter().copied().fold(0.0, f64::max));
-            let (y0, y1) = (ys.iter().copied().fold(f64::INFINITY, f64::min), ys.iter().copied().fold(0.0, f64::max));
-            if !(x0.is_finite() && y0.is_finite() && x1 > 0.0 && y1 > 0.0) {
-                return Err(Error::Output("study/penalty.svg: no positive values to plot".into()));
-            }
-            let mut chart = ChartBuilder::on(&root)
-                .caption(title, ("sans-serif", 20))
-                .margin(12)
-                .x_label_area_size(45)
-                .y_label_area_size(80)
-                .build_cartesian_2d((x0 / 2.0..x1 * 2.0).log_scale(), (y0 / 3.0..y1 * 3.0).log_scale())
-                .map_err(|e| err(&e))?;
-            chart
-                .configure_mesh()
-                .x_desc("ε (penalty compliance)")
-                .y_desc("error")
-                .x_label_formatter(&|v| format!("{v:.0e}"))
-                .y_label_formatter(&|v| format!("{v:.0e}"))
-                .draw()
-                .map_err(|e| err(&e))?;
-            let series: [(&str, f64, fn(&PenaltyRow) -> f64, RGBColor); 3] = [
-                ("e_V", self.slope_e_v, |r| r.e_v, RGBColor(31, 119, 180)),
-                ("e_H", self.slope_e_h, |r| r.e_h, RGBColor(255, 127, 14)),
-                ("δ (penetration beyond g)", self.slope_delta, |r| r.delta, RGBColor(44, 160, 44)),
-            ];
-            for (name, slope, f, color) in series {
-                let pts: Vec<(f64, f64)> = self.rows.iter().map(|r| (r.eps, f(r))).filter(|p| pos(p.0) && pos(p.1)).collect();
-                chart
-                    .draw_series(LineSeries::new(pts.clone(), ShapeStyle::from(&color).stroke_width(2)))
-                    .map_err(|e| err(&e))?
-                    .label(format!("{name}, slope {slope:.2}"))
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
-                chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 4, color.filled()))).map_err(|e| err(&e))?;
-            }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .draw()
-                .map_err(|e| err(&e))?;
-            root.present().map_err(|e| err(&e))?;
-        }
-        Ok(svg)
+        let series: [(&str, f64, fn(&PenaltyRow) -> f64); 3] = [
+            ("e_V", self.slope_e_v, |r| r.e_v),
+            ("e_H", self.slope_e_h, |r| r.e_h),
+            ("δ (penetration beyond g)", self.slope_delta, |r| r.delta),
+        ];
+        let series: Vec<harness::LogSeries> = series
+            .iter()
+            .map(|(name, slope, f)| harness::LogSeries {
+                name: format!("{name}, slope {slope:.2}"),
+                points: self.rows.iter().map(|r| (r.eps, f(r))).collect(),
+            })
+            .collect();
+        harness::loglog_chart("study/penalty.svg", title, ("ε (penalty compliance)", "error"), &series, (2.0, 3.0))
     }
 
     /// Write study/penalty.csv and study/penalty.svg under `dir`.

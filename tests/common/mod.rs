@@ -50,3 +50,13 @@ pub fn l2_diff(p: &Problem, a: &[f64], b: &[f64]) -> f64 {
     let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
     dyncontact::linalg::quad(&m, &d, &d).sqrt()
 }
+
+/// Mean x-velocity of the body (lumped-mass weighted).
+pub fn mean_velocity_x(sim: &Simulation) -> f64 {
+    let (mut mom, mut mass) = (0.0, 0.0);
+    for (i, m) in sim.ops.m_lumped.iter().enumerate().step_by(2) {
+        mom += m * sim.state.v[i];
+        mass += m;
+    }
+    mom / mass
+}

@@ -6,7 +6,8 @@
 //! 2. checks the equation trace (spec/equations.toml): every `implemented` ID names code anchors
 //!    that exist — a function whose doc comment starts with `/// (ID)` — and at least one test
 //!    that exists and passed in this run; every ID cited in a doc comment under src/ or tests/
-//!    is in the spec; `planned` IDs are listed as open;
+//!    is in the spec; every ID is defined in the index of spec/model.md; `planned` IDs are
+//!    listed as open;
 //! 3. runs the Python cross-check (`crosscheck`);
 //! 4. writes target/verify/trace.md and exits non-zero on any failure.
 
@@ -207,6 +208,18 @@ fn anchor_ok(root: &Path, anchor: &str, id: &str) -> Result<(), String> {
     }
 }
 
+/// The IDs the model defines: the first cell of every row of spec/model.md's equation index,
+/// written `| (ID) |`.
+fn model_ids(root: &Path) -> Result<BTreeSet<String>, String> {
+    let p = root.join("spec/model.md");
+    let text = std::fs::read_to_string(&p).map_err(|e| format!("{}: {e} (the model document must be in the repository)", p.display()))?;
+    Ok(text
+        .lines()
+        .filter_map(|l| l.strip_prefix("| (")?.split_once(") |").map(|(id, _)| id.to_string()))
+        .filter(|id| is_id(id))
+        .collect())
+}
+
 /// IDs cited at the start of doc comments (`/// (ID)` or `//! (ID)`) under a folder.
 fn cited_ids(dir: &Path, out: &mut BTreeMap<String, BTreeSet<String>>) {
     let Ok(rd) = std::fs::read_dir(dir) else { return };
@@ -318,6 +331,17 @@ fn check_trace(root: &Path, outcomes: Option<&Outcomes>) -> Result<TraceResult, 
         if !ids.contains(id) {
             failures.push(format!("{id} is cited in {} but is not in spec/equations.toml", files.iter().cloned().collect::<Vec<_>>().join(", ")));
         }
+    }
+    // every ID of the spec and every cited ID is defined in the index of spec/model.md
+    match model_ids(root) {
+        Ok(defined) => {
+            for id in ids.iter().chain(cited.keys()).collect::<BTreeSet<_>>() {
+                if !defined.contains(id) {
+                    failures.push(format!("{id}: not defined in spec/model.md (no index row `| ({id}) |`)"));
+                }
+            }
+        }
+        Err(e) => failures.push(e),
     }
     if !open.is_empty() {
         md.push_str("\n## Open (planned) IDs\n\n");
