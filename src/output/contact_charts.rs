@@ -247,7 +247,15 @@ pub fn contact_status(frames: &[Frame], along: &Along) -> Result<String, String>
             .y_label_area_size(70)
             .build_cartesian_2d(x0..x1, t0..t1)
             .map_err(|e| e.to_string())?;
-        chart.configure_mesh().disable_mesh().x_desc(along.label).y_desc("t [s]").draw().map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc(along.label)
+            .y_desc("t [s]")
+            .x_label_formatter(&|v| plots::tick_label(*v, x0, x1))
+            .y_label_formatter(&|v| plots::tick_label(*v, t0, t1))
+            .draw()
+            .map_err(|e| e.to_string())?;
         for cat in Category::ALL {
             let mut cells = Vec::new();
             for (row, (_, _, recs)) in rows.iter().enumerate() {
@@ -346,7 +354,15 @@ pub fn deformed(mesh: &Mesh, u: &[[f64; 2]], t: f64) -> Result<String, String> {
         let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let mut chart = deformed_frame(&root, &title, x0..x1, y0..y1)?;
-        chart.configure_mesh().disable_mesh().x_desc("x [m]").y_desc("y [m]").draw().map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc("x [m]")
+            .y_desc("y [m]")
+            .x_label_formatter(&|v| plots::tick_label(*v, x0, x1))
+            .y_label_formatter(&|v| plots::tick_label(*v, y0, y1))
+            .draw()
+            .map_err(|e| e.to_string())?;
         let grey = RGBColor(160, 160, 160).stroke_width(2);
         let node = |v: usize| (mesh.nodes[v][0], mesh.nodes[v][1]);
         chart.draw_series(outline.iter().map(|&(a, b)| PathElement::new(vec![node(a), node(b)], grey))).map_err(|e| e.to_string())?;
