@@ -9,6 +9,8 @@ pub const FIXED_POINT_TOLERANCE: f64 = 1e-8;
 pub const MAX_ITERATIONS: usize = 50;
 /// `solver.relaxation`: θ of (F.1) (1: no relaxation).
 pub const RELAXATION: f64 = 1.0;
+/// The most time steps a scene may ask for (time.end / time.step).
+pub const MAX_STEPS: usize = 100_000_000;
 /// `output.every`: a frame every this many steps.
 pub const OUTPUT_EVERY: usize = 10;
 

@@ -15,7 +15,7 @@
 //! - [`simulation`]: the time loop (`Simulation::steps`, the one loop every caller drives)
 //! - [`failure`]: why a solver or a run stopped (enums), and their messages; [`defaults`]: every tuning constant
 //! - [`output`]: history.csv, contact.csv, summary.json, VTU frames, SVG charts
-//! - [`run`], [`checkpoint`]: a run with its outputs, checkpoints and resume
+//! - [`run`], [`checkpoint`]: a run with its outputs, checkpoints and resume; [`resources`]: memory and cost estimates
 //! - [`studies`]: the ε-study, the stability map, the benchmarks (on the public API only)
 //! - [`linalg`]: thin wrappers over faer; [`reference`]: closed forms; [`variational`]: V.1/V.2 checks
 
@@ -31,6 +31,7 @@ pub mod model;
 pub mod output;
 pub mod problem;
 pub mod reference;
+pub mod resources;
 pub mod run;
 pub mod scene;
 pub mod scheme;

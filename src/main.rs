@@ -12,7 +12,7 @@ use dyncontact::output::ModelInfo;
 use dyncontact::problem::Problem;
 use dyncontact::run::{run, RunOptions};
 use dyncontact::scene::Scene;
-use dyncontact::{studies, Error};
+use dyncontact::{resources, studies, Error};
 
 #[derive(Parser)]
 #[command(name = "dyncontact", version, about = "Dynamic viscoelastic contact with normal compliance, finite penetration and slip-rate-dependent friction")]
@@ -182,7 +182,10 @@ fn cmd_run(
 ) -> Result<(), Error> {
     let (s, dir) = load(scene)?;
     let out = resume.or(out).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&s.name));
-    let problem = Problem::from_scene(&s, &dir)?;
+    let model = s.validate()?;
+    // refuse before anything large is built
+    resources::check_fits(&resources::estimate(&model, &dir)?, resources::available_memory())?;
+    let problem = Problem::new(model, &dir)?;
     let interrupt = Arc::new(AtomicBool::new(false));
     let flag = interrupt.clone();
     // a second Ctrl-C while the step finishes is ignored: the step completes and the files stay valid
@@ -233,10 +236,21 @@ fn cmd_penalty(scene: Option<&Path>, eps: Option<&[f64]>, out: Option<&Path>) ->
 /// `dyncontact check`: validate, build the problem, and print the model it switches on.
 fn cmd_check(scene: &Path) -> Result<(), Error> {
     let (s, dir) = load(Some(scene))?;
-    let problem = Problem::from_scene(&s, &dir)?;
+    let model = s.validate()?;
+    let estimate = resources::estimate(&model, &dir)?;
+    if let Err(e) = resources::check_fits(&estimate, resources::available_memory()) {
+        // too large for this machine: say what it would take without building it
+        say!("scene {} is valid", model.name);
+        for l in estimate.lines() {
+            say!("  {l}");
+        }
+        esay!("warning: `run` would refuse it: {e}");
+        return Ok(());
+    }
+    let problem = Problem::new(model, &dir)?;
     let info = ModelInfo::of(&problem);
     say!("scene {} is valid", problem.model.name);
-    for l in info.lines() {
+    for l in info.lines().into_iter().chain(estimate.lines()) {
         say!("  {l}");
     }
     for w in info.warnings() {

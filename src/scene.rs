@@ -578,6 +578,13 @@ impl Scene {
             return e("time.step", format!("must be <= time.end = {}, got {}", t.end, t.step));
         }
         let n = (t.end / t.step).round();
+        if n > defaults::MAX_STEPS as f64 {
+            let count = if n < 1e15 { format!("{n:.0}") } else { format!("{n:.3e}") };
+            return e(
+                "time.step",
+                format!("too many steps ({count}), at most {}: choose time.step >= {:.3e}", defaults::MAX_STEPS, t.end / defaults::MAX_STEPS as f64),
+            );
+        }
         if (n * t.step - t.end).abs() > 1e-6 * t.step {
             return e(
                 "time.step",
@@ -587,9 +594,6 @@ impl Scene {
                     t.end / n.max(1.0)
                 ),
             );
-        }
-        if n > 1e8 {
-            return e("time.step", format!("gives {n:.0} steps; at most 1e8 are allowed"));
         }
         Ok(TimeParams { end: t.end, step: t.step, steps: n as usize, scheme: t.scheme })
     }

@@ -321,7 +321,8 @@ fn cases() -> Vec<Case> {
         case("negative step", edit("step = 5.0e-4", "step = -5.0e-4"), "time.step", "must be > 0"),
         case("step longer than the run", edit("step = 5.0e-4", "step = 2.0"), "time.step", "must be <= time.end"),
         case("end not a whole number of steps", edit("step = 5.0e-4", "step = 0.3"), "time.step", "not a whole number of steps"),
-        case("too many steps", edit("step = 5.0e-4", "step = 1.0e-9"), "time.step", "at most 1e8"),
+        case("too many steps", edit("step = 5.0e-4", "step = 1.0e-9"), "time.step", "too many steps (1000000000), at most 100000000"),
+        case("a step so small that N overflows", edit("step = 5.0e-4", "step = 1.0e-300"), "time.step", "too many steps (1.000e300), at most 100000000"),
         // ---- solver and output ----
         case("relaxation 0", edit("relaxation = 1.0", "relaxation = 0.0"), "solver.relaxation", "must be in (0, 1]"),
         case("relaxation above 1", edit("relaxation = 1.0", "relaxation = 1.5"), "solver.relaxation", "must be in (0, 1]"),
