@@ -523,10 +523,35 @@ pub struct Steps<'s, 'p> {
     failed: bool,
 }
 
-impl<'p> Steps<'_, 'p> {
+impl<'s, 'p> Steps<'s, 'p> {
     /// The simulation between steps (its state is that of the last record returned).
     pub fn simulation(&self) -> &Simulation<'p> {
         self.sim
+    }
+
+    /// The same loop, calling `look` with the simulation before each step (to examine or
+    /// re-solve a step from its own state, as the twin and agreement checks do).
+    pub fn before_each<F: FnMut(&Simulation<'p>)>(self, look: F) -> BeforeEach<'s, 'p, F> {
+        BeforeEach { steps: self, look }
+    }
+}
+
+/// [`Steps`] with a look at the state before each step (see [`Steps::before_each`]).
+pub struct BeforeEach<'s, 'p, F> {
+    steps: Steps<'s, 'p>,
+    look: F,
+}
+
+impl<'p, F: FnMut(&Simulation<'p>)> Iterator for BeforeEach<'_, 'p, F> {
+    type Item = Result<StepRecord>;
+
+    fn next(&mut self) -> Option<Result<StepRecord>> {
+        let sim = &*self.steps.sim;
+        if self.steps.failed || sim.state.n >= sim.problem.steps {
+            return None;
+        }
+        (self.look)(sim);
+        self.steps.next()
     }
 }
 

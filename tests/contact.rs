@@ -72,30 +72,31 @@ fn twins_on(p: &Problem, steps: usize) -> (f64, f64) {
     let newton_set = NewtonSettings { tolerance: 1e-12, ..NewtonSettings::default() };
     let conic_set = ConicSettings { tolerance: 1e-11, max_rounds: 100, verbose: false };
     let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);
-    for _ in 0..steps.min(p.steps) {
-        let (w, _) = sim.free_velocity();
-        let c = p.contact.as_ref().expect("contact");
-        let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
-        // the S of the converged fixed point, then one frozen solve by each twin
-        let (_, s, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(newton_set), None).expect("F.1");
-        let a = newton::solve(&data, &s, &sim.state.lambda, &sim.state.t_fric, &newton_set).expect("newton");
-        let b = conic::solve(&data, &s, &conic_set).expect("conic");
-        let vs = data.velocity_scale(&a.y).max(1e-300);
-        let ra = data.forces(&a.y, &a.lambda, &a.t);
-        let rb = data.forces(&b.y, &b.lambda, &b.t);
-        // the conic solver works in r̃ = r/V with V the velocity scale, so its absolute force
-        // accuracy is relative to V/‖W‖ as well as to the forces themselves
-        let w_norm = (0..data.delassus.nrows()).map(|i| (0..data.delassus.ncols()).map(|j| data.delassus[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
-        let fs = linalg::norm_inf(&ra).max(data.velocity_scale(&data.y_free) / w_norm).max(1e-300);
-        if linalg::norm_inf(&ra) > 0.0 {
-            let (dv, df) = (rel(&a.y, &b.y, vs), rel(&ra, &rb, fs));
-            if std::env::var_os("TWIN_DEBUG").is_some() && (dv > 1e-6 || df > 1e-6) {
-                println!("step {}: dv {dv:.3e} df {df:.3e} vs {vs:.3e} fs {fs:.3e} y_newton {:?} y_conic {:?} status {:?} {:?}", sim.state.n + 1, &a.y[..6], &b.y[..6], &a.status[..3], &b.status[..3]);
+    for rec in sim.steps().before_each(|sim| {
+            let (w, _) = sim.free_velocity();
+            let c = p.contact.as_ref().expect("contact");
+            let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
+            // the S of the converged fixed point, then one frozen solve by each twin
+            let (_, s, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(newton_set), None).expect("F.1");
+            let a = newton::solve(&data, &s, &sim.state.lambda, &sim.state.t_fric, &newton_set).expect("newton");
+            let b = conic::solve(&data, &s, &conic_set).expect("conic");
+            let vs = data.velocity_scale(&a.y).max(1e-300);
+            let ra = data.forces(&a.y, &a.lambda, &a.t);
+            let rb = data.forces(&b.y, &b.lambda, &b.t);
+            // the conic solver works in r̃ = r/V with V the velocity scale, so its absolute force
+            // accuracy is relative to V/‖W‖ as well as to the forces themselves
+            let w_norm = (0..data.delassus.nrows()).map(|i| (0..data.delassus.ncols()).map(|j| data.delassus[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
+            let fs = linalg::norm_inf(&ra).max(data.velocity_scale(&data.y_free) / w_norm).max(1e-300);
+            if linalg::norm_inf(&ra) > 0.0 {
+                let (dv, df) = (rel(&a.y, &b.y, vs), rel(&ra, &rb, fs));
+                if std::env::var_os("TWIN_DEBUG").is_some() && (dv > 1e-6 || df > 1e-6) {
+                    println!("step {}: dv {dv:.3e} df {df:.3e} vs {vs:.3e} fs {fs:.3e} y_newton {:?} y_conic {:?} status {:?} {:?}", sim.state.n + 1, &a.y[..6], &b.y[..6], &a.status[..3], &b.status[..3]);
+                }
+                worst_v = worst_v.max(dv);
+                worst_f = worst_f.max(df);
             }
-            worst_v = worst_v.max(dv);
-            worst_f = worst_f.max(df);
-        }
-        sim.step().expect("step");
+    }).take(steps.min(p.steps)) {
+        rec.expect("step");
     }
     (worst_v, worst_f)
 }
@@ -148,25 +149,26 @@ fn n2_n3_alart_curnier_parameters_do_not_change_the_solution() {
     let p = problem(s);
     let mut sim = Simulation::new(&p).expect("setup");
     let mut worst = 0.0f64;
-    for _ in 0..p.steps {
-        let (w, _) = sim.free_velocity();
-        let c = p.contact.as_ref().expect("contact");
-        let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
-        let base = NewtonSettings { tolerance: 1e-12, max_iterations: 100, ..NewtonSettings::default() };
-        let (_, sb, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(base), None).expect("F.1");
-        let a = newton::solve(&data, &sb, &sim.state.lambda, &sim.state.t_fric, &base).expect("base");
-        for scale in [10.0, 0.1] {
-            let set = NewtonSettings { scale_normal: scale, scale_tangent: scale, ..base };
-            let b = newton::solve(&data, &sb, &sim.state.lambda, &sim.state.t_fric, &set).expect("rescaled");
-            let vs = data.velocity_scale(&a.y).max(1e-300);
-            worst = worst.max(rel(&a.y, &b.y, vs));
-            let (ra, rb) = (data.forces(&a.y, &a.lambda, &a.t), data.forces(&b.y, &b.lambda, &b.t));
-            let fs = linalg::norm_inf(&ra);
-            if fs > 0.0 {
-                worst = worst.max(rel(&ra, &rb, fs));
+    for rec in sim.steps().before_each(|sim| {
+            let (w, _) = sim.free_velocity();
+            let c = p.contact.as_ref().expect("contact");
+            let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
+            let base = NewtonSettings { tolerance: 1e-12, max_iterations: 100, ..NewtonSettings::default() };
+            let (_, sb, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(base), None).expect("F.1");
+            let a = newton::solve(&data, &sb, &sim.state.lambda, &sim.state.t_fric, &base).expect("base");
+            for scale in [10.0, 0.1] {
+                let set = NewtonSettings { scale_normal: scale, scale_tangent: scale, ..base };
+                let b = newton::solve(&data, &sb, &sim.state.lambda, &sim.state.t_fric, &set).expect("rescaled");
+                let vs = data.velocity_scale(&a.y).max(1e-300);
+                worst = worst.max(rel(&a.y, &b.y, vs));
+                let (ra, rb) = (data.forces(&a.y, &a.lambda, &a.t), data.forces(&b.y, &b.lambda, &b.t));
+                let fs = linalg::norm_inf(&ra);
+                if fs > 0.0 {
+                    worst = worst.max(rel(&ra, &rb, fs));
+                }
             }
-        }
-        sim.step().expect("step");
+    }).take(p.steps) {
+        rec.expect("step");
     }
     println!("worst relative change under rescaling: {worst:.3e}");
     common::measured("contact::n2_n3_alart_curnier_parameters_do_not_change_the_solution", "change under r ×10, ×0.1", worst, "≤ 1e-9");
@@ -252,21 +254,22 @@ fn f1_step_functional_decreases_under_ck() {
     let wmat = sim.delassus.clone().expect("W");
     let winv = wmat.partial_piv_lu().inverse();
     let (mut checked, mut worst) = (0usize, 0.0f64);
-    for _ in 0..p.steps {
-        let (w, _) = sim.free_velocity();
-        let c = p.contact.as_ref().expect("contact");
-        let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
-        let mut trace = Vec::new();
-        let inner = Inner::Newton(NewtonSettings { tolerance: 1e-12, ..NewtonSettings::default() });
-        sim.solve_frozen_sequence(&data, &p_hat, &inner, Some(&mut trace)).expect("F.1");
-        let phis: Vec<f64> = trace.iter().map(|y| step_functional(&data, &winv, &mu, &p_hat, y)).collect();
-        for w in phis.windows(2) {
-            let allowance = 1e-10 * w[0].abs().max(w[1].abs());
-            worst = worst.max((w[1] - w[0]) / w[0].abs().max(1e-300));
-            assert!(w[1] <= w[0] + allowance, "step {}: Φ rose from {} to {}", sim.state.n + 1, w[0], w[1]);
-            checked += 1;
-        }
-        sim.step().expect("step");
+    for rec in sim.steps().before_each(|sim| {
+            let (w, _) = sim.free_velocity();
+            let c = p.contact.as_ref().expect("contact");
+            let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
+            let mut trace = Vec::new();
+            let inner = Inner::Newton(NewtonSettings { tolerance: 1e-12, ..NewtonSettings::default() });
+            sim.solve_frozen_sequence(&data, &p_hat, &inner, Some(&mut trace)).expect("F.1");
+            let phis: Vec<f64> = trace.iter().map(|y| step_functional(&data, &winv, &mu, &p_hat, y)).collect();
+            for w in phis.windows(2) {
+                let allowance = 1e-10 * w[0].abs().max(w[1].abs());
+                worst = worst.max((w[1] - w[0]) / w[0].abs().max(1e-300));
+                assert!(w[1] <= w[0] + allowance, "step {}: Φ rose from {} to {}", sim.state.n + 1, w[0], w[1]);
+                checked += 1;
+            }
+    }).take(p.steps) {
+        rec.expect("step");
     }
     println!("checked {checked} fixed-point iterations; largest relative change of Φ {worst:.3e} (negative = decrease)");
     assert!(checked > 100, "too few fixed-point iterations to check");

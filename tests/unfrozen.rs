@@ -31,28 +31,29 @@ fn compare(p: &Problem, tol: f64) -> Agreement {
     let mut sim = Simulation::new(p).expect("setup");
     let set = NewtonSettings::default();
     let mut a = Agreement { steps: 0, worst_v: 0.0, worst_f: 0.0, differing: 0, fallbacks: 0, newton_f1: 0, newton_unfrozen: 0 };
-    for _ in 0..p.steps {
-        let (w, _) = sim.free_velocity();
-        let c = p.contact.as_ref().expect("contact");
-        let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
-        let (f1, _, r1) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).expect("F.1");
-        let (un, _, r2) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).expect("unfrozen");
-        a.newton_f1 += r1.inner_iterations;
-        a.newton_unfrozen += r2.inner_iterations;
-        a.fallbacks += usize::from(r2.fallback.is_some());
-        let vs = data.velocity_scale(&f1.y).max(1e-300);
-        let (ra, rb) = (data.forces(&f1.y, &f1.lambda, &f1.t), data.forces(&un.y, &un.lambda, &un.t));
-        let fs = linalg::norm_inf(&ra).max(1e-300);
-        let dv = f1.y.iter().zip(&un.y).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / vs;
-        let df = ra.iter().zip(&rb).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / fs;
-        if dv > tol || df > tol {
-            a.differing += 1;
-        } else {
-            a.worst_v = a.worst_v.max(dv);
-            a.worst_f = a.worst_f.max(df);
-        }
-        a.steps += 1;
-        sim.step().expect("step");
+    for rec in sim.steps().before_each(|sim| {
+            let (w, _) = sim.free_velocity();
+            let c = p.contact.as_ref().expect("contact");
+            let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
+            let (f1, _, r1) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).expect("F.1");
+            let (un, _, r2) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).expect("unfrozen");
+            a.newton_f1 += r1.inner_iterations;
+            a.newton_unfrozen += r2.inner_iterations;
+            a.fallbacks += usize::from(r2.fallback.is_some());
+            let vs = data.velocity_scale(&f1.y).max(1e-300);
+            let (ra, rb) = (data.forces(&f1.y, &f1.lambda, &f1.t), data.forces(&un.y, &un.lambda, &un.t));
+            let fs = linalg::norm_inf(&ra).max(1e-300);
+            let dv = f1.y.iter().zip(&un.y).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / vs;
+            let df = ra.iter().zip(&rb).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / fs;
+            if dv > tol || df > tol {
+                a.differing += 1;
+            } else {
+                a.worst_v = a.worst_v.max(dv);
+                a.worst_f = a.worst_f.max(df);
+            }
+            a.steps += 1;
+    }).take(p.steps) {
+        rec.expect("step");
     }
     a
 }

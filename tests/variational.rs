@@ -39,10 +39,12 @@ fn v1_penalty_steps_satisfy_the_hemivariational_inequality() {
     let mut sim = Simulation::new(&p).expect("setup");
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let (mut worst, mut checked) = (f64::INFINITY, 0usize);
-    for _ in 0..p.steps {
-        let (u0, v0) = (sim.state.u.clone(), sim.state.v.clone());
-        sim.step().expect("step");
-        let pair = StepPair { sim: &sim, u_before: &u0, v_before: &v0 };
+    let (mut u0, mut v0) = (sim.state.u.clone(), sim.state.v.clone());
+    let mut steps = sim.steps();
+    while let Some(rec) = steps.next() {
+        rec.expect("step");
+        let sim = steps.simulation();
+        let pair = StepPair { sim, u_before: &u0, v_before: &v0 };
         for _ in 0..20 {
             let z = rng.vector(p.dofs.n_free);
             let (m, scale) = hemivariational_margin(&pair, &z);
@@ -50,6 +52,7 @@ fn v1_penalty_steps_satisfy_the_hemivariational_inequality() {
             assert!(m >= -1e-7 * scale, "step {}: margin {m:.3e} (scale {scale:.3e})", sim.state.n);
             checked += 1;
         }
+        (u0, v0) = (sim.state.u.clone(), sim.state.v.clone());
     }
     println!("V.1: {checked} random test functions, smallest relative margin {worst:.3e}");
     common::measured("variational::v1_penalty_steps_satisfy_the_hemivariational_inequality", "V.1 smallest relative margin", worst, "≥ −1e-7");
@@ -66,10 +69,12 @@ fn v2_exact_steps_satisfy_the_variational_inequality() {
     let mut rng = Rng(0x0123_4567_89ab_cdef);
     let (mut worst, mut checked, mut bites) = (f64::INFINITY, 0usize, 0usize);
     let c = p.contact.as_ref().expect("contact");
-    for _ in 0..p.steps {
-        let (u0, v0) = (sim.state.u.clone(), sim.state.v.clone());
-        let rec = sim.step().expect("step");
-        let pair = StepPair { sim: &sim, u_before: &u0, v_before: &v0 };
+    let (mut u0, mut v0) = (sim.state.u.clone(), sim.state.v.clone());
+    let mut steps = sim.steps();
+    while let Some(rec) = steps.next() {
+        let rec = rec.expect("step");
+        let sim = steps.simulation();
+        let pair = StepPair { sim, u_before: &u0, v_before: &v0 };
         for _ in 0..20 {
             let mut z = rng.vector(p.dofs.n_free);
             admissible(&pair, &mut z);
@@ -89,6 +94,7 @@ fn v2_exact_steps_satisfy_the_variational_inequality() {
             assert!((m - expected).abs() <= 1e-8 * scale, "inadmissible z: margin {m:.6e}, expected −ωλ = {expected:.6e}");
             bites += 1;
         }
+        (u0, v0) = (sim.state.u.clone(), sim.state.v.clone());
     }
     println!("V.2: {checked} admissible random test functions, smallest relative margin {worst:.3e}; {bites} inadmissible checks gave −ωλ");
     common::measured("variational::v2_exact_steps_satisfy_the_variational_inequality", "V.2 smallest relative margin", worst, "≥ −1e-7");
