@@ -141,7 +141,7 @@ fn co1_oblique_bar_impact_slips_with_coulomb_force() {
     let mut steps = sim.steps();
     while let Some(rec) = steps.next() {
         let rec = rec.expect("step");
-        impulse += p.k * (-1.0) * rec.tangential_force;
+        impulse -= p.k * rec.tangential_force; // τ_y = −1
         worst = worst.max((momentum_y(steps.simulation()) - p0 - impulse).abs());
     }
     let scale: f64 = 0.1 * 0.2; // m w0 (ρ = 1, area 0.1)

@@ -40,9 +40,12 @@ impl std::fmt::Display for Cell {
     }
 }
 
+/// A history.csv column: its name and how a record gives its value.
+pub type Column = (&'static str, fn(&StepRecord) -> Cell);
+
 /// history.csv, column by column: the required columns of the README's output contract, then
 /// our additions. The header and every row are written from this one table.
-pub const HISTORY: [(&str, fn(&StepRecord) -> Cell); 24] = [
+pub const HISTORY: [Column; 24] = [
     ("step", |r| Cell::Count(r.step)),
     ("t", |r| Cell::Real(r.t)),
     ("kinetic", |r| Cell::Real(r.energy.kinetic)),
@@ -176,7 +179,7 @@ impl Writer {
             normal_force: rec.normal_force,
             tangential_force: rec.tangential_force,
         });
-        if rec.step % self.every == 0 || last {
+        if rec.step.is_multiple_of(self.every) || last {
             self.frame(rec, problem, state)?;
         }
         Ok(())

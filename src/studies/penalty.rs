@@ -145,7 +145,8 @@ impl PenaltyStudy {
 
     /// study/penalty.svg: e_V, e_H and δ against ε on log–log axes.
     pub fn svg(&self, title: &str) -> Result<String> {
-        let series: [(&str, f64, fn(&PenaltyRow) -> f64); 3] = [
+        type Measure = (&'static str, f64, fn(&PenaltyRow) -> f64);
+        let series: [Measure; 3] = [
             ("e_V", self.slope_e_v, |r| r.e_v),
             ("e_H", self.slope_e_h, |r| r.e_h),
             ("δ (penetration beyond g)", self.slope_delta, |r| r.delta),
