@@ -1,4 +1,4 @@
-//! Project tasks: `cargo xtask verify | crosscheck`.
+//! Project tasks: `cargo xtask verify | crosscheck | trace | bench | stability | bound-at`.
 //!
 //! `verify` is the project's test command. It
 //! 1. builds every test target (`cargo test --workspace --no-run`) and runs each test binary
@@ -53,7 +53,11 @@ fn main() -> ExitCode {
         Some("trace") => trace_only(&root),
         Some("bench") => study(&root, "bench", &args[1..]),
         Some("stability") => study(&root, "stability", &args[1..]),
-        _ => Err("usage: cargo xtask <verify [--no-crosscheck] | crosscheck | trace | bench [--quick] | stability [--quick]>".to_string()),
+        Some("bound-at") => study(&root, "bound-at", &args[1..]),
+        _ => Err(
+            "usage: cargo xtask <verify [--no-crosscheck] | crosscheck | trace | bench [--quick] | stability [--quick] | bound-at [--quick]>"
+                .to_string(),
+        ),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -75,7 +79,7 @@ fn study(root: &Path, what: &str, extra: &[String]) -> Result<(), String> {
     if !st.success() {
         return Err("the release build failed".into());
     }
-    let out = root.join("target").join(what);
+    let out = root.join("target").join(what.replace('-', "_"));
     let st = Command::new(root.join("target/release/dyncontact"))
         .args(["study", what, "--out"])
         .arg(&out)
