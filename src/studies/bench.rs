@@ -221,36 +221,34 @@ fn run_specs(plan: &Plan) -> Vec<RunSpec> {
 
 /// work_precision.csv.
 fn work_csv(rows: &[WorkRow]) -> String {
-    let mut s = format!("{WORK_PRECISION_COLUMNS}\n");
-    for r in rows {
-        let st = &r.stats;
-        let tps = r.time_per_step();
-        let ratio = if st.floor_s > 0.0 { tps / st.floor_s } else { f64::NAN };
-        let _ = writeln!(
-            s,
-            "{},{},{},{}x{},{:e},{},{:.6e},{:.6e},{:.6e},{:.4},{:.6e},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{}",
-            kinds::name(&r.spec.scheme),
-            kinds::name(&r.spec.inner),
-            kinds::name(&r.spec.mass),
-            r.spec.level.cells[0],
-            r.spec.level.cells[1],
-            r.spec.level.k,
-            st.steps,
-            st.wall_time_s,
-            tps,
-            st.floor_s,
-            ratio,
-            r.error_force[0],
-            r.error_disp,
-            st.newton_iterations,
-            st.fixed_point_iterations,
-            r.error_force[1],
-            r.error_force[2],
-            r.error_impulse,
-            harness::csv_field(&r.status)
-        );
-    }
-    s
+    harness::csv_table(
+        WORK_PRECISION_COLUMNS,
+        rows.iter().map(|r| {
+            let st = &r.stats;
+            let tps = r.time_per_step();
+            let ratio = if st.floor_s > 0.0 { tps / st.floor_s } else { f64::NAN };
+            vec![
+                kinds::name(&r.spec.scheme),
+                kinds::name(&r.spec.inner),
+                kinds::name(&r.spec.mass),
+                format!("{}x{}", r.spec.level.cells[0], r.spec.level.cells[1]),
+                format!("{:e}", r.spec.level.k),
+                st.steps.to_string(),
+                format!("{:.6e}", st.wall_time_s),
+                format!("{tps:.6e}"),
+                format!("{:.6e}", st.floor_s),
+                format!("{ratio:.4}"),
+                format!("{:.6e}", r.error_force[0]),
+                format!("{:.6e}", r.error_disp),
+                st.newton_iterations.to_string(),
+                st.fixed_point_iterations.to_string(),
+                format!("{:.6e}", r.error_force[1]),
+                format!("{:.6e}", r.error_force[2]),
+                format!("{:.6e}", r.error_impulse),
+                harness::csv_field(&r.status),
+            ]
+        }),
+    )
 }
 
 /// Observed orders of one group: pairwise log2(e_l / e_{l+1}) between consecutive levels (h and k
@@ -521,34 +519,33 @@ impl RaceRow {
 
 /// race.csv.
 fn race_csv(rows: &[RaceRow]) -> String {
-    let mut s = format!("{RACE_COLUMNS}\n");
-    for r in rows {
-        let st = &r.stats;
-        let _ = writeln!(
-            s,
-            "{},{},{:e},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.4},{:.4},{},{},{:.6e},{:.3e},{:.3e},{},{}",
-            harness::csv_field(&r.case.label),
-            r.case.decay,
-            r.case.k,
-            r.case.ck_limit.map_or("".into(), |l| format!("{l:.6e}")),
-            r.inside().map_or("", |b| if b { "yes" } else { "no" }),
-            kinds::name(&r.method),
-            st.steps,
-            st.wall_time_s,
-            r.per_step(st.step_time_s),
-            r.per_step(st.contact_time_s),
-            r.per_step(st.newton_iterations as f64),
-            r.per_step(st.fixed_point_iterations as f64),
-            st.unfrozen,
-            st.fallbacks,
-            st.setup_delassus_s,
-            r.agreement.max_dv,
-            r.agreement.max_df,
-            r.agreement.differing,
-            harness::csv_field(&r.status)
-        );
-    }
-    s
+    harness::csv_table(
+        RACE_COLUMNS,
+        rows.iter().map(|r| {
+            let st = &r.stats;
+            vec![
+                harness::csv_field(&r.case.label),
+                r.case.decay.to_string(),
+                format!("{:e}", r.case.k),
+                r.case.ck_limit.map_or("".into(), |l| format!("{l:.6e}")),
+                r.inside().map_or("", |b| if b { "yes" } else { "no" }).to_string(),
+                kinds::name(&r.method),
+                st.steps.to_string(),
+                format!("{:.6e}", st.wall_time_s),
+                format!("{:.6e}", r.per_step(st.step_time_s)),
+                format!("{:.6e}", r.per_step(st.contact_time_s)),
+                format!("{:.4}", r.per_step(st.newton_iterations as f64)),
+                format!("{:.4}", r.per_step(st.fixed_point_iterations as f64)),
+                st.unfrozen.to_string(),
+                st.fallbacks.to_string(),
+                format!("{:.6e}", st.setup_delassus_s),
+                format!("{:.3e}", r.agreement.max_dv),
+                format!("{:.3e}", r.agreement.max_df),
+                r.agreement.differing.to_string(),
+                harness::csv_field(&r.status),
+            ]
+        }),
+    )
 }
 
 /// One bar panel of race.csv: `value` per case, F.1 and N.4 side by side.

@@ -592,41 +592,38 @@ max_energy_gain,wall_time_s,note";
 
 /// stability.csv: one row per run.
 pub fn csv(rows: &[RunResult]) -> String {
-    let mut s = String::from(CSV_HEADER);
-    s.push('\n');
-    for r in rows {
-        let v = &r.case.variant;
-        let (scheme, mass, inner) = (kinds::name(&v.scheme), kinds::name(&v.mass), kinds::name(&v.inner));
-        let m = &r.m;
-        s.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{},{},{:.3e},{:.4e},{:.4e},{:.4},{}\n",
-            r.case.sweep.key(),
-            r.case.sweep.parameter(),
-            r.case.value,
-            r.case.variant.name,
-            scheme,
-            mass,
-            r.case.variant.persistency,
-            inner,
-            m.class.label(),
-            m.steps_completed,
-            m.steps_planned,
-            m.k,
-            m.ck_limit.map(|v| format!("{v:.4e}")).unwrap_or_default(),
-            m.fp_mean,
-            m.fp_max,
-            m.fp_capped_steps,
-            m.newton_total,
-            m.newton_max,
-            m.fallbacks,
-            m.max_defect,
-            m.drift,
-            m.max_gain,
-            m.wall_time_s,
-            harness::csv_field(&m.note)
-        ));
-    }
-    s
+    harness::csv_table(
+        CSV_HEADER,
+        rows.iter().map(|r| {
+            let (v, m) = (&r.case.variant, &r.m);
+            vec![
+                r.case.sweep.key().to_string(),
+                r.case.sweep.parameter().to_string(),
+                r.case.value.to_string(),
+                v.name.to_string(),
+                kinds::name(&v.scheme),
+                kinds::name(&v.mass),
+                v.persistency.to_string(),
+                kinds::name(&v.inner),
+                m.class.label().to_string(),
+                m.steps_completed.to_string(),
+                m.steps_planned.to_string(),
+                m.k.to_string(),
+                m.ck_limit.map(|v| format!("{v:.4e}")).unwrap_or_default(),
+                format!("{:.4}", m.fp_mean),
+                m.fp_max.to_string(),
+                m.fp_capped_steps.to_string(),
+                m.newton_total.to_string(),
+                m.newton_max.to_string(),
+                m.fallbacks.to_string(),
+                format!("{:.3e}", m.max_defect),
+                format!("{:.4e}", m.drift),
+                format!("{:.4e}", m.max_gain),
+                format!("{:.4}", m.wall_time_s),
+                harness::csv_field(&m.note),
+            ]
+        }),
+    )
 }
 
 /// The sweeps present in `rows`, in order, with their values in order.
