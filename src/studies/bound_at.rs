@@ -4,13 +4,15 @@
 //! is run at three steps k0, k0/2, k0/4 and compared with one fine reference (k0/16, the bound at
 //! the iterate): the relative L² error of the tangential impulses over windows of k0 (the
 //! midpoint rule's force chatter averages out within a window) and its observed order.
-//! Writes bound_at.csv, bound_at.svg and report.txt.
+//! Then the block with each compliance against its limit c_ν → ∞, Signorini–Coulomb (compliance
+//! 0, g = 0, the total bound), at the same step. Writes bound_at.csv, signorini_limit.csv,
+//! bound_at.svg and report.txt.
 
 use std::path::Path;
 use std::time::Instant;
 
 use crate::error::{Error, Result};
-use crate::model::kinds::{self, BoundAt};
+use crate::model::kinds::{self, BoundAt, FrictionBound};
 use crate::problem::Problem;
 use crate::scene::{NumOrStr, Scene};
 
@@ -108,6 +110,37 @@ pub fn rows(opts: &BoundAtOptions) -> Result<Vec<BoundAtRow>> {
     Ok(rows)
 }
 
+/// The block of B.3 with a stiff compliance against its limit, Signorini–Coulomb (compliance 0,
+/// g = 0, the total bound), at the same step: the relative L² distance of the tangential impulses
+/// per compliance and evaluation point (the compliance bound μ p(u_ν) tends to μ λ as c_ν → ∞).
+#[derive(Debug, Clone)]
+pub struct LimitRow {
+    pub compliance: f64,
+    pub at: BoundAt,
+    pub k: f64,
+    pub distance: f64,
+}
+
+/// The Signorini–Coulomb limit of the block at k0/4 (k0/2 in the quick study).
+pub fn signorini_limit(opts: &BoundAtOptions) -> Result<Vec<LimitRow>> {
+    let case = &CASES[1];
+    let (compliances, k) = if opts.quick { (vec![1e3, 1e7], case.k0 / 2.0) } else { (COMPLIANCES.to_vec(), case.k0 / 4.0) };
+    let mut limit_scene = scene(case, 0.0, k, BoundAt::Predictor)?;
+    if let Some(c) = limit_scene.contact.as_mut() {
+        c.penetration_bound = NumOrStr::Num(0.0);
+        c.friction_bound = FrictionBound::Total;
+    }
+    let (limit, _) = simulate(&Problem::from_scene(&limit_scene, Path::new("."))?, &[])?;
+    let mut rows = Vec::new();
+    for &c in &compliances {
+        for at in [BoundAt::Predictor, BoundAt::Midpoint] {
+            let (traj, _) = trajectory(case, c, k, at)?;
+            rows.push(LimitRow { compliance: c, at, k, distance: tangential_impulse_error(&traj, &limit, case.k0)? });
+        }
+    }
+    Ok(rows)
+}
+
 /// bound_at.csv.
 pub fn csv(rows: &[BoundAtRow]) -> String {
     harness::csv_table(
@@ -137,8 +170,9 @@ fn order(s: &[&BoundAtRow]) -> f64 {
     loglog_slope(&k, &e)
 }
 
-/// report.txt: per case and compliance, the errors at the finest k and the orders of both points.
-pub fn report(rows: &[BoundAtRow], wall_time_s: f64) -> String {
+/// report.txt: per case and compliance, the errors at the finest k and the orders of both points;
+/// then the block's distance to its Signorini–Coulomb limit.
+pub fn report(rows: &[BoundAtRow], limit: &[LimitRow], wall_time_s: f64) -> String {
     let mut s = String::from("friction_bound_at study: tangential impulse error against a k0/16 reference (bound at the iterate)\n");
     s.push_str(&format!("{:<9} {:>8} {:>14} {:>8} {:>14} {:>8}\n", "case", "c_nu", "predictor err", "order", "midpoint err", "order"));
     for case in &CASES {
@@ -157,6 +191,14 @@ pub fn report(rows: &[BoundAtRow], wall_time_s: f64) -> String {
                 order(&m)
             ));
         }
+    }
+    s.push_str("\nblock against Signorini–Coulomb (compliance 0, g = 0, friction_bound = total), same k:\n");
+    s.push_str(&format!("{:>8} {:>12} {:>12}\n", "c_nu", "predictor", "midpoint"));
+    let mut cs: Vec<f64> = limit.iter().map(|r| r.compliance).collect();
+    cs.dedup();
+    for c in cs {
+        let d = |at: BoundAt| limit.iter().find(|r| r.compliance == c && r.at == at).map_or(f64::NAN, |r| r.distance);
+        s.push_str(&format!("{:>8.0e} {:>12.3e} {:>12.3e}\n", c, d(BoundAt::Predictor), d(BoundAt::Midpoint)));
     }
     s.push_str(&format!("wall time {wall_time_s:.1} s\n"));
     s
@@ -182,8 +224,21 @@ pub fn svg(rows: &[BoundAtRow]) -> Result<String> {
 pub fn run(out: &Path, opts: &BoundAtOptions) -> Result<String> {
     let clock = Instant::now();
     let rows = rows(opts)?;
-    let report = report(&rows, clock.elapsed().as_secs_f64());
+    let limit = signorini_limit(opts)?;
+    let report = report(&rows, &limit, clock.elapsed().as_secs_f64());
     let svg = svg(&rows)?;
-    harness::write_files(out, &[("bound_at.csv", csv(&rows).as_bytes()), ("bound_at.svg", svg.as_bytes()), ("report.txt", report.as_bytes())])?;
+    let limit_csv = harness::csv_table(
+        "compliance,bound_at,k,distance_tangential_impulse",
+        limit.iter().map(|r| vec![format!("{:e}", r.compliance), kinds::name(&r.at), format!("{:e}", r.k), format!("{:.6e}", r.distance)]),
+    );
+    harness::write_files(
+        out,
+        &[
+            ("bound_at.csv", csv(&rows).as_bytes()),
+            ("signorini_limit.csv", limit_csv.as_bytes()),
+            ("bound_at.svg", svg.as_bytes()),
+            ("report.txt", report.as_bytes()),
+        ],
+    )?;
     Ok(report)
 }
