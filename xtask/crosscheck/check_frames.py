@@ -1,4 +1,4 @@
-"""Readability check of a `dyncontact run` output folder with meshio (SCENES.md "Outputs").
+"""Readability check of a `dyncontact run` output folder with meshio (the README, "Outputs").
 
 usage: python check_frames.py DIR
 

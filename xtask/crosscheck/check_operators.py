@@ -129,7 +129,7 @@ def main():
     def interleave(a):
         return sp.csr_array(a)[perm][:, perm] if sp.issparse(a) else np.asarray(a)[perm]
 
-    # operators: Lame constants from (E, nu) by scikit-fem, plane reduction as in model.md
+    # operators: Lame constants from (E, nu) by scikit-fem, plane reduction as in spec/model.md
     plane = prm["plane"]
     lam, mu = lame_parameters(prm["young"], prm["poisson"])
     lam = plane_reduce(lam, mu, plane)

@@ -1,6 +1,5 @@
 //! `cargo xtask crosscheck`: compare dyncontact's finite-element operators with scikit-fem and
-//! read its VTU frames back with meshio (shared/design/deps.md §3, "Cross-check with
-//! scikit-fem").
+//! read its VTU frames back with meshio (the README, "Verification").
 //!
 //! Steps:
 //! 1. a Python venv at `target/crosscheck-venv` with `xtask/crosscheck/requirements.txt`
