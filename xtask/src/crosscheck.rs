@@ -14,8 +14,8 @@
 //!    `check_frames.py` reads with meshio.
 //!
 //! The solver is the binary `target/debug/dyncontact`, built only if it is missing: `cargo run`
-//! from here would rebuild dependencies with other features than `cargo test` uses (deps.md
-//! pitfall 2). After changing the solver, rebuild it (`cargo build -p dyncontact --bin
+//! from here would rebuild dependencies with other features than `cargo test` uses (cargo's
+//! feature unification differs between the two). After changing the solver, rebuild it (`cargo build -p dyncontact --bin
 //! dyncontact`, or `cargo test`, which builds it too).
 
 use std::fmt::Write as _;
