@@ -405,3 +405,17 @@ fn positions_follow_the_arc_length_on_a_bent_contact_boundary() {
     let sorted: Vec<f64> = along.order.iter().map(|&i| along.s[i]).collect();
     assert!(sorted.windows(2).all(|w| w[1] > w[0]), "positions not distinct: {sorted:?}");
 }
+
+/// Tick labels read at a glance: plain numbers with the decimals the tick spacing needs, and
+/// scientific notation only where an axis reaches 1e5 or stays below 1e-3.
+#[test]
+fn tick_labels_are_plain_numbers_unless_the_axis_spans_decades() {
+    use dyncontact::output::plots::tick_label;
+    assert_eq!(tick_label(60.0, 0.0, 100.0), "60");
+    assert_eq!(tick_label(0.25, 0.0, 1.0), "0.25");
+    assert_eq!(tick_label(0.1 + 0.2, 0.0, 1.0), "0.3");
+    assert_eq!(tick_label(2.5, 0.0, 2.6), "2.5");
+    assert_eq!(tick_label(0.0, -1.0, 1.0), "0");
+    assert_eq!(tick_label(2.0e-4, 0.0, 5.0e-4), "2.0e-4");
+    assert_eq!(tick_label(3.0e6, 0.0, 1.0e7), "3.0e6");
+}

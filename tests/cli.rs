@@ -111,3 +111,25 @@ fn cli_run_without_contact() {
         }
     }
 }
+
+/// (Co.1) Where the model switched on is less than the scene states, `run` says so on stderr
+/// and in summary.json: a `[contact]` section with no contact side, on the crosscheck scene
+/// (which has none).
+#[test]
+fn less_physics_than_stated_is_a_warning_on_stderr_and_in_the_summary() {
+    let dir = tmp("warning");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let text = std::fs::read_to_string(scene("crosscheck_strain")).expect("scene")
+        + "\n[contact]\ncompliance = 10.0\npenetration_bound = 0.1\n";
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).expect("write");
+    let st = Command::new(BIN).arg("run").arg(&path).arg("--out").arg(dir.join("out")).output().expect("run");
+    let err = String::from_utf8_lossy(&st.stderr);
+    assert!(st.status.success(), "{err}");
+    let expected = "the [contact] section is not used: boundary.contact names no contact side";
+    assert!(err.contains(&format!("warning: {expected}")), "stderr: {err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).expect("summary")).expect("json");
+    let warnings = summary["warnings"].as_array().expect("warnings");
+    assert!(warnings.iter().any(|w| w.as_str() == Some(expected)), "summary warnings: {warnings:?}");
+}

@@ -64,19 +64,19 @@ pub fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// A tick label for an axis spanning [lo, hi]: a plain number with as many decimals as the
-/// tick spacing needs (60, 2.5, 0.125), or scientific notation when the axis reaches values
-/// ≥ 1e5 or lies entirely below 1e-3 in magnitude.
+/// A tick label for an axis spanning [lo, hi]: a plain number with the decimals that tell
+/// ticks apart (60, 2.5, 0.125: four significant digits of the span, trailing zeros dropped),
+/// or scientific notation when the axis reaches values ≥ 1e5 or lies entirely below 1e-3.
 pub fn tick_label(v: f64, lo: f64, hi: f64) -> String {
     let big = lo.abs().max(hi.abs());
     if big >= 1e5 || (big < 1e-3 && big > 0.0) {
         return format!("{v:.1e}");
     }
-    // ticks are about a tenth of the span apart: show the digits that tell them apart
-    let step = (hi - lo).abs() / 10.0;
-    let decimals = if step > 0.0 { (-step.log10().floor()).clamp(0.0, 8.0) as usize } else { 0 };
+    let span = (hi - lo).abs();
+    let decimals = if span > 0.0 { (4.0 - span.log10().floor()).clamp(0.0, 10.0) as usize } else { 0 };
     let s = format!("{v:.decimals$}");
-    if s.trim_start_matches('-').chars().all(|c| c == '0' || c == '.') { "0".into() } else { s }
+    let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s };
+    if s == "-0" { "0".into() } else { s }
 }
 
 /// One panel of a chart: title, axis names, series and labelled horizontal lines.
