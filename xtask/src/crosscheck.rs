@@ -1,5 +1,6 @@
-//! `cargo xtask crosscheck`: compare dyncontact's finite-element operators with scikit-fem and
-//! read its VTU frames back with meshio (the README, "Verification").
+//! `cargo xtask crosscheck`: compare dyncontact's finite-element operators with scikit-fem, read
+//! its VTU frames back with meshio (the README, "Verification"), and compare a dynamic contact
+//! run with GetFEM (Debian's python3-getfem, installed with apt when missing).
 //!
 //! Steps:
 //! 1. a Python venv at `target/crosscheck-venv` with `xtask/crosscheck/requirements.txt`
@@ -79,12 +80,20 @@ pub fn run(root: &Path) -> Result<String, String> {
     let _ = writeln!(report, "  frames of `dyncontact run {}` ({:.1} s)", rel(root, &scene), t.elapsed().as_secs_f64());
     record(&mut report, &mut failures, &format!("frames of {RUN_SCENE}"), result);
 
+    let t = Instant::now();
+    let result = getfem_check(root, &bin, &scripts.join("getfem"), &out_root.join("getfem"));
+    let _ = writeln!(report, "  GetFEM: dynamic contact, B.1 on the singular mass ({:.1} s)", t.elapsed().as_secs_f64());
+    record(&mut report, &mut failures, "GetFEM dynamic contact", result);
+
     let refs = rel(root, &reference);
     let _ = writeln!(report, "  scikit-fem reference operators written to {refs}/<scene>_{{M,K,C}}.mtx, <scene>_f.txt");
     let total = start.elapsed().as_secs_f64();
     if failures.is_empty() {
         let n = scenes.len();
-        let _ = write!(report, "crosscheck OK: {n} scenes, tolerance 1e-12 relative, frames readable ({total:.1} s)");
+        let _ = write!(
+            report,
+            "crosscheck OK: {n} scenes, tolerance 1e-12 relative, frames readable, GetFEM dynamic contact agrees ({total:.1} s)"
+        );
         Ok(report)
     } else {
         let _ = writeln!(report, "crosscheck FAILED ({total:.1} s):");
@@ -93,6 +102,37 @@ pub fn run(root: &Path) -> Result<String, String> {
         }
         Err(report.trim_end().to_string())
     }
+}
+
+/// Debian's Python, which has GetFEM (python3-getfem); the cross-check venv's Python does not.
+const GETFEM_PYTHON: &str = "/usr/bin/python3";
+
+/// The GetFEM cross-check of the dynamic contact solve (`getfem/bar_impact.py`): installs
+/// Debian's python3-getfem with apt when it is missing (CI runs as root), then runs the script,
+/// which runs dyncontact and GetFEM on the same bar and compares them.
+fn getfem_check(root: &Path, bin: &Path, dir: &Path, out: &Path) -> Result<(bool, String), String> {
+    let has_getfem = || Command::new(GETFEM_PYTHON).args(["-c", "import getfem"]).stdout(Stdio::null()).stderr(Stdio::null()).status().is_ok_and(|s| s.success());
+    if !has_getfem() {
+        exec(Command::new("apt-get").args(["update", "-qq"]))
+            .and_then(|()| exec(Command::new("apt-get").args(["install", "-y", "-qq", "python3-getfem"])))
+            .map_err(|e| format!("python3-getfem is missing and `apt-get install python3-getfem` failed (run it as root): {e}"))?;
+        if !has_getfem() {
+            return Err(format!("python3-getfem was installed but `{GETFEM_PYTHON} -c 'import getfem'` still fails"));
+        }
+    }
+    let out = fresh_dir(out)?;
+    spawn(
+        Command::new(GETFEM_PYTHON)
+            .current_dir(root)
+            .env("PYTHONDONTWRITEBYTECODE", "1")
+            .arg(dir.join("bar_impact.py"))
+            .arg("--dyncontact")
+            .arg(bin)
+            .arg("--scene")
+            .arg(dir.join("bar_impact_singular.toml"))
+            .arg("--out")
+            .arg(&out),
+    )
 }
 
 /// The venv's python, creating the venv and installing the requirements when needed. Returns
