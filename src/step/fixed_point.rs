@@ -1,10 +1,13 @@
 //! (F.1) The sequence of convex problems: freeze the friction bound S, solve the convex step
 //! problem (S.6) with an inner solver, update S from the new slip rate, repeat (spec/model.md §4.5).
 //!
-//! The normal part p_τ(û) of the bound is evaluated at the predictor û = d^n + p_d v_ν^n (see
-//! `ContactKinematics`), so S depends on the unknowns only through μ(‖v̄‖): a constant μ needs one
-//! convex solve, and for the exponential law each solve minimizes a convex majorant of the
-//! true step functional (the majorization–minimization argument of §4.5).
+//! The normal part N of S = μ(‖v̄‖) N is one of three ([`NormalPart`]): p_τ at the predictor
+//! û = d^n + p_d v_ν^n (the default; see `ContactKinematics`), where S depends on the unknowns only
+//! through μ(‖v̄‖), so a constant μ needs one convex solve and for the exponential law each solve
+//! minimizes a convex majorant of the true step functional (the majorization–minimization
+//! argument of §4.5); p_τ at u_ν^{n+½} of the iterate (Co.2); or the whole contact force q + λ of
+//! the iterate (Co.1, Coulomb's law), where S also follows the normal solution and a constant μ
+//! iterates too.
 
 use super::conic::{self, ConicSettings};
 use super::newton::{self, NewtonSettings};
