@@ -79,7 +79,7 @@ pub enum NormalPart<'a> {
     /// p_τ(d̂_i(y)) with d̂ = d^n + w (d^{n+1}(y) − d^n): u_ν^{n+½} of the iterate
     /// (w = ½; w = 1, the end point, for backward Euler)
     Midpoint { law: &'a FrictionBoundLaw, weight: f64 },
-    /// q_i(y) + λ_i: the whole contact force of the iterate (Coulomb's law)
+    /// (q_i(y) + λ_i)_+: the whole contact force of the iterate (Coulomb's law)
     Total,
 }
 
@@ -95,9 +95,10 @@ impl NormalPart<'_> {
 }
 
 /// (Co.1) The normal part of Coulomb's bound: the whole contact force of the iterate,
-/// N_i = q_i(y) + λ_i (compliance force of the scheme plus the multiplier of the constraint).
+/// N_i = (q_i(y) + λ_i)_+ (compliance force of the scheme plus the multiplier of the constraint;
+/// a solve may leave λ_i a round-off below 0, and a bound is never negative).
 pub fn total_contact_force(step: &StepData, i: usize, y: &[f64], lambda: &[f64]) -> f64 {
-    step.q(i, y) + lambda[i]
+    (step.q(i, y) + lambda[i]).max(0.0)
 }
 
 /// (Co.2) p_τ at the iterate: N_i = p_τ(d^n + w (d^{n+1}(y) − d^n)), u_ν^{n+½} for w = ½ (the
