@@ -239,7 +239,7 @@ fn enum_word() -> impl Strategy<Value = String> {
     const WORDS: &[&str] = &[
         "\"midpoint\"", "\"trapezoid\"", "\"backward-euler\"", "\"exponential\"", "\"constant\"", "\"table\"", "\"none\"",
         "\"exact\"", "\"penalty\"", "\"lumped\"", "\"consistent\"", "\"modified\"", "\"newton\"", "\"conic\"", "\"rectangle\"", "\"gmsh\"",
-        "\"strain\"", "\"stress\"", "\"capped\"", "\"uncapped\"", "\"inf\"", "\"Midpoint\"", "\"EXACT\"", "\"backward_euler\"",
+        "\"strain\"", "\"stress\"", "\"capped\"", "\"uncapped\"", "\"total\"", "\"predictor\"", "\"newton-unfrozen\"", "\"inf\"", "\"Midpoint\"", "\"EXACT\"", "\"backward_euler\"",
         "\"newton \"", "\"\"", "midpoint", "inf", "nan", "0", "-1", "true", "[]", "{}", "\"-inf\"", "\"1e308\"",
     ];
     prop_oneof![
@@ -250,7 +250,7 @@ fn enum_word() -> impl Strategy<Value = String> {
 }
 
 const ENUM_KEYS: &[&str] =
-    &["scheme", "law", "enforcement", "mass", "inner", "kind", "plane", "friction_bound", "penetration_bound"];
+    &["scheme", "law", "enforcement", "mass", "inner", "kind", "plane", "friction_bound", "friction_bound_at", "penetration_bound"];
 
 /// Lines that are valid somewhere in a scene; inserted at random places they switch features
 /// on (penalty, table law, conic solver, ...) or land in the wrong table.
@@ -260,7 +260,7 @@ fn scene_line() -> impl Strategy<Value = String> {
         "coefficient = 0.3", "coefficient = 1e308", "law = \"table\"", "points = [[0, 0.6], [0.1, 0.35], [1, 0.3]]",
         "points = [[0, 0.6], [0, 0.3]]", "points = []", "points = [[0, 1e308], [1e308, 0]]", "points = [[0]]",
         "inner = \"conic\"", "mass = \"consistent\"", "mass = \"modified\"", "persistency = true", "persistency = 1", "scheme = \"backward-euler\"", "scheme = \"trapezoid\"",
-        "friction_bound = \"uncapped\"", "plane = \"stress\"", "penetration_bound = \"inf\"", "penetration_bound = 0.0",
+        "friction_bound = \"uncapped\"", "friction_bound = \"total\"", "friction_bound_at = \"midpoint\"", "plane = \"stress\"", "penetration_bound = \"inf\"", "penetration_bound = 0.0",
         "penetration_bound = 1e308", "compliance = 0.0", "compliance = 1e308", "gap = \"0.01 - 0.2*x\"", "gap = -0.5",
         "gap = \"1/x\"", "relaxation = 0.5", "relaxation = 1e-300", "dirichlet = []", "contact = [\"bottom\", \"top\"]",
         "contact = [\"left\", \"right\", \"top\", \"bottom\"]", "dirichlet = [\"left\", \"right\", \"top\", \"bottom\"]",
@@ -390,7 +390,7 @@ fn set_table() -> impl Strategy<Value = TextMut> {
             format!("law = \"table\"\npoints = [{}]", pts.join(", "))
         }),
     ];
-    let contact = (n(), prop_oneof![n(), Just("\"inf\"".to_string())], prop::option::of(n()), prop::sample::select(&["\"capped\"", "\"uncapped\""][..]))
+    let contact = (n(), prop_oneof![n(), Just("\"inf\"".to_string())], prop::option::of(n()), prop::sample::select(&["\"capped\"", "\"uncapped\"", "\"total\""][..]))
         .prop_map(|(c, g, eps, cap)| {
             let enforcement = match &eps {
                 Some(e) => format!("enforcement = \"penalty\"\npenalty = {e}"),
