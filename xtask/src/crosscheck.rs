@@ -80,10 +80,12 @@ pub fn run(root: &Path) -> Result<String, String> {
     let _ = writeln!(report, "  frames of `dyncontact run {}` ({:.1} s)", rel(root, &scene), t.elapsed().as_secs_f64());
     record(&mut report, &mut failures, &format!("frames of {RUN_SCENE}"), result);
 
-    let t = Instant::now();
-    let result = getfem_check(root, &bin, &scripts.join("getfem"), &out_root.join("getfem"));
-    let _ = writeln!(report, "  GetFEM: dynamic contact, B.1 on the singular mass ({:.1} s)", t.elapsed().as_secs_f64());
-    record(&mut report, &mut failures, "GetFEM dynamic contact", result);
+    for (which, what) in [("bar_impact", "B.1 on the singular mass"), ("bar_friction", "oblique impact, Signorini–Coulomb and compliance + Coulomb")] {
+        let t = Instant::now();
+        let result = getfem_check(root, &bin, &scripts.join("getfem"), &out_root.join("getfem"), which);
+        let _ = writeln!(report, "  GetFEM: dynamic contact, {what} ({:.1} s)", t.elapsed().as_secs_f64());
+        record(&mut report, &mut failures, &format!("GetFEM dynamic contact ({which})"), result);
+    }
 
     let refs = rel(root, &reference);
     let _ = writeln!(report, "  scikit-fem reference operators written to {refs}/<scene>_{{M,K,C}}.mtx, <scene>_f.txt");
@@ -92,7 +94,7 @@ pub fn run(root: &Path) -> Result<String, String> {
         let n = scenes.len();
         let _ = write!(
             report,
-            "crosscheck OK: {n} scenes, tolerance 1e-12 relative, frames readable, GetFEM dynamic contact agrees ({total:.1} s)"
+            "crosscheck OK: {n} scenes, tolerance 1e-12 relative, frames readable, GetFEM dynamic contact agrees with and without friction ({total:.1} s)"
         );
         Ok(report)
     } else {
@@ -107,10 +109,13 @@ pub fn run(root: &Path) -> Result<String, String> {
 /// Debian's Python, which has GetFEM (python3-getfem); the cross-check venv's Python does not.
 const GETFEM_PYTHON: &str = "/usr/bin/python3";
 
-/// The GetFEM cross-check of the dynamic contact solve (`getfem/bar_impact.py`): installs
-/// Debian's python3-getfem with apt when it is missing (CI runs as root), then runs the script,
-/// which runs dyncontact and GetFEM on the same bar and compares them.
-fn getfem_check(root: &Path, bin: &Path, dir: &Path, out: &Path) -> Result<(bool, String), String> {
+/// The GetFEM cross-checks of the dynamic contact solve, each a script that runs dyncontact and
+/// GetFEM on the same bar and compares them: `getfem/bar_impact.py` (B.1, frictionless Signorini)
+/// and `getfem/bar_friction.py` (the oblique impact: Signorini–Coulomb and normal compliance +
+/// Coulomb in GetFEM's weak-form language). Installs Debian's python3-getfem with apt when it is
+/// missing (CI runs as root). `which` is the script's stem; the scene is `<stem>` + `_singular`
+/// for B.1 and `<stem>` for the friction case.
+fn getfem_check(root: &Path, bin: &Path, dir: &Path, out: &Path, which: &str) -> Result<(bool, String), String> {
     let has_getfem = || Command::new(GETFEM_PYTHON).args(["-c", "import getfem"]).stdout(Stdio::null()).stderr(Stdio::null()).status().is_ok_and(|s| s.success());
     if !has_getfem() {
         exec(Command::new("apt-get").args(["update", "-qq"]))
@@ -120,16 +125,18 @@ fn getfem_check(root: &Path, bin: &Path, dir: &Path, out: &Path) -> Result<(bool
             return Err(format!("python3-getfem was installed but `{GETFEM_PYTHON} -c 'import getfem'` still fails"));
         }
     }
-    let out = fresh_dir(out)?;
+    let scene = if which == "bar_impact" { "bar_impact_singular.toml".to_string() } else { format!("{which}.toml") };
+    let out = fresh_dir(&out.join(which))?;
     spawn(
         Command::new(GETFEM_PYTHON)
             .current_dir(root)
             .env("PYTHONDONTWRITEBYTECODE", "1")
-            .arg(dir.join("bar_impact.py"))
+            .env("PYTHONUNBUFFERED", "1")
+            .arg(dir.join(format!("{which}.py")))
             .arg("--dyncontact")
             .arg(bin)
             .arg("--scene")
-            .arg(dir.join("bar_impact_singular.toml"))
+            .arg(dir.join(scene))
             .arg("--out")
             .arg(&out),
     )

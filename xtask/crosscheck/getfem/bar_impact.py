@@ -46,10 +46,12 @@ gf.util('trace level', 0)  # GetFEM's assembly traces would drown the report
 
 L, H, RHO_C_V0_H = 1.0, 0.1, 0.01
 E0 = 0.5 * (L * H) * 0.1 ** 2
+LEFT = 1
 
 
-def getfem_run(nx, k, T):
-    """B.1 with GetFEM on the singular mass; per step: t, F_n, kinetic, elastic, contact nodes."""
+def bar_mesh(nx):
+    """The bar's mesh as dyncontact builds it: NX × 1 cells cut along the lower-left → upper-right
+    diagonal; region LEFT (the contact side x = 0) marked."""
     xs, ys = np.linspace(0.0, L, nx + 1), np.array([0.0, H])
     m = gf.Mesh('empty', 2)
     for i in range(nx):
@@ -57,26 +59,38 @@ def getfem_run(nx, k, T):
         p01, p11 = [xs[i], ys[1]], [xs[i + 1], ys[1]]
         m.add_convex(gf.GeoTrans('GT_PK(2,1)'), np.array([p00, p10, p11]).T)
         m.add_convex(gf.GeoTrans('GT_PK(2,1)'), np.array([p00, p11, p01]).T)
-    mf = gf.MeshFem(m, 2)
-    mf.set_classical_fem(1)
-    mim = gf.MeshIm(m, gf.Integ('IM_TRIANGLE(2)'))
-    mim_vertex = gf.MeshIm(m, gf.Integ('IM_NC(2,1)'))
-    LEFT = 1
     faces = m.outer_faces()
     pts = m.pts()
     left = [[cv, f] for cv, f in zip(faces[0], faces[1])
             if np.all(np.abs(pts[0, m.pid_in_faces(np.array([[cv], [f]]))]) < 1e-12)]
     m.set_region(LEFT, np.array(left).T)
-    n = mf.nbdof()
+    return m
+
+
+def vertex_mass(mf, mim_vertex, nx, singular):
+    """GetFEM's mass matrix integrated with the vertex rule (ρ|T|/3 per vertex, so lumped); with
+    `singular`, each contact node's mass is moved to its neighbour at x = h (a singular mass)."""
     M = gf.asm_mass_matrix(mim_vertex, mf)
-    dn = mf.basic_dof_nodes()
-    h = L / nx
-    for d in range(n):
-        if abs(dn[0, d]) < 1e-12:
-            partner = next(e for e in range(n)
-                           if abs(dn[0, e] - h) < 1e-12 and abs(dn[1, e] - dn[1, d]) < 1e-12 and e % 2 == d % 2)
-            M[partner, partner] = M[partner, partner] + M[d, d]
-            M[d, d] = 0.0
+    if singular:
+        n, dn, h = mf.nbdof(), mf.basic_dof_nodes(), L / nx
+        for d in range(n):
+            if abs(dn[0, d]) < 1e-12:
+                partner = next(e for e in range(n)
+                               if abs(dn[0, e] - h) < 1e-12 and abs(dn[1, e] - dn[1, d]) < 1e-12 and e % 2 == d % 2)
+                M[partner, partner] = M[partner, partner] + M[d, d]
+                M[d, d] = 0.0
+    return M
+
+
+def getfem_run(nx, k, T):
+    """B.1 with GetFEM on the singular mass; per step: t, F_n, kinetic, elastic, contact nodes."""
+    m = bar_mesh(nx)
+    mf = gf.MeshFem(m, 2)
+    mf.set_classical_fem(1)
+    mim = gf.MeshIm(m, gf.Integ('IM_TRIANGLE(2)'))
+    mim_vertex = gf.MeshIm(m, gf.Integ('IM_NC(2,1)'))
+    n = mf.nbdof()
+    M = vertex_mass(mf, mim_vertex, nx, True)
     lam, mu = 0.0, 0.5  # E = 1, ν = 0
     elastic = gf.Model('real')
     elastic.add_fem_variable('u', mf)
