@@ -186,6 +186,8 @@ pub struct Simulation<'p> {
     pub settings: Settings,
     /// W = H A_k⁻¹ Hᵀ (None without contact)
     pub delassus: Option<Mat<f64>>,
+    /// factorizations of the Newton matrices W_UU + D, reused while unchanged
+    pub delassus_factors: delassus::DelassusFactors,
     pub kinematics: ContactKinematics,
     pub state: State,
     pub setup_timing: SetupTiming,
@@ -244,6 +246,7 @@ impl<'p> Simulation<'p> {
             stepper,
             settings,
             delassus,
+            delassus_factors: delassus::DelassusFactors::default(),
             state,
             setup_timing: SetupTiming { assembly, factorization, delassus: t_delassus },
         })
@@ -473,6 +476,7 @@ impl<'p> Simulation<'p> {
             law: &c.normal,
             friction: c.friction.is_some(),
             dim: c.dim,
+            factors: &self.delassus_factors,
         };
         Some((data, p_tau_hat))
     }

@@ -297,3 +297,53 @@ fn f1_relaxation_gives_the_same_solution() {
     assert!(diff <= 1e-5 * scale, "relaxed fixed point differs by {diff:.3e}");
     assert!(b.iter().all(|r| r.report.fixed_point_converged()));
 }
+
+/// Worst per-step differences between the reduced Newton system (Cholesky on the force
+/// unknowns, factorization reused) and the full m × m LU, each solving the frozen problem of
+/// the converged F.1 bound from the same state; and whether a fresh factor cache gives the
+/// same bits as the simulation's warm one.
+fn reduced_vs_full(p: &Problem, steps: usize) -> (f64, f64, bool) {
+    let mut sim = Simulation::new(p).expect("setup");
+    let reduced = NewtonSettings { tolerance: 1e-12, ..NewtonSettings::default() };
+    let full = NewtonSettings { reduced: false, ..reduced };
+    let (mut worst_v, mut worst_f, mut same_bits) = (0.0f64, 0.0f64, true);
+    for rec in sim.steps().before_each(|sim| {
+            let (w, _) = sim.free_velocity();
+            let c = p.contact.as_ref().expect("contact");
+            let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
+            let (_, s, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(reduced), None).expect("F.1");
+            let a = newton::solve(&data, &s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced");
+            let b = newton::solve(&data, &s, &sim.state.lambda, &sim.state.t_fric, &full).expect("full");
+            let fresh = dyncontact::step::delassus::DelassusFactors::default();
+            let (mut cold, _) = sim.step_data(c.restrict(&w)).expect("data");
+            cold.factors = &fresh;
+            let a_cold = newton::solve(&cold, &s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced, cold");
+            same_bits &= a_cold.y == a.y && a_cold.lambda == a.lambda && a_cold.t == a.t;
+            let ra = data.forces(&a.y, &a.lambda, &a.t);
+            let rb = data.forces(&b.y, &b.lambda, &b.t);
+            if linalg::norm_inf(&ra) > 0.0 {
+                worst_v = worst_v.max(rel(&a.y, &b.y, data.velocity_scale(&a.y).max(1e-300)));
+                worst_f = worst_f.max(rel(&ra, &rb, linalg::norm_inf(&ra)));
+            }
+    }).take(steps.min(p.steps)) {
+        rec.expect("step");
+    }
+    (worst_v, worst_f, same_bits)
+}
+
+/// (S.6) The reduced Newton system (Cholesky of W_UU + D on the force unknowns, its
+/// factorization reused while U and D do not change) gives the same step solution as the full
+/// m × m LU on every step of a frictional impact, the compliant layer and the start of the
+/// default academic scene, to 1e-12 (the two directions are the same linear algebra in another
+/// order, so they differ by round-off, measured ≤ 1.1e-15; 1e-12 leaves room for the
+/// conditioning of W_UU); and a reused factorization gives the same bits as a fresh one.
+#[test]
+fn reduced_newton_system_agrees_with_the_full_one() {
+    for (name, steps) in [("impact_friction", usize::MAX), ("compliant_layer", usize::MAX), ("academic", 600)] {
+        let p = problem(fixture(name));
+        let (dv, df, same_bits) = reduced_vs_full(&p, steps);
+        println!("{name}: reduced vs full Newton system, worst per-step difference: velocity {dv:.3e}, force {df:.3e}; cache bit-identical: {same_bits}");
+        assert!(dv <= 1e-12 && df <= 1e-12, "{name}: velocity {dv:.3e}, force {df:.3e}");
+        assert!(same_bits, "{name}: a reused factorization changed the answer");
+    }
+}

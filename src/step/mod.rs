@@ -47,6 +47,8 @@ pub struct StepData<'a> {
     pub friction: bool,
     /// components per contact node (ν, τ_1, …): the space dimension d
     pub dim: usize,
+    /// the Newton matrices' factorizations, reused while the matrix is unchanged
+    pub factors: &'a delassus::DelassusFactors,
 }
 
 /// Contact status of a node after a step (contact.csv `status`).
@@ -167,8 +169,27 @@ impl StepData<'_> {
     }
     /// y_free − W r.
     pub fn response(&self, r: &[f64]) -> Vec<f64> {
-        let m = r.len();
-        (0..m).map(|j| self.y_free[j] - (0..m).map(|l| self.delassus[(j, l)] * r[l]).sum::<f64>()).collect()
+        let mut y = self.y_free.clone();
+        self.delassus_add(r, -1.0, &mut y);
+        y
+    }
+    /// W r.
+    pub fn apply_delassus(&self, r: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; r.len()];
+        self.delassus_add(r, 1.0, &mut out);
+        out
+    }
+    /// out += alpha W r, column by column (W is stored by columns) and skipping the zero
+    /// forces of separated nodes.
+    fn delassus_add(&self, r: &[f64], alpha: f64, out: &mut [f64]) {
+        for (l, &rl) in r.iter().enumerate() {
+            if rl != 0.0 {
+                let a = alpha * rl;
+                for (o, w) in out.iter_mut().zip(self.delassus.col_as_slice(l)) {
+                    *o += w * a;
+                }
+            }
+        }
     }
     /// A velocity scale for relative tests: the largest of the free velocity, `y`, and the
     /// velocities of the kinematics (v^n terms in d^{n+1} and v̄).

@@ -69,11 +69,15 @@ pub struct NewtonSettings {
     /// multiplies the default ρ_ν, ρ_τ (the solution must not depend on them)
     pub scale_normal: f64,
     pub scale_tangent: f64,
+    /// solve the symmetric cases' Newton systems on the force unknowns by Cholesky with the
+    /// factorization reused (`reduced_direction`, the default); false: the full m × m LU for
+    /// every direction (the reference the reduced system is tested against)
+    pub reduced: bool,
 }
 
 impl Default for NewtonSettings {
     fn default() -> Self {
-        NewtonSettings { tolerance: NEWTON_TOLERANCE, max_iterations: MAX_ITERATIONS, scale_normal: 1.0, scale_tangent: 1.0 }
+        NewtonSettings { tolerance: NEWTON_TOLERANCE, max_iterations: MAX_ITERATIONS, scale_normal: 1.0, scale_tangent: 1.0, reduced: true }
     }
 }
 
@@ -213,7 +217,7 @@ pub fn solve_with(
             break;
         }
         prev_ok = ok;
-        let Some((dy, dm)) = direction(step, s, &p, &x, &cur_sets) else {
+        let Some((dy, dm)) = direction(step, s, &p, &x, &cur_sets, set.reduced) else {
             return Err(NewtonFailure {
                 status: NewtonStatus::SingularJacobian,
                 iterations: it,
@@ -270,7 +274,14 @@ fn solution(step: &StepData, x: Iterate, stick: &[bool], iterations: usize, resi
 /// prescribed-velocity components (active normal, stick) carry a force unknown Δm (Δλ_i at 2i,
 /// Δt_i at 2i+1); the others carry a velocity unknown Δy with the force change known.
 /// None when the reduced matrix is singular.
-fn direction(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, sets: &(Vec<bool>, Vec<bool>)) -> Option<(Vec<f64>, Vec<f64>)> {
+fn direction(
+    step: &StepData,
+    s: &FrictionBound,
+    p: &Params,
+    x: &Iterate,
+    sets: &(Vec<bool>, Vec<bool>),
+    reduced: bool,
+) -> Option<(Vec<f64>, Vec<f64>)> {
     let (n, m) = (step.n(), step.m());
     let (active, stick) = sets;
     let (y, lambda, t, f) = (&x.y, &x.lambda, &x.t, &x.f);
@@ -305,7 +316,79 @@ fn direction(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, sets: 
             }
         }
     }
-    // J x = rhs with x_l = Δm_l (prescribed) or Δy_l (free)
+    let symmetric = coupling.iter().all(|&c| c == 0.0) && (0..m).all(|l| prescribed[l] || g[l] >= 0.0);
+    let sol = if reduced && symmetric {
+        reduced_direction(step, f, &prescribed, &g, &dy, &dm)?
+    } else {
+        general_direction(step, f, &prescribed, &g, &coupling, &dy, &dm)?
+    };
+    for l in 0..m {
+        if prescribed[l] {
+            dm[l] = sol[l];
+        } else {
+            dy[l] = sol[l];
+        }
+    }
+    Some((dy, dm))
+}
+
+/// The Newton direction as a symmetric positive definite system in the force increments (the
+/// frozen bound of F.1 with a monotone normal law: no Co.3 coupling, ∂q/∂y ≥ 0). With
+/// z_l = ω_l Δm_l on prescribed components (P) and z_l = ω_l g_l Δy_l on free components whose
+/// force follows y (F_g: g_l > 0), and the known force change r_k,l = ω_l Δm_l on the free ones
+/// (ω_l g_l Δy_l on P: the compliance part of an active node's force),
+/// the linearized (N.1) rows Δy + W Δr = −F_y read
+///   (W_UU + D) z_U = −F_U − Δy_P − (W r_k)_U,   U = P ∪ F_g,   D = diag(0 on P, 1/(ω g) on F_g),
+/// and the remaining free rows give Δy_l = −F_l − (W (z + r_k))_l. W_UU + D is a principal
+/// submatrix of the Delassus operator plus a nonnegative diagonal: Cholesky, not LU. Its
+/// factorization depends only on U and D, so it is reused from `step.factors` while they do not
+/// change (bit-identical to refactoring). Returns the unknown of each component (Δm on P, Δy
+/// elsewhere), None when W_UU + D is not numerically positive definite.
+fn reduced_direction(step: &StepData, f: &[f64], prescribed: &[bool], g: &[f64], dy: &[f64], dm: &[f64]) -> Option<Vec<f64>> {
+    let m = step.m();
+    let w = step.delassus;
+    let omega = |l: usize| step.nodes[step.node_of(l)].omega;
+    let unknown: Vec<usize> = (0..m).filter(|&l| prescribed[l] || g[l] > 0.0).collect();
+    let diag: Vec<f64> = unknown.iter().map(|&l| if prescribed[l] { 0.0 } else { 1.0 / (omega(l) * g[l]) }).collect();
+    // the known force change and its response W r_k
+    let r_k: Vec<f64> = (0..m).map(|l| omega(l) * if prescribed[l] { g[l] * dy[l] } else { dm[l] }).collect();
+    let w_rk = step.apply_delassus(&r_k);
+    let mut b: Vec<f64> = unknown.iter().map(|&j| -f[j] - w_rk[j] - if prescribed[j] { dy[j] } else { 0.0 }).collect();
+    if !unknown.is_empty() {
+        step.factors.solve(w, &unknown, &diag, &mut b)?;
+    }
+    let mut z = vec![0.0; m];
+    for (&l, &zl) in unknown.iter().zip(&b) {
+        z[l] = zl;
+    }
+    let w_z = step.apply_delassus(&z);
+    let out: Vec<f64> = (0..m)
+        .map(|l| {
+            if prescribed[l] {
+                z[l] / omega(l)
+            } else if g[l] > 0.0 {
+                z[l] / (omega(l) * g[l])
+            } else {
+                -f[l] - w_z[l] - w_rk[l]
+            }
+        })
+        .collect();
+    out.iter().all(|v| v.is_finite()).then_some(out)
+}
+
+/// The Newton direction on the full m × m system (dense LU), for the unsymmetric cases: the
+/// Co.3 coupling of the friction force to the normal force, and the unfrozen bound of N.4
+/// (∂S/∂v̄ < 0 under velocity weakening). J x = rhs with x_l = Δm_l (prescribed) or Δy_l (free).
+fn general_direction(
+    step: &StepData,
+    f: &[f64],
+    prescribed: &[bool],
+    g: &[f64],
+    coupling: &[f64],
+    dy: &[f64],
+    dm: &[f64],
+) -> Option<Vec<f64>> {
+    let (n, m) = (step.n(), step.m());
     let w = step.delassus;
     let omega = |l: usize| step.nodes[step.node_of(l)].omega;
     let mut jac = Mat::<f64>::zeros(m, m);
@@ -338,15 +421,7 @@ fn direction(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, sets: 
             rhs[j] -= w[(j, jt)] * c * known;
         }
     }
-    let sol = linalg::dense_solve(&jac, &rhs)?;
-    for l in 0..m {
-        if prescribed[l] {
-            dm[l] = sol[l];
-        } else {
-            dy[l] = sol[l];
-        }
-    }
-    Some((dy, dm))
+    linalg::dense_solve(&jac, &rhs)
 }
 
 /// Backtracking line search on ½‖F‖² along (Δy, Δm): the first Armijo step, else the best
