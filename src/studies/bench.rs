@@ -18,6 +18,7 @@
 //! 2. **The floor**: per run, the time of two sparse triangular-solve pairs with the run's own
 //!    factor of A_k (free solve + recovery solve: the least a step with contact can cost), and
 //!    time per step ÷ floor.
+//!    Also on the default scene itself (`floor.csv`): min and median over repeated runs.
 //! 3. **The race** (`race.csv`, `race.svg`): `newton` (F.1, the paper's sequence of convex
 //!    problems) against `newton-unfrozen` (N.4, F.1 as fallback) on the academic friction law and
 //!    a 5× steeper one, at a k inside (C.k) and beyond it: time and linear-algebra work per step,
@@ -90,6 +91,10 @@ struct Plan {
     /// the conic twin runs on the coarsest `conic_levels` levels only (it is ~30× slower)
     conic_levels: usize,
     race: RacePlan,
+    /// repetitions of the default scene for time per step ÷ floor (min and median reported);
+    /// its horizon (the scene's own end in the full plan)
+    floor_repeats: usize,
+    floor_end: Option<f64>,
 }
 
 impl Plan {
@@ -105,6 +110,8 @@ impl Plan {
             masses: vec![MassKind::Lumped, MassKind::Consistent],
             conic_levels: 3,
             race: RacePlan { cells: [32, 16], t_end: 0.5, decay_factors: vec![1.0, 5.0], beyond: vec![5e-4, 1e-3] },
+            floor_repeats: 5,
+            floor_end: None,
         }
     }
 
@@ -119,6 +126,8 @@ impl Plan {
             masses: vec![MassKind::Lumped, MassKind::Consistent],
             conic_levels: 0,
             race: RacePlan { cells: [16, 8], t_end: 0.05, decay_factors: vec![1.0, 5.0], beyond: vec![1e-3] },
+            floor_repeats: 2,
+            floor_end: Some(0.05),
         }
     }
 }
@@ -739,6 +748,82 @@ fn race_report(race: &RacePlan, rows: &[RaceRow]) -> String {
     s
 }
 
+/// One run of the default scene for the floor part.
+struct FloorRun {
+    per_step: f64,
+    floor: f64,
+    contact_per_step: f64,
+    stats: RunStats,
+}
+
+/// Part 2, the floor on the default scene (`academic`, as `cargo run --release -- run` runs it,
+/// without outputs): time per step ÷ the floor of two triangular-solve pairs, `repeats` times.
+fn floor_runs(plan: &Plan) -> Result<Vec<FloorRun>> {
+    let mut scene = Scene::default_scene();
+    if let Some(end) = plan.floor_end {
+        scene.time.end = end;
+    }
+    let p = Problem::from_scene(&scene, Path::new("."))?;
+    (0..plan.floor_repeats)
+        .map(|_| {
+            let (_, stats) = simulate(&p, &[])?;
+            let steps = stats.steps as f64;
+            Ok(FloorRun { per_step: stats.step_time_s / steps, floor: stats.floor_s, contact_per_step: stats.contact_time_s / steps, stats })
+        })
+        .collect()
+}
+
+/// floor.csv and the printed lines of the floor part: min and median over the repetitions.
+fn floor_report(runs: &[FloorRun]) -> (String, String) {
+    let mut csv = String::from("run,steps,time_per_step_s,floor_s,ratio_to_floor,contact_per_step_s,newton_iterations,fixed_point_iterations,factorizations,factor_reuses\n");
+    for (i, r) in runs.iter().enumerate() {
+        let st = &r.stats;
+        let _ = writeln!(
+            csv,
+            "{i},{},{:.6e},{:.6e},{:.3},{:.6e},{},{},{},{}",
+            st.steps,
+            r.per_step,
+            r.floor,
+            r.per_step / r.floor,
+            r.contact_per_step,
+            st.newton_iterations,
+            st.fixed_point_iterations,
+            st.factorizations,
+            st.factor_reuses
+        );
+    }
+    let stat = |f: &dyn Fn(&FloorRun) -> f64| {
+        let mut v: Vec<f64> = runs.iter().map(f).collect();
+        v.sort_by(f64::total_cmp);
+        (v[0], v[v.len() / 2])
+    };
+    let (step_min, step_med) = stat(&|r| r.per_step);
+    let (floor_min, floor_med) = stat(&|r| r.floor);
+    let (ratio_min, ratio_med) = stat(&|r| r.per_step / r.floor);
+    let (contact_min, contact_med) = stat(&|r| r.contact_per_step);
+    let st = &runs[0].stats;
+    let text = format!(
+        "floor: default scene (academic), {} steps, {} runs (min / median): time per step {:.1} / {:.1} µs, floor (two A_k \
+         solve pairs) {:.1} / {:.1} µs, ratio {:.2} / {:.2}; contact solve {:.1} / {:.1} µs per step; {} Newton iterations, \
+         {} convex solves, Newton matrices factored {} times and reused {} times\n",
+        st.steps,
+        runs.len(),
+        1e6 * step_min,
+        1e6 * step_med,
+        1e6 * floor_min,
+        1e6 * floor_med,
+        ratio_min,
+        ratio_med,
+        1e6 * contact_min,
+        1e6 * contact_med,
+        st.newton_iterations,
+        st.fixed_point_iterations,
+        st.factorizations,
+        st.factor_reuses
+    );
+    (csv, text)
+}
+
 /// Write one output file under `out`.
 fn write(out: &Path, name: &str, text: &str) -> Result<()> {
     write_atomic(&out.join(name), text.as_bytes())
@@ -764,6 +849,10 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     let title = format!("work–precision, academic scene, T = {} s (newton solid, conic dashed)", plan.t_end);
     write(out, "work_precision.svg", &work_svg(&rows, &title)?)?;
 
+    progress("floor: the default scene");
+    let (floor_csv, floor_text) = floor_report(&floor_runs(&plan)?);
+    write(out, "floor.csv", &floor_csv)?;
+
     let mut race = Vec::new();
     for case in race_cases(&plan.race)? {
         progress(&format!("race {}", case.label));
@@ -774,6 +863,8 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     write(out, "race.svg", &race_svg(&race, &title)?)?;
 
     let mut report = work_report(&plan, &rows, &ref_stats);
+    report.push('\n');
+    report.push_str(&floor_text);
     report.push('\n');
     report.push_str(&race_report(&plan.race, &race));
     let _ = writeln!(report, "\ntotal benchmark wall time {:.1} s; outputs in {}", clock.elapsed().as_secs_f64(), out.display());

@@ -55,6 +55,9 @@ pub(super) struct RunStats {
     pub fallbacks: usize,
     /// two A_k solves (free + recovery) with this run's factor
     pub floor_s: f64,
+    /// Newton-matrix factorizations computed and reused (the reduced system's cache)
+    pub factorizations: usize,
+    pub factor_reuses: usize,
 }
 
 /// The free-DOF indices of [ux, uy] at each probe point (None where clamped).
@@ -117,6 +120,7 @@ pub(super) fn simulate(p: &Problem, probes: &[[Option<usize>; 2]]) -> Result<(Tr
     }
     st.wall_time_s = setup + st.step_time_s;
     st.floor_s = floor_time(&sim);
+    (st.factorizations, st.factor_reuses) = sim.delassus_factors.counts();
     Ok((traj, st))
 }
 
