@@ -107,6 +107,10 @@ fn new_summary(problem: &Problem, sim: &Simulation, start: Instant) -> Summary {
             delassus_s: t.delassus,
             ..Timing::default()
         },
+        contact_solve: sim.delassus.as_ref().map_or("none", |w| w.form()).to_string(),
+        contact_solve_sparse: sim.delassus.as_ref().and_then(|w| w.sparse_stats()),
+        contact_factorizations: 0,
+        contact_factor_reuses: 0,
         newton_iterations_total: 0,
         fixed_point_iterations_total: 0,
         fixed_point_iterations_max: 0,
@@ -189,6 +193,7 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
             }
         };
         tally(&mut summary, &mut first_cap, &rec);
+        (summary.contact_factorizations, summary.contact_factor_reuses) = steps.simulation().delassus_factors.counts();
         let state = &steps.simulation().state;
         let t_out = Instant::now();
         let last = state.n == problem.steps;

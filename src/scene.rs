@@ -14,7 +14,7 @@ use crate::defaults;
 use crate::error::{Error, Result};
 use crate::model::expr::{Expr, VecExpr};
 pub use crate::model::kinds::{
-    Bound, BoundAt, DomainKind, EnforcementKind, FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind,
+    Bound, BoundAt, DomainKind, EnforcementKind, FrictionBound, FrictionLaw, ContactSolve, InnerSolver, MassKind, Plane, SchemeKind,
 };
 use crate::model::kinds;
 use crate::model::laws::FrictionCoefficient;
@@ -265,6 +265,9 @@ pub struct Solver {
     /// (R.2) velocity-level persistency on nodes that stay on the constraint or in stick
     #[serde(default)]
     pub persistency: bool,
+    /// "auto" | "dense" | "sparse": the form of the Delassus operator
+    #[serde(default)]
+    pub contact_solve: ContactSolve,
 }
 
 fn d_newton_tol() -> f64 {
@@ -291,6 +294,7 @@ impl Default for Solver {
             max_fixed_point_iterations: d_iters(),
             relaxation: d_one(),
             persistency: false,
+            contact_solve: ContactSolve::Auto,
         }
     }
 }
@@ -634,6 +638,7 @@ impl Scene {
             max_fixed_point_iterations: s.max_fixed_point_iterations as usize,
             relaxation: s.relaxation,
             persistency: s.persistency,
+            contact_solve: s.contact_solve,
         })
     }
 

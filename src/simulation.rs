@@ -8,7 +8,6 @@
 
 use std::time::Instant;
 
-use faer::Mat;
 
 use crate::defaults::CONIC_TOLERANCE_FLOOR;
 use crate::energy::{self, EnergyTerms, StepEnergy};
@@ -185,7 +184,7 @@ pub struct Simulation<'p> {
     pub stepper: StepOperator,
     pub settings: Settings,
     /// W = H A_k⁻¹ Hᵀ (None without contact)
-    pub delassus: Option<Mat<f64>>,
+    pub delassus: Option<delassus::Delassus>,
     /// factorizations of the Newton matrices W_UU + D, reused while unchanged
     pub delassus_factors: delassus::DelassusFactors,
     pub kinematics: ContactKinematics,
@@ -220,7 +219,10 @@ impl<'p> Simulation<'p> {
         let stepper = StepOperator::new(&ops, problem.model.time.scheme, problem.k)?;
         let factorization = clock.elapsed().as_secs_f64();
         let clock = Instant::now();
-        let delassus = problem.contact.as_ref().map(|c| delassus::delassus(stepper.factor(), c));
+        let delassus = problem.contact.as_ref().map(|c| {
+            let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| problem.mesh.nodes[i]).map(|x| [x[0], x[1], 0.0]).collect();
+            delassus::build(stepper.factor(), c, &positions, problem.model.solver.contact_solve)
+        });
         let t_delassus = clock.elapsed().as_secs_f64();
         let nc = problem.contact.as_ref().map(ContactModel::n).unwrap_or(0);
         let (u, v) = (problem.u0.clone(), problem.v0.clone());

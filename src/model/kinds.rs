@@ -100,6 +100,19 @@ pub enum MassKind {
     Modified,
 }
 
+/// The form of the Delassus operator and so of the contact solve (`[solver] contact_solve`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactSolve {
+    /// dense below `defaults::SPARSE_FROM` contact unknowns, sparse from there
+    #[default]
+    Auto,
+    /// the exact m × m operator, dense Cholesky
+    Dense,
+    /// the probed operator truncated at `defaults::DELASSUS_TRUNCATION`, sparse Cholesky
+    Sparse,
+}
+
 /// The penetration bound g: finite, or none ("inf", pure normal compliance).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Bound {

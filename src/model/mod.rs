@@ -9,7 +9,7 @@ pub mod laws;
 pub mod material;
 
 use expr::{Expr, VecExpr};
-use kinds::{Bound, BoundAt, FrictionBound, InnerSolver, MassKind, Plane, SchemeKind};
+use kinds::{Bound, BoundAt, FrictionBound, ContactSolve, InnerSolver, MassKind, Plane, SchemeKind};
 use laws::FrictionCoefficient;
 
 /// A validated scene: every range checked, every expression parsed, every law built. It is
@@ -136,6 +136,8 @@ pub struct SolverParams {
     pub relaxation: f64,
     /// (R.2) velocity-level persistency
     pub persistency: bool,
+    /// dense or sparse Delassus operator (auto: from the sizes)
+    pub contact_solve: ContactSolve,
 }
 
 impl Model {

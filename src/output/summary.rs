@@ -248,6 +248,13 @@ pub struct Summary {
     pub final_time: f64,
     pub wall_time_s: f64,
     pub timing: Timing,
+    /// the form of the Delassus operator ("dense" | "sparse" | "none") and, for the sparse form,
+    /// its probing facts (radius, colours, solves, density, measured apply error)
+    pub contact_solve: String,
+    pub contact_solve_sparse: Option<crate::step::delassus::SparseStats>,
+    /// Newton matrices W_UU + D factored, and factorizations reused (unchanged sets)
+    pub contact_factorizations: usize,
+    pub contact_factor_reuses: usize,
     pub newton_iterations_total: usize,
     pub fixed_point_iterations_total: usize,
     pub fixed_point_iterations_max: usize,

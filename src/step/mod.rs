@@ -15,7 +15,6 @@ pub mod delassus;
 pub mod fixed_point;
 pub mod newton;
 
-use faer::Mat;
 
 use crate::model::laws::{NormalForceRule, NormalLaw};
 
@@ -36,7 +35,7 @@ pub struct NodeData {
 /// The frozen-S contact problem of one step, condensed on the contact DOFs.
 pub struct StepData<'a> {
     /// Delassus operator W = H A_k⁻¹ Hᵀ, components interleaved (ν_1, τ_1, ν_2, τ_2, …)
-    pub delassus: &'a Mat<f64>,
+    pub delassus: &'a delassus::Delassus,
     pub y_free: Vec<f64>,
     pub nodes: Vec<NodeData>,
     pub a_d: f64,
@@ -179,17 +178,8 @@ impl StepData<'_> {
         self.delassus_add(r, 1.0, &mut out);
         out
     }
-    /// out += alpha W r, column by column (W is stored by columns) and skipping the zero
-    /// forces of separated nodes.
     fn delassus_add(&self, r: &[f64], alpha: f64, out: &mut [f64]) {
-        for (l, &rl) in r.iter().enumerate() {
-            if rl != 0.0 {
-                let a = alpha * rl;
-                for (o, w) in out.iter_mut().zip(self.delassus.col_as_slice(l)) {
-                    *o += w * a;
-                }
-            }
-        }
+        self.delassus.add_times(r, alpha, out);
     }
     /// A velocity scale for relative tests: the largest of the free velocity, `y`, and the
     /// velocities of the kinematics (v^n terms in d^{n+1} and v̄).
