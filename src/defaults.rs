@@ -46,3 +46,8 @@ pub const SPARSE_DENSITY: f64 = 0.25;
 
 /// The sparse Delassus operator drops entries below this fraction of the diagonal.
 pub const DELASSUS_TRUNCATION: f64 = 1e-12;
+
+/// Cells along one side of a rectangle at most: long strips (8,192 cells along Γ3 in the
+/// scaling benchmark) are fine; the total size is guarded by the memory estimate of `run`
+/// (src/resources.rs), not by this bound.
+pub const MAX_CELLS_PER_SIDE: i64 = 65_536;

@@ -459,8 +459,9 @@ impl Scene {
                     if *c < 1 {
                         return e(&format!("domain.cells[{i}]"), format!("must be >= 1, got {c}"));
                     }
-                    if *c > 4096 {
-                        return e(&format!("domain.cells[{i}]"), format!("must be <= 4096, got {c}"));
+                    if *c > defaults::MAX_CELLS_PER_SIDE {
+                        let max = defaults::MAX_CELLS_PER_SIDE;
+                        return e(&format!("domain.cells[{i}]"), format!("must be <= {max}, got {c}"));
                     }
                 }
                 if d.file.is_some() {

@@ -18,7 +18,7 @@
 //! or more than [`MAX_CELLS_PER_SIDE`] on a side, and a scene whose
 //! `solver.max_newton_iterations × max_fixed_point_iterations` exceeds [`MAX_ITERATION_PRODUCT`]
 //! are not built; a problem that would run the conic inner solver on more than
-//! [`MAX_CONIC_NODES`] contact nodes is built but not stepped. The library accepts up to 4096
+//! [`MAX_CONIC_NODES`] contact nodes is built but not stepped. The library accepts up to 65,536
 //! cells per side, 10⁵ × 10⁵ iterations and any number of contact nodes on purpose: that is
 //! minutes of honest work, not a hang.
 //!

@@ -23,6 +23,8 @@
 //!    problems) against `newton-unfrozen` (N.4, F.1 as fallback) on the academic friction law and
 //!    a 5× steeper one, at a k inside (C.k) and beyond it: time and linear-algebra work per step,
 //!    and the largest per-step difference of their solutions from the same state.
+//! 4. **Scaling** (`scaling.csv`, `scaling.svg`, src/studies/scaling.rs): the contact solve per
+//!    step against the number of contact nodes, dense and sparse Delassus operator.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -853,6 +855,11 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     let (floor_csv, floor_text) = floor_report(&floor_runs(&plan)?);
     write(out, "floor.csv", &floor_csv)?;
 
+    let scaling_plan = if opts.quick { super::scaling::ScalingPlan::quick() } else { super::scaling::ScalingPlan::full() };
+    let scaling_rows = super::scaling::run(&scaling_plan, &progress)?;
+    write(out, "scaling.csv", &super::scaling::csv(&scaling_rows))?;
+    write(out, "scaling.svg", &super::scaling::svg(&scaling_rows, &scaling_plan)?)?;
+
     let mut race = Vec::new();
     for case in race_cases(&plan.race)? {
         progress(&format!("race {}", case.label));
@@ -865,6 +872,8 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     let mut report = work_report(&plan, &rows, &ref_stats);
     report.push('\n');
     report.push_str(&floor_text);
+    report.push('\n');
+    report.push_str(&super::scaling::report(&scaling_rows));
     report.push('\n');
     report.push_str(&race_report(&plan.race, &race));
     let _ = writeln!(report, "\ntotal benchmark wall time {:.1} s; outputs in {}", clock.elapsed().as_secs_f64(), out.display());

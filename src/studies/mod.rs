@@ -9,4 +9,5 @@ pub mod bound_at;
 pub mod convergence;
 pub mod harness;
 pub mod penalty;
+pub mod scaling;
 pub mod stability;
