@@ -14,7 +14,7 @@ use crate::defaults;
 use crate::error::{Error, Result};
 use crate::model::expr::{Expr, VecExpr};
 pub use crate::model::kinds::{
-    Bound, BoundAt, DomainKind, EnforcementKind, FrictionBound, FrictionLaw, ContactSolve, InnerSolver, MassKind, Plane, SchemeKind,
+    Bound, BoundAt, DomainKind, EnforcementKind, FrictionBound, FrictionLaw, ContactSolve, FixedPointAcceleration, InnerSolver, MassKind, Plane, SchemeKind,
 };
 use crate::model::kinds;
 use crate::model::laws::FrictionCoefficient;
@@ -268,6 +268,9 @@ pub struct Solver {
     /// "auto" | "dense" | "sparse": the form of the Delassus operator
     #[serde(default)]
     pub contact_solve: ContactSolve,
+    /// "anderson" | "none": how (F.1) updates S
+    #[serde(default)]
+    pub fixed_point_acceleration: FixedPointAcceleration,
 }
 
 fn d_newton_tol() -> f64 {
@@ -295,6 +298,7 @@ impl Default for Solver {
             relaxation: d_one(),
             persistency: false,
             contact_solve: ContactSolve::Auto,
+            fixed_point_acceleration: FixedPointAcceleration::Anderson,
         }
     }
 }
@@ -640,6 +644,7 @@ impl Scene {
             relaxation: s.relaxation,
             persistency: s.persistency,
             contact_solve: s.contact_solve,
+            fixed_point_acceleration: s.fixed_point_acceleration,
         })
     }
 

@@ -16,7 +16,7 @@ use crate::failure::{ContactFailure, SolverFailure, StepFailureCause};
 use crate::fem::Operators;
 use crate::linalg;
 use crate::model::contact::ContactModel;
-use crate::model::kinds::{BoundAt, FrictionBound, InnerSolver, SchemeKind};
+use crate::model::kinds::{BoundAt, FixedPointAcceleration, FrictionBound, InnerSolver, SchemeKind};
 use crate::problem::Problem;
 use crate::scheme::{ContactKinematics, StepOperator};
 use crate::step::conic::ConicSettings;
@@ -156,6 +156,7 @@ impl Settings {
                 tolerance: s.fixed_point_tolerance,
                 max_iterations: s.max_fixed_point_iterations,
                 relaxation: s.relaxation,
+                anderson: s.fixed_point_acceleration == FixedPointAcceleration::Anderson,
             },
         }
     }

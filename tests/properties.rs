@@ -275,7 +275,7 @@ proptest! {
     /// residuals vanish for any r_ν, r_τ > 0 (ρ rescaled by 10 and 0.1).
     #[test]
     fn n3_friction_return_map((n, wraw, y_free, d_n, v_t, s, c, k) in step_problem(), bound in any::<bool>()) {
-        let w = build(n, &wraw);
+        let w = dyncontact::step::delassus::Delassus::Dense(build(n, &wraw));
         let law = NormalLaw::compliance(c);
         let g = 0.01;
         let nodes: Vec<NodeData> = (0..n).map(|i| NodeData {

@@ -100,6 +100,17 @@ pub enum MassKind {
     Modified,
 }
 
+/// How (F.1) updates the friction bound (`[solver] fixed_point_acceleration`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum FixedPointAcceleration {
+    /// Anderson(1) extrapolation of S, safeguarded (θ = 1 only)
+    #[default]
+    Anderson,
+    /// the plain iteration S ← θ G(S) + (1 − θ) S of the paper
+    None,
+}
+
 /// The form of the Delassus operator and so of the contact solve (`[solver] contact_solve`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "lowercase")]

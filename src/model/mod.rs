@@ -9,7 +9,7 @@ pub mod laws;
 pub mod material;
 
 use expr::{Expr, VecExpr};
-use kinds::{Bound, BoundAt, FrictionBound, ContactSolve, InnerSolver, MassKind, Plane, SchemeKind};
+use kinds::{Bound, BoundAt, FrictionBound, ContactSolve, FixedPointAcceleration, InnerSolver, MassKind, Plane, SchemeKind};
 use laws::FrictionCoefficient;
 
 /// A validated scene: every range checked, every expression parsed, every law built. It is
@@ -138,6 +138,8 @@ pub struct SolverParams {
     pub persistency: bool,
     /// dense or sparse Delassus operator (auto: from the sizes)
     pub contact_solve: ContactSolve,
+    /// Anderson extrapolation of S in (F.1), or the plain iteration
+    pub fixed_point_acceleration: FixedPointAcceleration,
 }
 
 impl Model {

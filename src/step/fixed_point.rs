@@ -32,6 +32,9 @@ pub struct FixedPointSettings {
     pub max_iterations: usize,
     /// θ of S ← θ S_new + (1 − θ) S
     pub relaxation: f64,
+    /// Anderson(1) extrapolation of S (with θ = 1): the same fixed point and the same stopping
+    /// test, fewer convex solves; false: the plain iteration (the paper's F.1)
+    pub anderson: bool,
 }
 
 /// What the step did (one history.csv row's worth of solver facts).
@@ -198,6 +201,8 @@ fn iterate(
     let mut y_prev = y0.to_vec();
     let (mut lam, mut tf) = (lambda0.to_vec(), t0.to_vec());
     let mut last: Option<(ContactSolution, Vec<f64>)> = None;
+    // G(S) and G(S) − S of the previous iteration, for the extrapolation
+    let mut history: Option<(Vec<f64>, Vec<f64>)> = None;
     for l in 1..=fp.max_iterations.max(1) {
         let sol = inner_solve(step, &s_bound, &lam, &tf, inner).map_err(fail(l))?;
         if let Some(tr) = trace.as_deref_mut() {
@@ -218,9 +223,20 @@ fn iterate(
             return Ok((sol, s_bound, report));
         }
         let s_used = s_bound.clone();
-        for i in 0..n {
-            s_bound[i] = fp.relaxation * s_new[i] + (1.0 - fp.relaxation) * s_bound[i];
+        let residual: Vec<f64> = s_new.iter().zip(&s_used).map(|(g, s)| g - s).collect();
+        let extrapolated = match &history {
+            Some((g_prev, f_prev)) if fp.anderson && fp.relaxation == 1.0 => anderson(&s_new, &residual, g_prev, f_prev),
+            _ => None,
+        };
+        match extrapolated {
+            Some(s_next) => s_bound = s_next,
+            None => {
+                for i in 0..n {
+                    s_bound[i] = fp.relaxation * s_new[i] + (1.0 - fp.relaxation) * s_bound[i];
+                }
+            }
         }
+        history = Some((s_new, residual));
         y_prev.clone_from(&sol.y);
         lam.clone_from(&sol.lambda);
         tf.clone_from(&sol.t);
@@ -230,4 +246,22 @@ fn iterate(
     report.fixed_point = FixedPointStatus::CapReached;
     let (sol, s_used) = last.expect("the loop above runs at least once and either returns or sets `last`");
     Ok((sol, s_used, report))
+}
+
+/// (F.1) Anderson(1) step for the fixed point S = G(S): with f = G(S) − S at this and the
+/// previous iterate, S_next = G − γ (G − G_prev), γ = f·(f − f_prev)/‖f − f_prev‖², clamped at 0
+/// (a bound is never negative). None — take the plain step — when the residual did not decrease
+/// (the safeguard that keeps the plain iteration's convergence) or the secant is degenerate.
+fn anderson(g: &[f64], f: &[f64], g_prev: &[f64], f_prev: &[f64]) -> Option<Vec<f64>> {
+    if linalg::dot(f, f) >= linalg::dot(f_prev, f_prev) {
+        return None;
+    }
+    let df: Vec<f64> = f.iter().zip(f_prev).map(|(a, b)| a - b).collect();
+    let dd = linalg::dot(&df, &df);
+    if dd <= 0.0 || !dd.is_finite() {
+        return None;
+    }
+    let gamma = linalg::dot(f, &df) / dd;
+    let s: Vec<f64> = g.iter().zip(g_prev).map(|(a, b)| (a - gamma * (a - b)).max(0.0)).collect();
+    s.iter().all(|v| v.is_finite()).then_some(s)
 }

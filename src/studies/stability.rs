@@ -28,7 +28,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use crate::energy::EnergyTerms;
 use crate::error::{Error, Result};
 use crate::failure::StepFailureCause;
-use crate::model::kinds::{self, EnforcementKind, InnerSolver, MassKind, SchemeKind};
+use crate::model::kinds::{self, EnforcementKind, FixedPointAcceleration, InnerSolver, MassKind, SchemeKind};
 use crate::output::summary::ModelInfo;
 use crate::output::write_atomic;
 use crate::problem::Problem;
@@ -157,8 +157,11 @@ impl Variant {
         self.scheme == SchemeKind::Midpoint
     }
 
-    /// Set the scheme and solver options on a scene.
+    /// Set the scheme and solver options on a scene. The map is of the paper's plain (F.1)
+    /// iteration (`fixed_point_acceleration = "none"`): where it slows down and caps beyond
+    /// (C.k) is what the map shows.
     pub fn apply(&self, s: &mut Scene) {
+        s.solver.fixed_point_acceleration = FixedPointAcceleration::None;
         s.time.scheme = self.scheme;
         s.solver.mass = self.mass;
         s.solver.persistency = self.persistency;
