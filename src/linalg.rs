@@ -52,10 +52,19 @@ pub fn mul(a: &SpMat, x: &[f64]) -> Vec<f64> {
     y
 }
 
-/// xᵀ A y.
+/// xᵀ A y, column by column: Σ_j y_j (Σ_p A_pj x_p) — reads A once and writes nothing.
 pub fn quad(a: &SpMat, x: &[f64], y: &[f64]) -> f64 {
-    let ay = mul(a, y);
-    dot(x, &ay)
+    let r = a.as_ref();
+    let (cp, ri, v) = (r.symbolic().col_ptr(), r.symbolic().row_idx(), r.val());
+    let mut total = 0.0;
+    for (j, &yj) in y.iter().enumerate().take(a.ncols()) {
+        if yj == 0.0 {
+            continue;
+        }
+        let col: f64 = (cp[j]..cp[j + 1]).map(|p| v[p] * x[ri[p]]).sum();
+        total += col * yj;
+    }
+    total
 }
 
 pub fn dot(x: &[f64], y: &[f64]) -> f64 {

@@ -82,6 +82,9 @@ enum StudyKind {
         /// a small configuration (smoke test)
         #[arg(long)]
         quick: bool,
+        /// only the floor part (time per step ÷ floor on the default scene; floor.csv)
+        #[arg(long)]
+        floor_only: bool,
     },
     /// Stability map: sweeps of k, ε, the friction decay, the impact speed and θ per scheme,
     /// each run classified (converged, fixed point failed, Newton failed, energy grew, error).
@@ -144,9 +147,9 @@ fn main() -> ExitCode {
             cmd_run(scene.as_deref(), out.as_deref(), *checkpoint_every, resume.as_deref(), *stop_after)
         }
         Command::Study { study: StudyKind::Penalty { scene, eps, out } } => cmd_penalty(scene.as_deref(), eps.as_deref(), out.as_deref()),
-        Command::Study { study: StudyKind::Bench { out, quick } } => {
+        Command::Study { study: StudyKind::Bench { out, quick, floor_only } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/bench"));
-            studies::bench::run(&out, &studies::bench::BenchOptions { quick: *quick }).map(|report| say!("{report}"))
+            studies::bench::run(&out, &studies::bench::BenchOptions { quick: *quick, floor_only: *floor_only }).map(|report| say!("{report}"))
         }
         Command::Study { study: StudyKind::Stability { out, quick } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/stability"));

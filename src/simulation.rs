@@ -188,6 +188,9 @@ pub struct Simulation<'p> {
     pub delassus: Option<delassus::Delassus>,
     /// factorizations of the Newton matrices W_UU + D, reused while unchanged
     pub delassus_factors: delassus::DelassusFactors,
+    /// K u^n: the (E.1) elastic term of the last step computed it, the next right-hand side
+    /// (S.2) reuses it (one sparse product per step instead of two)
+    ku: Vec<f64>,
     pub kinematics: ContactKinematics,
     pub state: State,
     pub setup_timing: SetupTiming,
@@ -242,6 +245,7 @@ impl<'p> Simulation<'p> {
             active: vec![false; nc],
             stick: vec![false; nc],
         };
+        let ku = linalg::mul(&ops.k, &state.u);
         Ok(Simulation {
             problem,
             kinematics: stepper.contact_kinematics(),
@@ -250,6 +254,7 @@ impl<'p> Simulation<'p> {
             settings,
             delassus,
             delassus_factors: delassus::DelassusFactors::default(),
+            ku,
             state,
             setup_timing: SetupTiming { assembly, factorization, delassus: t_delassus },
         })
@@ -350,9 +355,10 @@ impl<'p> Simulation<'p> {
         let (u, v) = (&self.state.u, &self.state.v);
         let du: Vec<f64> = u_new.iter().zip(u).map(|(a, b)| a - b).collect();
         let v_visc = self.stepper.viscous_velocity(v, &v_new);
+        let ku_new = linalg::mul(&self.ops.k, &u_new);
         let mut se = StepEnergy {
             d_kinetic: energy::increment(&self.ops.m, v, &v_new),
-            d_elastic: energy::increment(&self.ops.k, u, &u_new),
+            d_elastic: energy::increment_with(&du, &self.ku, &ku_new),
             work: linalg::dot(&du, f),
             viscous: linalg::quad(&self.ops.c, &du, &v_visc),
             ..StepEnergy::default()
@@ -370,6 +376,7 @@ impl<'p> Simulation<'p> {
         self.state.u = u_new;
         self.state.v = v_new;
         self.state.n += 1;
+        self.ku = ku_new;
         rec.energy = self.state.energy;
         rec.energy_scale = self.state.energy_scale;
         rec
@@ -447,7 +454,7 @@ impl<'p> Simulation<'p> {
     /// The free velocity A_k⁻¹ b^n of the current state and the load used.
     pub fn free_velocity(&self) -> (Vec<f64>, Vec<f64>) {
         let f = self.problem.loads.at(self.stepper.load_time(self.problem.time(self.state.n)));
-        let mut v_free = self.stepper.rhs(&self.state.u, &self.state.v, &f);
+        let mut v_free = self.stepper.rhs(&self.ku, &self.state.v, &f);
         self.stepper.solve_in_place(&mut v_free);
         (v_free, f)
     }
@@ -516,6 +523,7 @@ impl<'p> Simulation<'p> {
             return Err(Error::Output(format!("the checkpoint is at step {}, beyond the scene's {} steps", s.n, self.problem.steps)));
         }
         self.state = s;
+        self.ku = linalg::mul(&self.ops.k, &self.state.u);
         Ok(())
     }
 

@@ -47,7 +47,7 @@ fn number(row: &std::collections::HashMap<String, String>, col: &str) -> f64 {
 #[test]
 fn quick_bench_writes_its_files() {
     let dir = std::env::temp_dir().join(format!("dyncontact-bench-smoke-{}", std::process::id()));
-    let report = bench::run(&dir, &BenchOptions { quick: true }).expect("the quick benchmark runs");
+    let report = bench::run(&dir, &BenchOptions { quick: true, floor_only: false }).expect("the quick benchmark runs");
     assert!(report.contains("work–precision") && report.contains("race"), "{report}");
 
     let (header, rows) = read_csv(&dir.join("work_precision.csv"));

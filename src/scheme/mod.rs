@@ -38,7 +38,6 @@ pub struct StepOperator {
     a: Cholesky,
     /// R with b^n = R v^n − K u^n + f
     r: SpMat,
-    kmat: SpMat,
 }
 
 impl StepOperator {
@@ -55,7 +54,7 @@ impl StepOperator {
                 linalg::combine(&[(1.0 / k, &ops.m)])?,
             ),
         };
-        Ok(StepOperator { kind, k, a: Cholesky::new(&a, "the step matrix A_k")?, r, kmat: ops.k.clone() })
+        Ok(StepOperator { kind, k, a: Cholesky::new(&a, "the step matrix A_k")?, r })
     }
 
     /// The time at which the load is sampled: f^{n+½} = f(t_n + k/2) (decision 7), or
@@ -68,11 +67,11 @@ impl StepOperator {
     }
 
     /// (S.2) without contact forces: b^n = (M/k − C/2 − kK/4) v^n − K u^n + f^{n+½}
-    /// (backward Euler: M v^n/k − K u^n + f^{n+1}), so that A_k w = b^n − Hᵀ r.
-    pub fn rhs(&self, u: &[f64], v: &[f64], f: &[f64]) -> Vec<f64> {
-        let mut b = f.to_vec();
+    /// (backward Euler: M v^n/k − K u^n + f^{n+1}), so that A_k w = b^n − Hᵀ r. `ku` is K u^n
+    /// (the time loop keeps it from the previous step's (E.1) term).
+    pub fn rhs(&self, ku: &[f64], v: &[f64], f: &[f64]) -> Vec<f64> {
+        let mut b: Vec<f64> = f.iter().zip(ku).map(|(f, ku)| f - ku).collect();
         linalg::mul_add(&self.r, v, 1.0, &mut b);
-        linalg::mul_add(&self.kmat, u, -1.0, &mut b);
         b
     }
 

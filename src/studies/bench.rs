@@ -55,6 +55,8 @@ use super::harness::{self, loglog_slope};
 pub struct BenchOptions {
     /// a small configuration for smoke tests
     pub quick: bool,
+    /// only part 2 on the default scene (floor.csv)
+    pub floor_only: bool,
 }
 
 /// The columns of work_precision.csv.
@@ -836,6 +838,11 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     let clock = Instant::now();
     let plan = if opts.quick { Plan::quick() } else { Plan::full() };
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    if opts.floor_only {
+        let (floor_csv, floor_text) = floor_report(&floor_runs(&plan)?);
+        write(out, "floor.csv", &floor_csv)?;
+        return Ok(floor_text);
+    }
 
     let reference_spec = RunSpec { scheme: SchemeKind::Midpoint, inner: InnerSolver::Newton, mass: MassKind::Lumped, level: plan.reference };
     progress(&format!("reference {}", reference_spec.label()));
