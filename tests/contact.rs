@@ -68,36 +68,29 @@ fn rel(a: &[f64], b: &[f64], scale: f64) -> f64 {
 /// Solve the frozen problem of every step with both inner solvers and compare.
 /// Returns the worst relative differences (velocity, force) over the run.
 fn twins_on(p: &Problem, steps: usize) -> (f64, f64) {
-    let mut sim = Simulation::new(p).expect("setup");
     let newton_set = NewtonSettings { tolerance: 1e-12, ..NewtonSettings::default() };
     let conic_set = ConicSettings { tolerance: 1e-11, max_rounds: 100, verbose: false };
     let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);
-    for rec in sim.steps().before_each(|sim| {
-            let (w, _) = sim.free_velocity();
-            let c = p.contact.as_ref().expect("contact");
-            let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
-            // the S of the converged fixed point, then one frozen solve by each twin
-            let (_, s, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(newton_set), None).expect("F.1");
-            let a = newton::solve(&data, &s, &sim.state.lambda, &sim.state.t_fric, &newton_set).expect("newton");
-            let b = conic::solve(&data, &s, &conic_set).expect("conic");
-            let vs = data.velocity_scale(&a.y).max(1e-300);
-            let ra = data.forces(&a.y, &a.lambda, &a.t);
-            let rb = data.forces(&b.y, &b.lambda, &b.t);
-            // the conic solver works in r̃ = r/V with V the velocity scale, so its absolute force
-            // accuracy is relative to V/‖W‖ as well as to the forces themselves
-            let w_norm = (0..data.delassus.dim()).map(|i| (0..data.delassus.dim()).map(|j| data.delassus[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
-            let fs = linalg::norm_inf(&ra).max(data.velocity_scale(&data.y_free) / w_norm).max(1e-300);
-            if linalg::norm_inf(&ra) > 0.0 {
-                let (dv, df) = (rel(&a.y, &b.y, vs), rel(&ra, &rb, fs));
-                if std::env::var_os("TWIN_DEBUG").is_some() && (dv > 1e-6 || df > 1e-6) {
-                    println!("step {}: dv {dv:.3e} df {df:.3e} vs {vs:.3e} fs {fs:.3e} y_newton {:?} y_conic {:?} status {:?} {:?}", sim.state.n + 1, &a.y[..6], &b.y[..6], &a.status[..3], &b.status[..3]);
-                }
-                worst_v = worst_v.max(dv);
-                worst_f = worst_f.max(df);
+    // the S of the converged fixed point, then one frozen solve by each twin
+    common::each_frozen_step(p, steps, newton_set, |sim, data, s, _| {
+        let a = newton::solve(data, s, &sim.state.lambda, &sim.state.t_fric, &newton_set).expect("newton");
+        let b = conic::solve(data, s, &conic_set).expect("conic");
+        let vs = data.velocity_scale(&a.y).max(1e-300);
+        let ra = data.forces(&a.y, &a.lambda, &a.t);
+        let rb = data.forces(&b.y, &b.lambda, &b.t);
+        // the conic solver works in r̃ = r/V with V the velocity scale, so its absolute force
+        // accuracy is relative to V/‖W‖ as well as to the forces themselves
+        let w_norm = (0..data.delassus.dim()).map(|i| (0..data.delassus.dim()).map(|j| data.delassus[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
+        let fs = linalg::norm_inf(&ra).max(data.velocity_scale(&data.y_free) / w_norm).max(1e-300);
+        if linalg::norm_inf(&ra) > 0.0 {
+            let (dv, df) = (rel(&a.y, &b.y, vs), rel(&ra, &rb, fs));
+            if std::env::var_os("TWIN_DEBUG").is_some() && (dv > 1e-6 || df > 1e-6) {
+                println!("step {}: dv {dv:.3e} df {df:.3e} vs {vs:.3e} fs {fs:.3e} y_newton {:?} y_conic {:?} status {:?} {:?}", sim.state.n + 1, &a.y[..6], &b.y[..6], &a.status[..3], &b.status[..3]);
             }
-    }).take(steps.min(p.steps)) {
-        rec.expect("step");
-    }
+            worst_v = worst_v.max(dv);
+            worst_f = worst_f.max(df);
+        }
+    });
     (worst_v, worst_f)
 }
 
@@ -306,31 +299,24 @@ fn f1_relaxation_gives_the_same_solution() {
 /// the converged F.1 bound from the same state; and whether a fresh factor cache gives the
 /// same bits as the simulation's warm one.
 fn reduced_vs_full(p: &Problem, steps: usize) -> (f64, f64, bool) {
-    let mut sim = Simulation::new(p).expect("setup");
     let reduced = NewtonSettings { tolerance: 1e-12, ..NewtonSettings::default() };
     let full = NewtonSettings { reduced: false, ..reduced };
     let (mut worst_v, mut worst_f, mut same_bits) = (0.0f64, 0.0f64, true);
-    for rec in sim.steps().before_each(|sim| {
-            let (w, _) = sim.free_velocity();
-            let c = p.contact.as_ref().expect("contact");
-            let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
-            let (_, s, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(reduced), None).expect("F.1");
-            let a = newton::solve(&data, &s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced");
-            let b = newton::solve(&data, &s, &sim.state.lambda, &sim.state.t_fric, &full).expect("full");
-            let fresh = dyncontact::step::delassus::DelassusFactors::default();
-            let (mut cold, _) = sim.step_data(c.restrict(&w)).expect("data");
-            cold.factors = &fresh;
-            let a_cold = newton::solve(&cold, &s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced, cold");
-            same_bits &= a_cold.y == a.y && a_cold.lambda == a.lambda && a_cold.t == a.t;
-            let ra = data.forces(&a.y, &a.lambda, &a.t);
-            let rb = data.forces(&b.y, &b.lambda, &b.t);
-            if linalg::norm_inf(&ra) > 0.0 {
-                worst_v = worst_v.max(rel(&a.y, &b.y, data.velocity_scale(&a.y).max(1e-300)));
-                worst_f = worst_f.max(rel(&ra, &rb, linalg::norm_inf(&ra)));
-            }
-    }).take(steps.min(p.steps)) {
-        rec.expect("step");
-    }
+    common::each_frozen_step(p, steps, reduced, |sim, data, s, y_free| {
+        let a = newton::solve(data, s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced");
+        let b = newton::solve(data, s, &sim.state.lambda, &sim.state.t_fric, &full).expect("full");
+        let fresh = dyncontact::step::delassus::DelassusFactors::default();
+        let (mut cold, _) = sim.step_data(y_free.to_vec()).expect("data");
+        cold.factors = &fresh;
+        let a_cold = newton::solve(&cold, s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced, cold");
+        same_bits &= a_cold.y == a.y && a_cold.lambda == a.lambda && a_cold.t == a.t;
+        let ra = data.forces(&a.y, &a.lambda, &a.t);
+        let rb = data.forces(&b.y, &b.lambda, &b.t);
+        if linalg::norm_inf(&ra) > 0.0 {
+            worst_v = worst_v.max(rel(&a.y, &b.y, data.velocity_scale(&a.y).max(1e-300)));
+            worst_f = worst_f.max(rel(&ra, &rb, linalg::norm_inf(&ra)));
+        }
+    });
     (worst_v, worst_f, same_bits)
 }
 

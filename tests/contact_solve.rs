@@ -16,7 +16,6 @@ use dyncontact::problem::Problem;
 use dyncontact::scene::{ContactSolve, Scene};
 use dyncontact::simulation::Simulation;
 use dyncontact::step::delassus::{self, DelassusFactors};
-use dyncontact::step::fixed_point::Inner;
 use dyncontact::step::newton::{self, NewtonSettings};
 
 /// Largest |a − b| over the largest |a| (or 1e-300).
@@ -43,31 +42,26 @@ fn strip(n: i64, k: f64, steps: usize) -> Scene {
 /// Per step from the same state: the F.1 bound of the dense solve, then one frozen Newton solve
 /// with each form of W; the worst relative differences of the contact velocities and forces.
 fn per_step(p: &Problem, steps: usize) -> (f64, f64) {
-    let mut sim = Simulation::new(p).expect("setup");
     let c = p.contact.as_ref().expect("contact");
     let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| p.mesh.nodes[i]).map(|x| [x[0], x[1], 0.0]).collect();
-    let w_sparse = delassus::build(sim.stepper.factor(), c, &positions, ContactSolve::Sparse);
+    let setup = Simulation::new(p).expect("setup");
+    let w_sparse = delassus::build(setup.stepper.factor(), c, &positions, ContactSolve::Sparse);
     assert_eq!(w_sparse.form(), "sparse");
     let set = NewtonSettings { tolerance: 1e-12, ..NewtonSettings::default() };
     let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);
     let sparse_factors = DelassusFactors::default();
-    for rec in sim.steps().before_each(|sim| {
-        let (w, _) = sim.free_velocity();
-        let (dense, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
-        let (_, s, _) = sim.solve_frozen_sequence(&dense, &p_hat, &Inner::Newton(set), None).expect("F.1");
-        let a = newton::solve(&dense, &s, &sim.state.lambda, &sim.state.t_fric, &set).expect("dense");
-        let (mut sparse, _) = sim.step_data(c.restrict(&w)).expect("data");
+    common::each_frozen_step(p, steps, set, |sim, dense, s, y_free| {
+        let a = newton::solve(dense, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("dense");
+        let (mut sparse, _) = sim.step_data(y_free.to_vec()).expect("data");
         sparse.delassus = &w_sparse;
         sparse.factors = &sparse_factors;
-        let b = newton::solve(&sparse, &s, &sim.state.lambda, &sim.state.t_fric, &set).expect("sparse");
+        let b = newton::solve(&sparse, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("sparse");
         let (ra, rb) = (dense.forces(&a.y, &a.lambda, &a.t), sparse.forces(&b.y, &b.lambda, &b.t));
         if linalg::norm_inf(&ra) > 0.0 {
             worst_v = worst_v.max(rel(&a.y, &b.y));
             worst_f = worst_f.max(rel(&ra, &rb));
         }
-    }).take(steps) {
-        rec.expect("step");
-    }
+    });
     (worst_v, worst_f)
 }
 

@@ -40,8 +40,6 @@ constraint; dyncontact's midpoint force does not), which is why the windows are 
 Exits 1 if any comparison fails; prints the table and both codes' wall times.
 """
 import argparse
-import csv
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -49,7 +47,7 @@ from pathlib import Path
 import numpy as np
 import getfem as gf
 
-from bar_impact import E0, H, L, LEFT, RHO_C_V0_H, bar_mesh, vertex_mass
+from bar_impact import E0, H, L, LEFT, RHO_C_V0_H, bar_mesh, run_scene, vertex_mass
 
 gf.util('trace level', 0)
 
@@ -136,13 +134,7 @@ def dyncontact_run(binary, scene_text, case, nx, k, out):
                 .replace('penetration_bound = 0.0', 'penetration_bound = "inf"')
                 .replace('friction_bound = "total"', 'friction_bound = "uncapped"\nfriction_bound_at = "midpoint"')
                 .replace('mass = "modified"', 'mass = "lumped"'))
-    out.mkdir(parents=True, exist_ok=True)
-    scene = out / 'scene.toml'
-    scene.write_text(text)
-    subprocess.run([binary, 'run', str(scene), '--out', str(out / 'run')], check=True, capture_output=True)
-    with open(out / 'run' / 'history.csv') as f:
-        rows = list(csv.DictReader(f))[1:]
-    return np.array([[float(r[c]) for c in COLUMNS] for r in rows])
+    return run_scene(binary, text, out, COLUMNS)
 
 
 def window_max(x, t, width=0.05):

@@ -129,18 +129,23 @@ def getfem_run(nx, k, T):
     return np.array(rows)
 
 
-def dyncontact_run(binary, scene_text, nx, k, out):
-    """B.1 with dyncontact at NX cells and step k; per step: t, F_n, kinetic, elastic, contact nodes."""
-    text = re.sub(r'cells = \[\d+, 1\]', f'cells = [{nx}, 1]', scene_text)
-    text = re.sub(r'step = [0-9.e-]+', f'step = {k!r}', text)
+def run_scene(binary, text, out, columns):
+    """Run dyncontact on the scene `text` in `out`; per step (step 0 dropped) the `columns` of
+    its history.csv."""
     out.mkdir(parents=True, exist_ok=True)
     scene = out / 'scene.toml'
     scene.write_text(text)
     subprocess.run([binary, 'run', str(scene), '--out', str(out / 'run')], check=True, capture_output=True)
     with open(out / 'run' / 'history.csv') as f:
         rows = list(csv.DictReader(f))[1:]
-    return np.array([[float(r['t']), float(r['normal_force']), float(r['kinetic']), float(r['elastic']),
-                      float(r['contact_nodes'])] for r in rows])
+    return np.array([[float(r[c]) for c in columns] for r in rows])
+
+
+def dyncontact_run(binary, scene_text, nx, k, out):
+    """B.1 with dyncontact at NX cells and step k; per step: t, F_n, kinetic, elastic, contact nodes."""
+    text = re.sub(r'cells = \[\d+, 1\]', f'cells = [{nx}, 1]', scene_text)
+    text = re.sub(r'step = [0-9.e-]+', f'step = {k!r}', text)
+    return run_scene(binary, text, out, ['t', 'normal_force', 'kinetic', 'elastic', 'contact_nodes'])
 
 
 def compare(g, d):
