@@ -56,17 +56,15 @@ pub fn half_quad(a: &SpMat, x: &[f64]) -> f64 {
     0.5 * linalg::quad(a, x, x)
 }
 
-/// ½ (x' − x)ᵀ A (x' + x), the increment of ½ xᵀAx without differencing large totals.
-/// The same increment ½ (x' − x)ᵀ (A x' + A x) from dx = x' − x and the products A x, A x'
+/// The increment ½ (x' − x)ᵀ (A x' + A x) from dx = x' − x and the products A x, A x'
 /// (the elastic term, whose K u the time loop keeps for the next right-hand side).
 pub fn increment_with(dx: &[f64], ax: &[f64], ax_new: &[f64]) -> f64 {
     0.5 * dx.iter().zip(ax).zip(ax_new).map(|((d, a), b)| d * (a + b)).sum::<f64>()
 }
 
+/// ½ (x' − x)ᵀ A (x' + x), the increment of ½ xᵀAx without differencing large totals.
 pub fn increment(a: &SpMat, x: &[f64], x_new: &[f64]) -> f64 {
-    let dx: Vec<f64> = x_new.iter().zip(x).map(|(a, b)| a - b).collect();
-    let sx: Vec<f64> = x_new.iter().zip(x).map(|(a, b)| a + b).collect();
-    0.5 * linalg::quad(a, &dx, &sx)
+    0.5 * linalg::quad_by(a, |i| x_new[i] - x[i], |j| x_new[j] + x[j])
 }
 
 impl EnergyTerms {

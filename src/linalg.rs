@@ -54,14 +54,21 @@ pub fn mul(a: &SpMat, x: &[f64]) -> Vec<f64> {
 
 /// xᵀ A y, column by column: Σ_j y_j (Σ_p A_pj x_p) — reads A once and writes nothing.
 pub fn quad(a: &SpMat, x: &[f64], y: &[f64]) -> f64 {
+    quad_by(a, |i| x[i], |j| y[j])
+}
+
+/// xᵀ A y with x and y given entry by entry (no temporary vectors: the (E.1) terms of a large
+/// mesh form x and y from the states on the fly); the same sums as [`quad`].
+pub fn quad_by(a: &SpMat, x: impl Fn(usize) -> f64, y: impl Fn(usize) -> f64) -> f64 {
     let r = a.as_ref();
     let (cp, ri, v) = (r.symbolic().col_ptr(), r.symbolic().row_idx(), r.val());
     let mut total = 0.0;
-    for (j, &yj) in y.iter().enumerate().take(a.ncols()) {
+    for j in 0..a.ncols() {
+        let yj = y(j);
         if yj == 0.0 {
             continue;
         }
-        let col: f64 = (cp[j]..cp[j + 1]).map(|p| v[p] * x[ri[p]]).sum();
+        let col: f64 = (cp[j]..cp[j + 1]).map(|p| v[p] * x(ri[p])).sum();
         total += col * yj;
     }
     total

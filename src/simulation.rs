@@ -354,13 +354,12 @@ impl<'p> Simulation<'p> {
     fn balance(&mut self, u_new: Vec<f64>, mut v_new: Vec<f64>, f: &[f64], contact: Option<ContactStep>, timing: StepTiming) -> StepRecord {
         let (u, v) = (&self.state.u, &self.state.v);
         let du: Vec<f64> = u_new.iter().zip(u).map(|(a, b)| a - b).collect();
-        let v_visc = self.stepper.viscous_velocity(v, &v_new);
         let ku_new = linalg::mul(&self.ops.k, &u_new);
         let mut se = StepEnergy {
             d_kinetic: energy::increment(&self.ops.m, v, &v_new),
             d_elastic: energy::increment_with(&du, &self.ku, &ku_new),
             work: linalg::dot(&du, f),
-            viscous: linalg::quad(&self.ops.c, &du, &v_visc),
+            viscous: linalg::quad_by(&self.ops.c, |i| du[i], |j| self.stepper.viscous_velocity_at(v, &v_new, j)),
             ..StepEnergy::default()
         };
         let mut rec = StepRecord { timing, ..StepRecord::empty(self.state.n + 1, self.problem.time(self.state.n + 1)) };

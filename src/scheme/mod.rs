@@ -93,11 +93,11 @@ impl StepOperator {
         }
     }
 
-    /// The velocity at which the viscous force acts: v^{n+½} (midpoint) or v^{n+1}.
-    pub fn viscous_velocity(&self, v: &[f64], w: &[f64]) -> Vec<f64> {
+    /// Entry j of the velocity at which the viscous force acts: v^{n+½} (midpoint) or v^{n+1}.
+    pub fn viscous_velocity_at(&self, v: &[f64], w: &[f64], j: usize) -> f64 {
         match self.kind {
-            SchemeKind::BackwardEuler => w.to_vec(),
-            _ => v.iter().zip(w).map(|(a, b)| 0.5 * (a + b)).collect(),
+            SchemeKind::BackwardEuler => w[j],
+            _ => 0.5 * (v[j] + w[j]),
         }
     }
 
