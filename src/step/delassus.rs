@@ -115,6 +115,28 @@ impl Delassus {
             }
         }
     }
+    /// (W r)_j alone, summed over l in the order of [`add_times`](Self::add_times) (so the same
+    /// bits): W is symmetric, so row j is read as column j.
+    pub fn row_times(&self, j: usize, r: &[f64]) -> f64 {
+        let mut out = 0.0;
+        match self {
+            Delassus::Dense(w) => {
+                for (&rl, &wl) in r.iter().zip(w.col_as_slice(j)) {
+                    if rl != 0.0 {
+                        out += wl * rl;
+                    }
+                }
+            }
+            Delassus::Sparse(s) => {
+                for (&l, &wl) in s.w.symbolic().row_idx_of_col_raw(j).iter().zip(s.w.val_of_col(j)) {
+                    if r[l] != 0.0 {
+                        out += wl * r[l];
+                    }
+                }
+            }
+        }
+        out
+    }
     /// The dense matrix (a copy for the sparse form: the unsymmetric Newton systems and the
     /// conic twin work on it).
     pub fn to_dense(&self) -> Mat<f64> {

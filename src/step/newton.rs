@@ -361,7 +361,8 @@ fn reduced_direction(step: &StepData, f: &[f64], prescribed: &[bool], g: &[f64],
     for (&l, &zl) in unknown.iter().zip(&b) {
         z[l] = zl;
     }
-    let w_z = step.apply_delassus(&z);
+    // W z is needed only on the free components whose force is known (g = 0): slipping
+    // tangents and separated normals — none while every node sticks on the foundation
     let out: Vec<f64> = (0..m)
         .map(|l| {
             if prescribed[l] {
@@ -369,7 +370,7 @@ fn reduced_direction(step: &StepData, f: &[f64], prescribed: &[bool], g: &[f64],
             } else if g[l] > 0.0 {
                 z[l] / (omega(l) * g[l])
             } else {
-                -f[l] - w_z[l] - w_rk[l]
+                -f[l] - step.delassus.row_times(l, &z) - w_rk[l]
             }
         })
         .collect();
