@@ -39,8 +39,9 @@ pub fn mul_add(a: &SpMat, x: &[f64], alpha: f64, y: &mut [f64]) {
         if xj == 0.0 {
             continue;
         }
-        for p in cp[j]..cp[j + 1] {
-            y[ri[p]] += v[p] * xj;
+        let span = cp[j]..cp[j + 1];
+        for (&i, &a) in ri[span.clone()].iter().zip(&v[span]) {
+            y[i] += a * xj;
         }
     }
 }
@@ -68,7 +69,8 @@ pub fn quad_by(a: &SpMat, x: impl Fn(usize) -> f64, y: impl Fn(usize) -> f64) ->
         if yj == 0.0 {
             continue;
         }
-        let col: f64 = (cp[j]..cp[j + 1]).map(|p| v[p] * x(ri[p])).sum();
+        let span = cp[j]..cp[j + 1];
+        let col: f64 = ri[span.clone()].iter().zip(&v[span]).map(|(&i, &a)| a * x(i)).sum();
         total += col * yj;
     }
     total
