@@ -1,5 +1,5 @@
 //! Thin wrappers over faer: sparse matrices from triplets, products, the sparse Cholesky
-//! factor that the time loop reuses, and a dense LU for the small contact systems.
+//! factor that the time loop reuses, and a dense LU for the unsymmetric contact systems.
 
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};

@@ -164,8 +164,10 @@ pub fn build(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], choic
             (p.density <= crate::defaults::SPARSE_DENSITY).then_some(p)
         }
     };
-    match probe {
-        Some(p) => Delassus::Sparse(sparse(a, contact, positions, &p)),
+    // the sparse form falls back to the dense one if faer refuses to build it (it cannot for
+    // indices below m, but a failed allocation should not end the run)
+    match probe.and_then(|p| sparse(a, contact, positions, &p)) {
+        Some(s) => Delassus::Sparse(s),
         None => Delassus::Dense(dense(a, contact)),
     }
 }
@@ -276,8 +278,8 @@ fn responses(a: &Cholesky, contact: &ContactModel, forces: &[Vec<f64>]) -> Vec<V
 }
 
 /// The sparse W by probing (module doc): `positions` are the contact nodes' coordinates, `probe`
-/// the measured decay radius.
-pub fn sparse(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], probe: &Probe) -> SparseDelassus {
+/// the measured decay radius. None if faer cannot build the matrix.
+pub fn sparse(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], probe: &Probe) -> Option<SparseDelassus> {
     let (d, nc) = (contact.dim, contact.n());
     let m = d * nc;
     let (radius, truncation) = (probe.radius, probe.truncation);
@@ -336,7 +338,7 @@ pub fn sparse(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], prob
     // symmetrize: average W_ij and W_ji (both are kept: the neighbour relation is symmetric)
     let sym: Vec<Triplet<usize, usize, f64>> =
         triplets.iter().flat_map(|t| [Triplet::new(t.row, t.col, 0.5 * t.val), Triplet::new(t.col, t.row, 0.5 * t.val)]).collect();
-    let w = SparseColMat::<usize, f64>::try_new_from_triplets(m, m, &sym).expect("indices below m");
+    let w = SparseColMat::<usize, f64>::try_new_from_triplets(m, m, &sym).ok()?;
     // 3. the kept operator against an exact solve on a pseudo-random force
     let x: Vec<f64> = (0..m).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
     let exact = &responses(a, contact, std::slice::from_ref(&x))[0];
@@ -350,7 +352,7 @@ pub fn sparse(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], prob
         .ok()
         .and_then(|sym| sym.perm().map(|p| p.arrays().1.to_vec()))
         .unwrap_or_else(|| (0..m).collect());
-    SparseDelassus { w, rank, stats: SparseStats { truncation, radius, colours, solves: d * (colours + 1) + 1, density, apply_error } }
+    Some(SparseDelassus { w, rank, stats: SparseStats { truncation, radius, colours, solves: d * (colours + 1) + 1, density, apply_error } })
 }
 
 /// Cholesky factorizations of W_UU + D (a principal submatrix of the Delassus operator plus a

@@ -8,6 +8,10 @@
 //! where y_ν ≤ β_i ⟺ d^{n+1} ≤ g, and ρ_ν = r_ν a_d, ρ_τ = r_τ relate to spec/model.md's r_ν, r_τ.
 //! The solution does not depend on ρ (tested); the default ρ_ν,i = 1/(ω_i W_νν,ii) and
 //! ρ_τ,i = 1/(a_v ω_i W_ττ,ii) make the trial values exact for an isolated node.
+//!
+//! The direction: in the symmetric cases (frozen S, monotone normal law) a Cholesky solve on the
+//! force unknowns with the factor reused while the contact sets hold (`reduced_direction`, dense
+//! or sparse as W is); otherwise the full m × m LU (`general_direction`).
 
 use faer::Mat;
 

@@ -613,7 +613,7 @@ fn race_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, rows: &[RaceRow], value
     Ok(())
 }
 
-/// race.svg: contact-solve time and Newton iterations (dense LU factorizations) per step.
+/// race.svg: contact-solve time and Newton iterations per step.
 fn race_svg(rows: &[RaceRow], title: &str) -> Result<String> {
     let err = harness::chart_error("race.svg");
     let mut svg = String::new();
@@ -623,7 +623,7 @@ fn race_svg(rows: &[RaceRow], title: &str) -> Result<String> {
         let root = root.titled(title, ("sans-serif", 20)).map_err(|e| err(&e))?;
         let panels = root.split_evenly((1, 2));
         race_panel(&panels[0], rows, |r| 1e3 * r.per_step(r.stats.contact_time_s), "contact solve per step [ms]")?;
-        race_panel(&panels[1], rows, |r| r.per_step(r.stats.newton_iterations as f64), "Newton iterations (dense LU) per step")?;
+        race_panel(&panels[1], rows, |r| r.per_step(r.stats.newton_iterations as f64), "Newton iterations per step")?;
         root.present().map_err(|e| err(&e))?;
     }
     Ok(svg)
