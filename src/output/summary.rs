@@ -8,7 +8,7 @@ use crate::fem::assemble::nodal_masses;
 use crate::model::laws::FrictionCoefficient;
 use crate::problem::Problem;
 use crate::model::contact::ContactModel;
-use crate::model::kinds::{self, Bound, BoundAt, FrictionBound};
+use crate::model::kinds::{self, Bound, BoundAt, ContactSolve, FixedPointAcceleration, FrictionBound};
 use crate::model::{ContactParams, Enforcement};
 use crate::scheme::ContactKinematics;
 
@@ -22,6 +22,8 @@ pub struct ModelInfo {
     pub constraint: String,
     pub friction: String,
     pub friction_bound: String,
+    /// the form of the contact solve and how F.1 updates S
+    pub contact_solve: String,
     pub scheme: String,
     pub inner_solver: String,
     pub mass: String,
@@ -60,6 +62,7 @@ impl ModelInfo {
             constraint: "-".into(),
             friction: "-".into(),
             friction_bound: "-".into(),
+            contact_solve: "-".into(),
             scheme: kinds::name(&s.time.scheme),
             inner_solver: kinds::name(&s.solver.inner),
             mass: kinds::name(&s.solver.mass),
@@ -85,6 +88,21 @@ impl ModelInfo {
     /// The contact lines: sides, normal law, constraint, friction and its bound.
     fn describe_contact(&mut self, p: &Problem, c: &ContactModel, cs: &ContactParams) {
         self.contact = format!("on sides {}: {} contact nodes", p.model.contact_sides.join(", "), c.n());
+        let m = c.dim * c.n();
+        let form = match p.model.solver.contact_solve {
+            ContactSolve::Dense => format!("dense Delassus operator W ({m} × {m})"),
+            ContactSolve::Sparse => format!("sparse Delassus operator W ({m} × {m}, probed, entries below {:e} of the diagonal dropped)", crate::defaults::DELASSUS_TRUNCATION),
+            ContactSolve::Auto if m < crate::defaults::SPARSE_FROM => format!("dense Delassus operator W ({m} × {m}; auto: below {} unknowns)", crate::defaults::SPARSE_FROM),
+            ContactSolve::Auto => format!(
+                "auto: W ({m} × {m}) probed at setup, sparse if its decay keeps ≤ {}% of the entries, else dense (summary.json says which)",
+                100.0 * crate::defaults::SPARSE_DENSITY
+            ),
+        };
+        let update = match p.model.solver.fixed_point_acceleration {
+            FixedPointAcceleration::Anderson => "F.1 with Anderson extrapolation of S",
+            FixedPointAcceleration::None => "plain F.1",
+        };
+        self.contact_solve = format!("{form}; {update}");
         self.contact_nodes = c.n();
         self.normal_law = if cs.compliance > 0.0 {
             format!("normal compliance p(r) = {} r_+", cs.compliance)
@@ -170,6 +188,7 @@ impl ModelInfo {
             format!("constraint     : {}", self.constraint),
             format!("friction       : {}", self.friction),
             format!("friction bound : {}", self.friction_bound),
+            format!("contact solve  : {}", self.contact_solve),
             format!("scheme         : {}, inner solver {}, {} mass", self.scheme, self.inner_solver, self.mass),
             format!(
                 "sizes          : {} nodes, {} triangles, {} velocity unknowns, {} contact nodes, {} multipliers, {} friction unknowns",
