@@ -187,12 +187,7 @@ impl Probe {
         let m = d * nc;
         let centroid: Vec<f64> = (0..3).map(|k| positions.iter().map(|p| p[k]).sum::<f64>() / nc as f64).collect();
         let i0 = (0..nc).min_by(|&a, &b| distance(&positions[a], &centroid).total_cmp(&distance(&positions[b], &centroid))).unwrap_or(0);
-        let unit = |l: usize| -> Vec<f64> {
-            let mut e = vec![0.0; m];
-            e[l] = 1.0;
-            e
-        };
-        let columns = responses(a, contact, &(0..d).map(|c| unit(d * i0 + c)).collect::<Vec<_>>());
+        let columns = responses(a, contact, &(0..d).map(|c| unit(m, d * i0 + c)).collect::<Vec<_>>());
         let mut radius = 0.0f64;
         for (c, col) in columns.iter().enumerate() {
             let diag = col[d * i0 + c].abs();
@@ -215,33 +210,15 @@ fn distance(a: &[f64], b: &[f64]) -> f64 {
 /// d n_c solves in blocks of 64 right-hand sides.
 pub fn dense(a: &Cholesky, contact: &ContactModel) -> Mat<f64> {
     let m = contact.dim * contact.n();
-    let n = a.dim();
     let mut w = Mat::<f64>::zeros(m, m);
     const BLOCK: usize = 64;
-    let mut start = 0;
-    while start < m {
-        let cols = BLOCK.min(m - start);
-        let mut rhs = Mat::<f64>::zeros(n, cols);
-        for c in 0..cols {
-            let mut e = vec![0.0; m];
-            e[start + c] = 1.0;
-            let mut col = vec![0.0; n];
-            contact.scatter_add(&e, &mut col);
-            for (i, v) in col.iter().enumerate() {
-                if *v != 0.0 {
-                    rhs[(i, c)] = *v;
-                }
-            }
-        }
-        a.solve_mat_in_place(&mut rhs);
-        for c in 0..cols {
-            let x: Vec<f64> = (0..n).map(|i| rhs[(i, c)]).collect();
-            let hx = contact.restrict(&x);
+    for start in (0..m).step_by(BLOCK) {
+        let units: Vec<Vec<f64>> = (start..(start + BLOCK).min(m)).map(|l| unit(m, l)).collect();
+        for (c, hx) in responses(a, contact, &units).into_iter().enumerate() {
             for (j, v) in hx.iter().enumerate() {
                 w[(j, start + c)] = *v;
             }
         }
-        start += cols;
     }
     // symmetrize the round-off
     for i in 0..m {
@@ -252,6 +229,13 @@ pub fn dense(a: &Cholesky, contact: &ContactModel) -> Mat<f64> {
         }
     }
     w
+}
+
+/// The unit force on contact component l (of m).
+fn unit(m: usize, l: usize) -> Vec<f64> {
+    let mut e = vec![0.0; m];
+    e[l] = 1.0;
+    e
 }
 
 /// out += a W[:, l] for a sparse W.
