@@ -44,6 +44,17 @@ pub const SPARSE_FROM: usize = 256;
 /// share 0.13, runs 1.3× faster sparse; 256×128 cells, share 0.69, 2.4× slower).
 pub const SPARSE_DENSITY: f64 = 0.25;
 
+/// With the dense Delassus operator the time loop keeps the responses G = A_k⁻¹ Hᵀ (n × d n_c,
+/// from the same solves) when they take at most this many bytes, and recovers v^{n+1} − v_free
+/// = −G r by columns when that reads fewer numbers than a solve pair on the factor of A_k.
+pub const RESPONSES_BYTES: f64 = 32.0 * 1024.0 * 1024.0;
+
+/// The recovery reads G's columns when they hold at most this many times the entries of a solve
+/// pair: a column update streams memory, a sparse triangular solve walks it (measured on the
+/// academic scene: 64 columns of 1,088 entries in ~5 µs against ~37 µs for a solve pair on a
+/// factor of 28,048 entries, ~10× per entry read).
+pub const RESPONSES_ADVANTAGE: f64 = 4.0;
+
 /// The sparse Delassus operator drops entries below this fraction of the diagonal.
 pub const DELASSUS_TRUNCATION: f64 = 1e-12;
 

@@ -46,6 +46,38 @@ pub fn mul_add(a: &SpMat, x: &[f64], alpha: f64, y: &mut [f64]) {
     }
 }
 
+/// Whether A and B store the same sparsity pattern (one pass can then form products of both).
+pub fn same_pattern(a: &SpMat, b: &SpMat) -> bool {
+    let (sa, sb) = (a.as_ref().symbolic(), b.as_ref().symbolic());
+    a.nrows() == b.nrows() && a.ncols() == b.ncols() && sa.col_ptr() == sb.col_ptr() && sa.row_idx() == sb.row_idx()
+}
+
+/// (A x, A y, B y) for symmetric A and B: column j gathers (A x)_j = Σ_p A_pj x_p, and when A
+/// and B share a pattern the three sums read the indices of column j once. Equal to
+/// [`mul`] up to the order of the sums.
+pub fn sym_mul3(a: &SpMat, b: &SpMat, x: &[f64], y: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    if !same_pattern(a, b) {
+        return (mul(a, x), mul(a, y), mul(b, y));
+    }
+    let n = a.ncols();
+    let (mut ax, mut ay, mut by) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let (ra, rb) = (a.as_ref(), b.as_ref());
+    let (cp, ri, va, vb) = (ra.symbolic().col_ptr(), ra.symbolic().row_idx(), ra.val(), rb.val());
+    for j in 0..n {
+        let span = cp[j]..cp[j + 1];
+        let (mut s1, mut s2, mut s3) = (0.0, 0.0, 0.0);
+        for ((&i, &a), &b) in ri[span.clone()].iter().zip(&va[span.clone()]).zip(&vb[span]) {
+            s1 += a * x[i];
+            s2 += a * y[i];
+            s3 += b * y[i];
+        }
+        ax[j] = s1;
+        ay[j] = s2;
+        by[j] = s3;
+    }
+    (ax, ay, by)
+}
+
 /// A x.
 pub fn mul(a: &SpMat, x: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; a.nrows()];
@@ -100,6 +132,8 @@ pub fn combine(terms: &[(f64, &SpMat)]) -> Result<SpMat> {
 pub struct Cholesky {
     llt: Llt<usize, f64>,
     n: usize,
+    /// stored entries of the factor L (a solve pair reads them twice)
+    factor_len: usize,
 }
 
 impl Cholesky {
@@ -113,11 +147,21 @@ impl Cholesky {
                  (check density > 0, the material constants and that the body is held or has mass)"
             ))
         })?;
-        Ok(Cholesky { llt, n: a.nrows() })
+        // faer's Llt does not expose its symbolic part; a second symbolic analysis (cheap next to
+        // the numeric one) gives the factor's size for the cost rules of the time loop
+        let factor_len = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), Default::default())
+            .map(|s| s.len_val())
+            .unwrap_or(usize::MAX);
+        Ok(Cholesky { llt, n: a.nrows(), factor_len })
     }
 
     pub fn dim(&self) -> usize {
         self.n
+    }
+
+    /// Stored entries of the factor L.
+    pub fn factor_len(&self) -> usize {
+        self.factor_len
     }
 
     /// b ← A⁻¹ b.

@@ -84,6 +84,8 @@ fn tally(summary: &mut Summary, first_cap: &mut Option<usize>, rec: &StepRecord)
     summary.timing.free_solve_s += rec.timing.free_solve;
     summary.timing.contact_solve_s += rec.timing.contact_solve;
     summary.timing.recovery_s += rec.timing.recovery;
+    summary.timing.products_s += rec.timing.products;
+    summary.timing.balance_s += rec.timing.balance;
 }
 
 /// The summary of a run that is starting.

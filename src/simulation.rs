@@ -9,7 +9,7 @@
 use std::time::Instant;
 
 
-use crate::defaults::CONIC_TOLERANCE_FLOOR;
+use crate::defaults::{CONIC_TOLERANCE_FLOOR, RESPONSES_ADVANTAGE};
 use crate::energy::{self, EnergyTerms, StepEnergy};
 use crate::error::{Error, Result};
 use crate::failure::{ContactFailure, SolverFailure, StepFailureCause};
@@ -18,7 +18,7 @@ use crate::linalg;
 use crate::model::contact::ContactModel;
 use crate::model::kinds::{BoundAt, FixedPointAcceleration, FrictionBound, InnerSolver, SchemeKind};
 use crate::problem::Problem;
-use crate::scheme::{ContactKinematics, StepOperator};
+use crate::scheme::{ContactKinematics, StateProducts, StepOperator};
 use crate::step::conic::ConicSettings;
 use crate::step::fixed_point::{self, FixedPointSettings, Inner, NormalPart, StepReport};
 use crate::step::newton::NewtonSettings;
@@ -81,6 +81,10 @@ pub struct StepTiming {
     /// the contact solve, (F.1) included
     pub contact_solve: f64,
     pub recovery: f64,
+    /// K u, K v, C v, M v of the new state (read by (E.1) and the next right-hand side)
+    pub products: f64,
+    /// the (E.1) increments, persistency and the contact records, products excluded
+    pub balance: f64,
 }
 
 /// One history.csv row plus the nodal contact data.
@@ -188,9 +192,12 @@ pub struct Simulation<'p> {
     pub delassus: Option<delassus::Delassus>,
     /// factorizations of the Newton matrices W_UU + D, reused while unchanged
     pub delassus_factors: delassus::DelassusFactors,
-    /// K u^n: the (E.1) elastic term of the last step computed it, the next right-hand side
-    /// (S.2) reuses it (one sparse product per step instead of two)
-    ku: Vec<f64>,
+    /// G = A_k⁻¹ Hᵀ (n × d n_c), kept beside a dense W when small (the recovery reads its
+    /// columns instead of solving)
+    responses: Option<faer::Mat<f64>>,
+    /// K u^n, K v^n, C v^n, M v^n: the (E.1) terms of the last step formed them, the next
+    /// right-hand side (S.2) reads them
+    products: StateProducts,
     pub kinematics: ContactKinematics,
     pub state: State,
     pub setup_timing: SetupTiming,
@@ -223,10 +230,14 @@ impl<'p> Simulation<'p> {
         let stepper = StepOperator::new(&ops, problem.model.time.scheme, problem.k)?;
         let factorization = clock.elapsed().as_secs_f64();
         let clock = Instant::now();
-        let delassus = problem.contact.as_ref().map(|c| {
-            let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| problem.mesh.nodes[i]).map(|x| [x[0], x[1], 0.0]).collect();
-            delassus::build(stepper.factor(), c, &positions, problem.model.solver.contact_solve)
-        });
+        let (delassus, responses) = match problem.contact.as_ref() {
+            Some(c) => {
+                let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| problem.mesh.nodes[i]).map(|x| [x[0], x[1], 0.0]).collect();
+                let (w, g) = delassus::build_with_responses(stepper.factor(), c, &positions, problem.model.solver.contact_solve);
+                (Some(w), g)
+            }
+            None => (None, None),
+        };
         let t_delassus = clock.elapsed().as_secs_f64();
         let nc = problem.contact.as_ref().map(ContactModel::n).unwrap_or(0);
         let (u, v) = (problem.u0.clone(), problem.v0.clone());
@@ -245,7 +256,7 @@ impl<'p> Simulation<'p> {
             active: vec![false; nc],
             stick: vec![false; nc],
         };
-        let ku = linalg::mul(&ops.k, &state.u);
+        let products = StateProducts::of(&ops, &state.u, &state.v);
         Ok(Simulation {
             problem,
             kinematics: stepper.contact_kinematics(),
@@ -254,7 +265,8 @@ impl<'p> Simulation<'p> {
             settings,
             delassus,
             delassus_factors: delassus::DelassusFactors::default(),
-            ku,
+            responses,
+            products,
             state,
             setup_timing: SetupTiming { assembly, factorization, delassus: t_delassus },
         })
@@ -337,9 +349,21 @@ impl<'p> Simulation<'p> {
         }))
     }
 
-    /// Recovery: v^{n+1} = v_free − A_k⁻¹ Hᵀ r with the contact forces r of the solution.
+    /// (S.2) Recovery: v^{n+1} = v_free − A_k⁻¹ Hᵀ r with the contact forces r of the solution: by
+    /// the kept responses G = A_k⁻¹ Hᵀ, column by column over the nonzero forces, when that reads
+    /// at most [`RESPONSES_ADVANTAGE`](crate::defaults::RESPONSES_ADVANTAGE) times the entries a
+    /// solve pair reads (2 × the factor's), else by a solve.
     fn recover(&self, c: &ContactModel, cs: &ContactStep, v_new: &mut [f64]) {
-        if cs.r.iter().any(|v| *v != 0.0) {
+        let forces = cs.r.iter().filter(|v| **v != 0.0).count();
+        if let Some(g) = self.responses.as_ref().filter(|_| (forces * v_new.len()) as f64 <= RESPONSES_ADVANTAGE * 2.0 * self.stepper.factor().factor_len() as f64) {
+            for (l, &rl) in cs.r.iter().enumerate() {
+                if rl != 0.0 {
+                    for (vi, gi) in v_new.iter_mut().zip(g.col_as_slice(l)) {
+                        *vi -= gi * rl;
+                    }
+                }
+            }
+        } else if forces > 0 {
             let mut corr = vec![0.0; v_new.len()];
             c.scatter_add(&cs.r, &mut corr);
             self.stepper.solve_in_place(&mut corr);
@@ -352,20 +376,27 @@ impl<'p> Simulation<'p> {
     /// (E.1) terms of the step, (R.2) persistency, the contact records; then the state moves
     /// to t_{n+1}.
     fn balance(&mut self, u_new: Vec<f64>, mut v_new: Vec<f64>, f: &[f64], contact: Option<ContactStep>, timing: StepTiming) -> StepRecord {
+        let clock = Instant::now();
+        let mut p_new = StateProducts::of(&self.ops, &u_new, &v_new);
+        let t_products = clock.elapsed().as_secs_f64();
+        let clock = Instant::now();
         let (u, v) = (&self.state.u, &self.state.v);
         let du: Vec<f64> = u_new.iter().zip(u).map(|(a, b)| a - b).collect();
-        let ku_new = linalg::mul(&self.ops.k, &u_new);
+        let dv: Vec<f64> = v_new.iter().zip(v).map(|(a, b)| a - b).collect();
+        let p = &self.products;
         let mut se = StepEnergy {
-            d_kinetic: energy::increment(&self.ops.m, v, &v_new),
-            d_elastic: energy::increment_with(&du, &self.ku, &ku_new),
+            d_kinetic: energy::increment_with(&dv, &p.mv, &p_new.mv),
+            d_elastic: energy::increment_with(&du, &p.ku, &p_new.ku),
             work: linalg::dot(&du, f),
-            viscous: linalg::quad_by(&self.ops.c, |i| du[i], |j| self.stepper.viscous_velocity_at(v, &v_new, j)),
+            viscous: self.stepper.viscous_work(&du, &p.cv, &p_new.cv),
             ..StepEnergy::default()
         };
-        let mut rec = StepRecord { timing, ..StepRecord::empty(self.state.n + 1, self.problem.time(self.state.n + 1)) };
+        let mut rec = StepRecord { timing: StepTiming { products: t_products, ..timing }, ..StepRecord::empty(self.state.n + 1, self.problem.time(self.state.n + 1)) };
         if let (Some(c), Some(cs)) = (&self.problem.contact, &contact) {
             self.contact_terms(c, cs, &u_new, &du, &mut se, &mut rec);
-            self.persistency(c, cs, &mut v_new, &mut se, &mut rec);
+            if self.persistency(c, cs, &mut v_new, &mut se, &mut rec) {
+                p_new = StateProducts::of(&self.ops, &u_new, &v_new);
+            }
             self.state.lambda.clone_from(&cs.sol.lambda);
             self.state.t_fric.clone_from(&cs.sol.t);
             rec.report = cs.report.clone();
@@ -375,9 +406,10 @@ impl<'p> Simulation<'p> {
         self.state.u = u_new;
         self.state.v = v_new;
         self.state.n += 1;
-        self.ku = ku_new;
+        self.products = p_new;
         rec.energy = self.state.energy;
         rec.energy_scale = self.state.energy_scale;
+        rec.timing.balance = clock.elapsed().as_secs_f64();
         rec
     }
 
@@ -420,7 +452,8 @@ impl<'p> Simulation<'p> {
 
     /// (R.2) on nodes that stayed on the constraint or in stick over the step: either remove
     /// the velocity they keep (`solver.persistency`) and book it, or measure it as chatter.
-    fn persistency(&mut self, c: &ContactModel, cs: &ContactStep, v_new: &mut [f64], se: &mut StepEnergy, rec: &mut StepRecord) {
+    /// Returns whether it changed v^{n+1}.
+    fn persistency(&mut self, c: &ContactModel, cs: &ContactStep, v_new: &mut [f64], se: &mut StepEnergy, rec: &mut StepRecord) -> bool {
         let persistency = self.problem.model.solver.persistency;
         let mut removed = 0.0;
         for i in 0..c.n() {
@@ -448,12 +481,13 @@ impl<'p> Simulation<'p> {
             se.d_kinetic = energy::increment(&self.ops.m, &self.state.v, v_new);
             se.persistency = removed;
         }
+        persistency
     }
 
     /// The free velocity A_k⁻¹ b^n of the current state and the load used.
     pub fn free_velocity(&self) -> (Vec<f64>, Vec<f64>) {
         let f = self.problem.loads.at(self.stepper.load_time(self.problem.time(self.state.n)));
-        let mut v_free = self.stepper.rhs(&self.ku, &self.state.v, &f);
+        let mut v_free = self.stepper.rhs(&self.products, &f);
         self.stepper.solve_in_place(&mut v_free);
         (v_free, f)
     }
@@ -522,7 +556,7 @@ impl<'p> Simulation<'p> {
             return Err(Error::Output(format!("the checkpoint is at step {}, beyond the scene's {} steps", s.n, self.problem.steps)));
         }
         self.state = s;
-        self.ku = linalg::mul(&self.ops.k, &self.state.u);
+        self.products = StateProducts::of(&self.ops, &self.state.u, &self.state.v);
         Ok(())
     }
 

@@ -4,6 +4,10 @@
 //! Files are written so that a run stopped at any point leaves valid files: CSV rows are
 //! flushed whole after each step, and the PVD, the summary and the charts are written to a
 //! temporary name and renamed.
+//!
+//! A VTU frame is encoded and written on a background thread while the time loop goes on (one
+//! frame in flight at most: the next frame, the summary and the end of the run wait for it and
+//! report its error), so a frame costs the loop only the copy of u and v.
 
 pub mod contact_charts;
 pub mod export;
@@ -16,6 +20,8 @@ pub mod vtu;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::thread::JoinHandle;
 
 use crate::error::{Error, Result};
 use crate::problem::Problem;
@@ -106,6 +112,18 @@ pub struct Writer {
     pub rows: Vec<ChartRow>,
     /// the contact nodes of every frame: (step, t, records), for the contact charts
     pub contact_frames: Vec<(usize, f64, Vec<NodeRecord>)>,
+    /// the mesh, shared with the frame thread
+    mesh: Arc<crate::mesh::Mesh>,
+    /// the frame being written (VTU, then series.pvd)
+    pending: Option<JoinHandle<Result<()>>>,
+}
+
+impl Drop for Writer {
+    /// A frame in flight is finished before the writer goes (its error, if any, was not asked
+    /// for: every path that reports errors calls [`Writer::wait`] first).
+    fn drop(&mut self) {
+        let _ = self.wait();
+    }
 }
 
 fn csv_io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
@@ -141,15 +159,37 @@ impl Writer {
             std::fs::write(&cp, format!("{CONTACT_COLUMNS}\n")).map_err(csv_io(&cp))?;
             None
         };
-        Ok(Writer {
+        Ok(Writer::new(dir, problem, history, contact, Vec::new(), Vec::new(), Vec::new()))
+    }
+
+    pub(crate) fn new(
+        dir: &Path,
+        problem: &Problem,
+        history: BufWriter<File>,
+        contact: Option<BufWriter<File>>,
+        frames: Vec<(f64, String)>,
+        rows: Vec<ChartRow>,
+        contact_frames: Vec<(usize, f64, Vec<NodeRecord>)>,
+    ) -> Writer {
+        Writer {
             dir: dir.to_path_buf(),
             history,
             contact,
-            frames: Vec::new(),
+            frames,
             every: problem.model.output_every,
-            rows: Vec::new(),
-            contact_frames: Vec::new(),
-        })
+            rows,
+            contact_frames,
+            mesh: Arc::new(problem.mesh.clone()),
+            pending: None,
+        }
+    }
+
+    /// Wait for the frame in flight and return its result.
+    pub fn wait(&mut self) -> Result<()> {
+        match self.pending.take() {
+            Some(h) => h.join().unwrap_or_else(|_| Err(Error::Output("the frame writer thread panicked".into()))),
+            None => Ok(()),
+        }
     }
 
     pub fn dir(&self) -> &Path {
@@ -219,11 +259,16 @@ impl Writer {
         }
         let u = p.dofs.expand(&state.u);
         let v = p.dofs.expand(&state.v);
-        let frame = vtu::Frame { mesh: &p.mesh, material: &p.material, u: &u, v: &v, contact: &contact };
+        self.wait()?;
         let name = format!("frames/frame_{:05}.vtu", rec.step);
-        write_atomic(&self.dir.join(&name), vtu::vtu(&frame).as_bytes())?;
-        self.frames.push((rec.t, name));
-        write_atomic(&self.dir.join("series.pvd"), vtu::pvd(&self.frames).as_bytes())
+        self.frames.push((rec.t, name.clone()));
+        let (dir, mesh, material, frames) = (self.dir.clone(), Arc::clone(&self.mesh), p.material, self.frames.clone());
+        self.pending = Some(std::thread::spawn(move || {
+            let frame = vtu::Frame { mesh: &mesh, material: &material, u: &u, v: &v, contact: &contact };
+            write_atomic(&dir.join(&name), vtu::vtu(&frame).as_bytes())?;
+            write_atomic(&dir.join("series.pvd"), vtu::pvd(&frames).as_bytes())
+        }));
+        Ok(())
     }
 
     /// Write summary.json and the charts.
@@ -232,8 +277,9 @@ impl Writer {
         self.charts(problem, state)
     }
 
-    /// Write only the summary (used when a run fails).
-    pub fn write_summary(&self, summary: &Summary) -> Result<()> {
+    /// Write only the summary (used when a run fails), after the frame in flight.
+    pub fn write_summary(&mut self, summary: &Summary) -> Result<()> {
+        self.wait()?;
         let json = serde_json::to_string_pretty(summary).map_err(|e| Error::Output(format!("summary.json: {e}")))?;
         write_atomic(&self.dir.join("summary.json"), json.as_bytes())
     }

@@ -56,15 +56,8 @@ impl Writer {
         let frames = kept_frames(dir, problem, step);
         write_atomic(&dir.join("series.pvd"), super::vtu::pvd(&frames).as_bytes())?;
         let open = |p: &Path| OpenOptions::new().append(true).open(p).map(BufWriter::new).map_err(|e| Error::io(p, e));
-        Ok(Writer {
-            dir: dir.to_path_buf(),
-            history: open(&hp)?,
-            contact: if problem.contact.is_some() { Some(open(&cp)?) } else { None },
-            frames,
-            every: problem.model.output_every,
-            rows: chart_rows,
-            contact_frames,
-        })
+        let contact = if problem.contact.is_some() { Some(open(&cp)?) } else { None };
+        Ok(Writer::new(dir, problem, open(&hp)?, contact, frames, chart_rows, contact_frames))
     }
 }
 

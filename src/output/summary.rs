@@ -250,6 +250,10 @@ pub struct Timing {
     pub free_solve_s: f64,
     pub contact_solve_s: f64,
     pub recovery_s: f64,
+    /// K u, K v, C v, M v of each new state (one pass; the next right-hand side reads them)
+    pub products_s: f64,
+    /// the (E.1) increments, persistency and the contact records
+    pub balance_s: f64,
     pub output_s: f64,
     pub total_s: f64,
 }

@@ -7,7 +7,7 @@
 
 use crate::error::Result;
 use crate::fem::Operators;
-use crate::linalg::{self, Cholesky, SpMat};
+use crate::linalg::{self, Cholesky};
 use crate::model::laws::NormalForceRule;
 use crate::model::kinds::SchemeKind;
 
@@ -30,31 +30,43 @@ pub struct ContactKinematics {
     pub p_w: f64,
 }
 
-/// The factored step matrix and the pieces of the right-hand side.
+/// The factored step matrix A_k.
 pub struct StepOperator {
     pub kind: SchemeKind,
     pub k: f64,
     /// A_k, factored once
     a: Cholesky,
-    /// R with b^n = R v^n − K u^n + f
-    r: SpMat,
+}
+
+/// The operator products of a state (u, v): K u, K v, C v and M v. The time loop forms them once
+/// per step, at the end of the step, for the (E.1) increments of that step; the next step's
+/// right-hand side (S.2) reads the same vectors, so a step costs one pass over the pattern of K
+/// and C instead of three sparse products.
+#[derive(Debug, Clone)]
+pub struct StateProducts {
+    pub ku: Vec<f64>,
+    pub kv: Vec<f64>,
+    pub cv: Vec<f64>,
+    pub mv: Vec<f64>,
+}
+
+impl StateProducts {
+    /// K u, K v, C v (one pass when K and C share a pattern, as P1 assembly gives) and M v.
+    pub fn of(ops: &Operators, u: &[f64], v: &[f64]) -> StateProducts {
+        let (ku, kv, cv) = linalg::sym_mul3(&ops.k, &ops.c, u, v);
+        StateProducts { ku, kv, cv, mv: linalg::mul(&ops.m, v) }
+    }
 }
 
 impl StepOperator {
     /// (S.2) The constant step matrix A_k = M/k + C/2 + (k/4) K of the midpoint rule
     /// (A = M/k + C + k K for backward Euler), factored once by sparse Cholesky.
     pub fn new(ops: &Operators, kind: SchemeKind, k: f64) -> Result<StepOperator> {
-        let (a, r) = match kind {
-            SchemeKind::Midpoint | SchemeKind::Trapezoid => (
-                linalg::combine(&[(1.0 / k, &ops.m), (0.5, &ops.c), (0.25 * k, &ops.k)])?,
-                linalg::combine(&[(1.0 / k, &ops.m), (-0.5, &ops.c), (-0.25 * k, &ops.k)])?,
-            ),
-            SchemeKind::BackwardEuler => (
-                linalg::combine(&[(1.0 / k, &ops.m), (1.0, &ops.c), (k, &ops.k)])?,
-                linalg::combine(&[(1.0 / k, &ops.m)])?,
-            ),
+        let a = match kind {
+            SchemeKind::Midpoint | SchemeKind::Trapezoid => linalg::combine(&[(1.0 / k, &ops.m), (0.5, &ops.c), (0.25 * k, &ops.k)])?,
+            SchemeKind::BackwardEuler => linalg::combine(&[(1.0 / k, &ops.m), (1.0, &ops.c), (k, &ops.k)])?,
         };
-        Ok(StepOperator { kind, k, a: Cholesky::new(&a, "the step matrix A_k")?, r })
+        Ok(StepOperator { kind, k, a: Cholesky::new(&a, "the step matrix A_k")? })
     }
 
     /// The time at which the load is sampled: f^{n+½} = f(t_n + k/2) (decision 7), or
@@ -67,12 +79,14 @@ impl StepOperator {
     }
 
     /// (S.2) without contact forces: b^n = (M/k − C/2 − kK/4) v^n − K u^n + f^{n+½}
-    /// (backward Euler: M v^n/k − K u^n + f^{n+1}), so that A_k w = b^n − Hᵀ r. `ku` is K u^n
-    /// (the time loop keeps it from the previous step's (E.1) term).
-    pub fn rhs(&self, ku: &[f64], v: &[f64], f: &[f64]) -> Vec<f64> {
-        let mut b: Vec<f64> = f.iter().zip(ku).map(|(f, ku)| f - ku).collect();
-        linalg::mul_add(&self.r, v, 1.0, &mut b);
-        b
+    /// (backward Euler: M v^n/k − K u^n + f^{n+1}), so that A_k w = b^n − Hᵀ r, from the
+    /// products `p` of the state (u^n, v^n).
+    pub fn rhs(&self, p: &StateProducts, f: &[f64]) -> Vec<f64> {
+        let k = self.k;
+        match self.kind {
+            SchemeKind::BackwardEuler => (0..f.len()).map(|i| p.mv[i] / k - p.ku[i] + f[i]).collect(),
+            _ => (0..f.len()).map(|i| p.mv[i] / k - 0.5 * p.cv[i] - 0.25 * k * p.kv[i] - p.ku[i] + f[i]).collect(),
+        }
     }
 
     /// x ← A_k⁻¹ x.
@@ -93,11 +107,12 @@ impl StepOperator {
         }
     }
 
-    /// Entry j of the velocity at which the viscous force acts: v^{n+½} (midpoint) or v^{n+1}.
-    pub fn viscous_velocity_at(&self, v: &[f64], w: &[f64], j: usize) -> f64 {
+    /// The (E.1) viscous term (u^{n+1} − u^n)ᵀ C v̄ with v̄ the velocity at which the viscous
+    /// force acts, v^{n+½} = (v^n + v^{n+1})/2 (midpoint) or v^{n+1}, from C v^n and C v^{n+1}.
+    pub fn viscous_work(&self, du: &[f64], cv: &[f64], cw: &[f64]) -> f64 {
         match self.kind {
-            SchemeKind::BackwardEuler => w[j],
-            _ => 0.5 * (v[j] + w[j]),
+            SchemeKind::BackwardEuler => linalg::dot(du, cw),
+            _ => 0.5 * du.iter().zip(cv).zip(cw).map(|((d, a), b)| d * (a + b)).sum::<f64>(),
         }
     }
 

@@ -153,6 +153,12 @@ impl Delassus {
 /// [`SPARSE_DENSITY`](crate::defaults::SPARSE_DENSITY) of the entries (measured crossover: README,
 /// "Speed").
 pub fn build(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], choice: ContactSolve) -> Delassus {
+    build_with_responses(a, contact, positions, choice).0
+}
+
+/// [`build`], and for the dense form the responses G = A_k⁻¹ Hᵀ when they fit in
+/// [`RESPONSES_BYTES`](crate::defaults::RESPONSES_BYTES).
+pub fn build_with_responses(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], choice: ContactSolve) -> (Delassus, Option<Mat<f64>>) {
     let m = contact.dim * contact.n();
     let truncation = crate::defaults::DELASSUS_TRUNCATION;
     let probe = match choice {
@@ -167,8 +173,12 @@ pub fn build(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], choic
     // the sparse form falls back to the dense one if faer refuses to build it (it cannot for
     // indices below m, but a failed allocation should not end the run)
     match probe.and_then(|p| sparse(a, contact, positions, &p)) {
-        Some(s) => Delassus::Sparse(s),
-        None => Delassus::Dense(dense(a, contact)),
+        Some(s) => (Delassus::Sparse(s), None),
+        None => {
+            let keep = 8.0 * a.dim() as f64 * m as f64 <= crate::defaults::RESPONSES_BYTES;
+            let (w, g) = dense_with_responses(a, contact, keep);
+            (Delassus::Dense(w), g)
+        }
     }
 }
 
@@ -209,14 +219,26 @@ fn distance(a: &[f64], b: &[f64]) -> f64 {
 /// The dense W (d n_c × d n_c, symmetric positive definite), components (ν_1, τ_1, …, ν_2, τ_2, …):
 /// d n_c solves in blocks of 64 right-hand sides.
 pub fn dense(a: &Cholesky, contact: &ContactModel) -> Mat<f64> {
+    dense_with_responses(a, contact, false).0
+}
+
+/// The dense W and, if `keep`, the responses G = A_k⁻¹ Hᵀ (n × d n_c) from the same solves
+/// (W = H G, symmetrized).
+pub fn dense_with_responses(a: &Cholesky, contact: &ContactModel, keep: bool) -> (Mat<f64>, Option<Mat<f64>>) {
     let m = contact.dim * contact.n();
     let mut w = Mat::<f64>::zeros(m, m);
+    let mut g = keep.then(|| Mat::<f64>::zeros(a.dim(), m));
     const BLOCK: usize = 64;
     for start in (0..m).step_by(BLOCK) {
         let units: Vec<Vec<f64>> = (start..(start + BLOCK).min(m)).map(|l| unit(m, l)).collect();
-        for (c, hx) in responses(a, contact, &units).into_iter().enumerate() {
-            for (j, v) in hx.iter().enumerate() {
+        let x = solve_forces(a, contact, &units);
+        for c in 0..units.len() {
+            let col: Vec<f64> = (0..a.dim()).map(|i| x[(i, c)]).collect();
+            for (j, v) in contact.restrict(&col).iter().enumerate() {
                 w[(j, start + c)] = *v;
+            }
+            if let Some(g) = &mut g {
+                g.col_as_slice_mut(start + c).copy_from_slice(&col);
             }
         }
     }
@@ -228,7 +250,7 @@ pub fn dense(a: &Cholesky, contact: &ContactModel) -> Mat<f64> {
             w[(j, i)] = s;
         }
     }
-    w
+    (w, g)
 }
 
 /// The unit force on contact component l (of m).
@@ -245,20 +267,22 @@ fn column_add(w: &SparseColMat<usize, f64>, l: usize, a: f64, out: &mut [f64]) {
     }
 }
 
-/// Solve A_k x = Hᵀ F for a block of contact force vectors F (columns of `forces`, each of
-/// length m) and return H x per column.
-fn responses(a: &Cholesky, contact: &ContactModel, forces: &[Vec<f64>]) -> Vec<Vec<f64>> {
+/// Solve A_k X = Hᵀ F for a block of contact force vectors F (columns of `forces`, each of
+/// length m): X, n × (columns).
+fn solve_forces(a: &Cholesky, contact: &ContactModel, forces: &[Vec<f64>]) -> Mat<f64> {
     let n = a.dim();
     let mut rhs = Mat::<f64>::zeros(n, forces.len());
     for (c, f) in forces.iter().enumerate() {
-        let mut col = vec![0.0; n];
-        contact.scatter_add(f, &mut col);
-        for (i, v) in col.iter().enumerate() {
-            rhs[(i, c)] = *v;
-        }
+        contact.scatter_add(f, rhs.col_as_slice_mut(c));
     }
     a.solve_mat_in_place(&mut rhs);
-    (0..forces.len()).map(|c| contact.restrict(&(0..n).map(|i| rhs[(i, c)]).collect::<Vec<f64>>())).collect()
+    rhs
+}
+
+/// H A_k⁻¹ Hᵀ F per column of `forces`.
+fn responses(a: &Cholesky, contact: &ContactModel, forces: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let x = solve_forces(a, contact, forces);
+    (0..forces.len()).map(|c| contact.restrict(&(0..a.dim()).map(|i| x[(i, c)]).collect::<Vec<f64>>())).collect()
 }
 
 /// The sparse W by probing (module doc): `positions` are the contact nodes' coordinates, `probe`
