@@ -85,6 +85,9 @@ enum StudyKind {
         /// only the floor part (time per step ÷ floor on the default scene; floor.csv)
         #[arg(long)]
         floor_only: bool,
+        /// only the bookkeeping part (the (E.1) terms and outputs at 66k unknowns; bookkeeping.csv)
+        #[arg(long)]
+        bookkeeping_only: bool,
     },
     /// Stability map: sweeps of k, ε, the friction decay, the impact speed and θ per scheme,
     /// each run classified (converged, fixed point failed, Newton failed, energy grew, error).
@@ -147,9 +150,9 @@ fn main() -> ExitCode {
             cmd_run(scene.as_deref(), out.as_deref(), *checkpoint_every, resume.as_deref(), *stop_after)
         }
         Command::Study { study: StudyKind::Penalty { scene, eps, out } } => cmd_penalty(scene.as_deref(), eps.as_deref(), out.as_deref()),
-        Command::Study { study: StudyKind::Bench { out, quick, floor_only } } => {
+        Command::Study { study: StudyKind::Bench { out, quick, floor_only, bookkeeping_only } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/bench"));
-            studies::bench::run(&out, &studies::bench::BenchOptions { quick: *quick, floor_only: *floor_only }).map(|report| say!("{report}"))
+            studies::bench::run(&out, &studies::bench::BenchOptions { quick: *quick, floor_only: *floor_only, bookkeeping_only: *bookkeeping_only }).map(|report| say!("{report}"))
         }
         Command::Study { study: StudyKind::Stability { out, quick } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/stability"));

@@ -57,6 +57,8 @@ pub struct BenchOptions {
     pub quick: bool,
     /// only part 2 on the default scene (floor.csv)
     pub floor_only: bool,
+    /// only part 5 (bookkeeping.csv)
+    pub bookkeeping_only: bool,
 }
 
 /// The columns of work_precision.csv.
@@ -839,6 +841,12 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     let clock = Instant::now();
     let plan = if opts.quick { Plan::quick() } else { Plan::full() };
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let bk_plan = if opts.quick { super::bookkeeping::BookkeepingPlan::quick() } else { super::bookkeeping::BookkeepingPlan::full() };
+    if opts.bookkeeping_only {
+        let rows = super::bookkeeping::run_part(&bk_plan, out)?;
+        write(out, "bookkeeping.csv", &super::bookkeeping::csv(&rows))?;
+        return Ok(super::bookkeeping::report(&rows));
+    }
     if opts.floor_only {
         let (floor_csv, floor_text) = floor_report(&floor_runs(&plan)?);
         write(out, "floor.csv", &floor_csv)?;
@@ -868,6 +876,10 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     write(out, "scaling.csv", &super::scaling::csv(&scaling_rows))?;
     write(out, "scaling.svg", &super::scaling::svg(&scaling_rows, &scaling_plan)?)?;
 
+    progress("bookkeeping: the default scene's body at 256 x 128 without contact, with outputs");
+    let bk_rows = super::bookkeeping::run_part(&bk_plan, out)?;
+    write(out, "bookkeeping.csv", &super::bookkeeping::csv(&bk_rows))?;
+
     let mut race = Vec::new();
     for case in race_cases(&plan.race)? {
         progress(&format!("race {}", case.label));
@@ -882,6 +894,8 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     report.push_str(&floor_text);
     report.push('\n');
     report.push_str(&super::scaling::report(&scaling_rows));
+    report.push('\n');
+    report.push_str(&super::bookkeeping::report(&bk_rows));
     report.push('\n');
     report.push_str(&race_report(&plan.race, &race));
     let _ = writeln!(report, "\ntotal benchmark wall time {:.1} s; outputs in {}", clock.elapsed().as_secs_f64(), out.display());

@@ -5,6 +5,7 @@
 //! slopes and charts.
 
 pub mod bench;
+pub mod bookkeeping;
 pub mod bound_at;
 pub mod convergence;
 pub mod harness;
