@@ -3,11 +3,12 @@
 
 use crate::error::{Error, Result};
 use crate::linalg::{self, SpMat};
+use crate::mesh::solid::SolidMesh;
 use crate::mesh::Mesh;
 use crate::model::material::Material;
 use crate::model::kinds::MassKind;
 
-use super::element;
+use super::{element, tet};
 
 /// Numbering of the free DOFs: (node k, component c) → map[2k + c] = Some(free index), or
 /// None on Γ̄1.
@@ -16,22 +17,31 @@ pub struct Dofs {
     pub map: Vec<Option<usize>>,
     pub n_free: usize,
     pub n_nodes: usize,
+    /// components per node (the space dimension d)
+    pub dim: usize,
 }
 
 impl Dofs {
-    /// (P.3) u = 0 on Γ1: both components of every node on a clamped side are removed from
-    /// the unknowns; the remaining DOFs are numbered in node order.
+    /// (P.3) u = 0 on Γ1 in two dimensions (see [`Dofs::with_dim`]).
     pub fn new(n_nodes: usize, clamped: &[bool]) -> Dofs {
-        let mut map = vec![None; 2 * n_nodes];
+        Dofs::with_dim(n_nodes, clamped, 2)
+    }
+
+    /// (P.3) u = 0 on Γ1: all d components of every node on a clamped side are removed from
+    /// the unknowns; the remaining DOFs are numbered in node order, (node k, component c) →
+    /// map[d k + c].
+    pub fn with_dim(n_nodes: usize, clamped: &[bool], dim: usize) -> Dofs {
+        let mut map = vec![None; dim * n_nodes];
         let mut n_free = 0;
         for k in 0..n_nodes {
             if !clamped[k] {
-                map[2 * k] = Some(n_free);
-                map[2 * k + 1] = Some(n_free + 1);
-                n_free += 2;
+                for c in 0..dim {
+                    map[dim * k + c] = Some(n_free + c);
+                }
+                n_free += dim;
             }
         }
-        Dofs { map, n_free, n_nodes }
+        Dofs { map, n_free, n_nodes, dim }
     }
 
     /// Nodal vectors from a free-DOF vector (zero on Γ̄1).
@@ -86,19 +96,65 @@ pub fn assemble_full(mesh: &Mesh, mat: &Material, mass: MassKind) -> Result<(SpM
             // the modified mass starts from the lumped one (see `modified_masses`)
             MassKind::Lumped | MassKind::Modified => element::lumped_mass(area, mat.rho),
         };
-        for a in 0..6 {
-            let ga = 2 * tri[a / 2] + a % 2;
-            for b in 0..6 {
-                let gb = 2 * tri[b / 2] + b % 2;
-                tk.push((ga, gb, ke[(a, b)]));
-                if mat.has_viscosity() {
-                    tc.push((ga, gb, ce[(a, b)]));
+        let element = Element { nodes: tri, dim: 2, k: ke.as_slice(), c: ce.as_slice(), m: me.as_slice() };
+        element.scatter(mat.has_viscosity(), (&mut tm, &mut tk, &mut tc));
+    }
+    Ok((linalg::from_triplets(n, n, &tm)?, linalg::from_triplets(n, n, &tk)?, linalg::from_triplets(n, n, &tc)?))
+}
+
+/// The element matrices of one simplex (column-major, N = d (d + 1) rows) and its vertices.
+struct Element<'a> {
+    nodes: &'a [usize],
+    dim: usize,
+    k: &'a [f64],
+    c: &'a [f64],
+    m: &'a [f64],
+}
+
+type Triplets = Vec<(usize, usize, f64)>;
+
+impl Element<'_> {
+    /// Add the entries to the triplet lists of (M, K, C): local DOF a = d·(vertex) + component
+    /// goes to global d·node + component; C only with viscosity, M only where nonzero.
+    fn scatter(&self, viscous: bool, (tm, tk, tc): (&mut Triplets, &mut Triplets, &mut Triplets)) {
+        let (d, nl) = (self.dim, self.dim * self.nodes.len());
+        let global = |a: usize| d * self.nodes[a / d] + a % d;
+        for a in 0..nl {
+            let ga = global(a);
+            for b in 0..nl {
+                let (gb, e) = (global(b), a + nl * b);
+                tk.push((ga, gb, self.k[e]));
+                if viscous {
+                    tc.push((ga, gb, self.c[e]));
                 }
-                if me[(a, b)] != 0.0 {
-                    tm.push((ga, gb, me[(a, b)]));
+                if self.m[e] != 0.0 {
+                    tm.push((ga, gb, self.m[e]));
                 }
             }
         }
+    }
+}
+
+/// (P.2) in three dimensions: the Galerkin matrices of ρü = Div σ + f0 on all 3N DOFs of a
+/// tetrahedral mesh, M (consistent or row-lumped), K and C from the 6×6 Voigt matrices of B and
+/// A (no plane reduction). Returns (M, K, C).
+pub fn assemble_solid(mesh: &SolidMesh, mat: &Material, mass: MassKind) -> Result<(SpMat, SpMat, SpMat)> {
+    let n = 3 * mesh.nodes.len();
+    let (db, da) = (mat.elasticity_3d(), mat.viscosity_3d());
+    let cap = 144 * mesh.tets.len();
+    let (mut tm, mut tk, mut tc) = (Vec::with_capacity(cap), Vec::with_capacity(cap), Vec::with_capacity(cap));
+    for (t, tet) in mesh.tets.iter().enumerate() {
+        let x = tet.map(|v| mesh.nodes[v]);
+        let degenerate = || Error::mesh(&mesh.source, format!("tetrahedron {t} (nodes {tet:?}) is degenerate"));
+        let volume = tet::gradients(x).ok_or_else(degenerate)?.1.abs();
+        let ke = tet::operator_matrix(x, &db).ok_or_else(degenerate)?;
+        let ce = tet::operator_matrix(x, &da).ok_or_else(degenerate)?;
+        let me = match mass {
+            MassKind::Consistent => tet::consistent_mass(volume, mat.rho),
+            MassKind::Lumped | MassKind::Modified => nalgebra::SMatrix::<f64, 12, 12>::from_diagonal_element(tet::vertex_mass(volume, mat.rho)),
+        };
+        let element = Element { nodes: tet, dim: 3, k: ke.as_slice(), c: ce.as_slice(), m: me.as_slice() };
+        element.scatter(mat.has_viscosity(), (&mut tm, &mut tk, &mut tc));
     }
     Ok((linalg::from_triplets(n, n, &tm)?, linalg::from_triplets(n, n, &tk)?, linalg::from_triplets(n, n, &tc)?))
 }
@@ -232,8 +288,8 @@ pub fn lumped_masses(mesh: &Mesh, mat: &Material, dofs: &Dofs) -> Vec<f64> {
 fn per_dof(per_node: &[f64], dofs: &Dofs) -> Vec<f64> {
     let mut d = vec![0.0; dofs.n_free];
     for (k, m) in per_node.iter().enumerate() {
-        for c in 0..2 {
-            if let Some(i) = dofs.map[2 * k + c] {
+        for c in 0..dofs.dim {
+            if let Some(i) = dofs.map[dofs.dim * k + c] {
                 d[i] = *m;
             }
         }

@@ -5,6 +5,7 @@ pub mod assemble;
 pub mod element;
 pub mod loads;
 pub mod norms;
+pub mod tet;
 
 pub use assemble::{Dofs, Operators};
 pub use loads::LoadVector;

@@ -3,6 +3,7 @@
 //! weights ω_i = ∫ φ_i over a set of sides).
 
 pub mod gmsh;
+pub mod solid;
 
 use std::collections::HashMap;
 

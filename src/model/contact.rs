@@ -22,6 +22,21 @@ impl Frame {
     pub fn planar(n: [f64; 2]) -> Frame {
         Frame { normal: [n[0], n[1], 0.0], tangents: [[-n[1], n[0], 0.0], [0.0; 3]] }
     }
+
+    /// The 3-D frame of a unit normal ν: τ_1 = e × ν/‖e × ν‖ with e the coordinate axis least
+    /// aligned with ν (so ‖e × ν‖ ≥ √(2/3)), τ_2 = ν × τ_1; (τ_1, τ_2, ν) is orthonormal and
+    /// right-handed. The friction law does not depend on the choice of the tangent pair: the
+    /// friction set is a disk in the tangent plane.
+    pub fn spatial(n: [f64; 3]) -> Frame {
+        let axis = (0..3).min_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs())).unwrap_or(0);
+        let mut e = [0.0; 3];
+        e[axis] = 1.0;
+        let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+        let t1 = cross(e, n);
+        let norm = (t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]).sqrt();
+        let t1 = t1.map(|c| c / norm);
+        Frame { normal: n, tangents: [t1, cross(n, t1)] }
+    }
 }
 
 /// What the foundation does at one contact node.

@@ -1,7 +1,8 @@
 //! The Kelvin–Voigt material (P.1): elasticity B, viscosity A, density ρ, in plane strain or
-//! plane stress, as 3×3 matrices in Voigt notation (ε_xx, ε_yy, γ_xy = 2ε_xy).
+//! plane stress, as 3×3 matrices in Voigt notation (ε_xx, ε_yy, γ_xy = 2ε_xy), and in three
+//! dimensions as 6×6 matrices (ε_xx, ε_yy, ε_zz, γ_yz, γ_xz, γ_xy).
 
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Matrix6};
 
 use super::kinds::Plane;
 use super::MaterialParams;
@@ -54,6 +55,17 @@ impl Material {
         isotropic(self.theta, self.zeta)
     }
 
+    /// Voigt matrix (ε_xx, ε_yy, ε_zz, γ_yz, γ_xz, γ_xy) of B in three dimensions: the scene's
+    /// λ, μ_L without the plane reduction.
+    pub fn elasticity_3d(&self) -> Matrix6<f64> {
+        isotropic_3d(self.lambda_3d, self.mu_lame)
+    }
+
+    /// Voigt matrix of A in three dimensions (θ, ζ of the scene).
+    pub fn viscosity_3d(&self) -> Matrix6<f64> {
+        isotropic_3d(self.theta_3d, self.zeta)
+    }
+
     pub fn has_viscosity(&self) -> bool {
         self.theta > 0.0 || self.zeta > 0.0
     }
@@ -72,6 +84,18 @@ impl Material {
         };
         [s[0], s[1], s[2], szz]
     }
+}
+
+/// λ tr(ε) I + 2μ ε on engineering Voigt strains: λ + 2μ / λ in the normal block, μ on the shears.
+fn isotropic_3d(l: f64, m: f64) -> Matrix6<f64> {
+    let mut d = Matrix6::zeros();
+    for i in 0..3 {
+        for j in 0..3 {
+            d[(i, j)] = if i == j { l + 2.0 * m } else { l };
+        }
+        d[(3 + i, 3 + i)] = m;
+    }
+    d
 }
 
 fn isotropic(l: f64, m: f64) -> Matrix3<f64> {

@@ -11,7 +11,9 @@
 //!    compares entry by entry (relative tolerance 1e-12; the reasoning is in the script). The
 //!    scikit-fem operators are saved under `fixtures/reference/<scene>_{M,K,C}.mtx`,
 //!    `<scene>_f.txt` for Rust tests that run without Python;
-//! 3. a short `dyncontact run` of [`RUN_SCENE`], whose `series.pvd` and frames
+//! 3. `solid_operators.py` assembles M, K, C of a 3-D box of tetrahedra with scikit-fem into
+//!    `fixtures/reference/box3d_*.mtx` (tests/crosscheck.rs compares dyncontact's assembly);
+//! 4. a short `dyncontact run` of [`RUN_SCENE`], whose `series.pvd` and frames
 //!    `check_frames.py` reads with meshio.
 //!
 //! The solver is the binary `target/debug/dyncontact`, built only if it is missing: `cargo run`
@@ -69,6 +71,13 @@ pub fn run(root: &Path) -> Result<String, String> {
         let _ = writeln!(report, "  {name} ({:.1} s)", t.elapsed().as_secs_f64());
         record(&mut report, &mut failures, &name, result);
     }
+
+    // the 3-D box: scikit-fem's operators as references for tests/crosscheck.rs (the Rust side
+    // has no scene path for 3-D yet, so the comparison is the Rust test's)
+    let t = Instant::now();
+    let result = spawn(python_cmd(&python, root).current_dir(&scripts).arg("solid_operators.py").arg(reference.join("box3d")));
+    let _ = writeln!(report, "  3-D box operators with scikit-fem ({:.1} s)", t.elapsed().as_secs_f64());
+    record(&mut report, &mut failures, "3-D box operators", result);
 
     let t = Instant::now();
     let scene = root.join("fixtures").join("scenes").join(format!("{RUN_SCENE}.toml"));
