@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 use crate::fem::{Dofs, LoadVector};
-use crate::mesh::{self, Mesh};
+use crate::mesh::solid::SolidMesh;
+use crate::mesh::{self, Geometry, Mesh};
 use crate::model::contact::ContactModel;
 use crate::model::expr::VecExpr;
 use crate::model::kinds::{Bound, FrictionBound};
@@ -21,7 +22,7 @@ use crate::scene::Scene;
 pub struct Problem {
     /// the validated scene this problem was built from
     pub model: Model,
-    pub mesh: Mesh,
+    pub mesh: Geometry,
     pub material: Material,
     pub dofs: Dofs,
     pub loads: LoadVector,
@@ -46,7 +47,7 @@ impl Problem {
         check_sides(&model, &mesh)?;
         let material = Material::new(&model.material, model.plane);
         let clamped = mesh.nodes_on(&model.dirichlet)?;
-        let dofs = Dofs::new(mesh.nodes.len(), &clamped);
+        let dofs = Dofs::with_dim(mesh.n_nodes(), &clamped, mesh.dim());
         if dofs.n_free == 0 {
             return Err(Error::scene("boundary.dirichlet", "clamps every node: there is nothing to solve"));
         }
@@ -70,21 +71,21 @@ impl Problem {
 }
 
 /// Every side the model names exists on the mesh.
-fn check_sides(model: &Model, mesh: &Mesh) -> Result<()> {
+fn check_sides(model: &Model, mesh: &Geometry) -> Result<()> {
     let names = mesh.side_list();
     let side_err = |key: String, s: &str| Error::scene(key, format!("no side named {s:?}; the mesh has {names}"));
     for (i, s) in model.dirichlet.iter().enumerate() {
-        if mesh.side(s).is_none() {
+        if !mesh.has_side(s) {
             return Err(side_err(format!("boundary.dirichlet[{i}]"), s));
         }
     }
     for (i, s) in model.contact_sides.iter().enumerate() {
-        if mesh.side(s).is_none() {
+        if !mesh.has_side(s) {
             return Err(side_err(format!("boundary.contact[{i}]"), s));
         }
     }
     for (i, tr) in model.loads.traction.iter().enumerate() {
-        if mesh.side(&tr.side).is_none() {
+        if !mesh.has_side(&tr.side) {
             return Err(side_err(format!("loads.traction[{i}].side"), &tr.side));
         }
     }
@@ -93,23 +94,31 @@ fn check_sides(model: &Model, mesh: &Mesh) -> Result<()> {
 
 /// f(t): the body load f0, the tractions f2 and the known load f3 on Γ3 (every contact side;
 /// for manufactured solutions with contact), checked finite at t = 0 and t = T.
-pub fn build_loads(model: &Model, mesh: &Mesh, dofs: &Dofs) -> Result<LoadVector> {
-    let edges_of = |side: &str| mesh.side(side).map(|s| s.edges.clone()).unwrap_or_default();
-    let mut surface: Vec<(Vec<[usize; 2]>, VecExpr, String)> =
-        model.loads.traction.iter().map(|tr| (edges_of(&tr.side), tr.value.clone(), tr.path.clone())).collect();
-    if let Some(f3) = &model.loads.contact_surface {
-        for side in &model.contact_sides {
-            surface.push((edges_of(side), f3.clone(), "loads.contact_surface".into()));
-        }
-    }
-    let loads = LoadVector::new(mesh, dofs, &model.loads.body, &surface);
+pub fn build_loads(model: &Model, mesh: &Geometry, dofs: &Dofs) -> Result<LoadVector> {
+    let loads = match mesh {
+        Geometry::Plane(m) => LoadVector::new(m, dofs, &model.loads.body, &surface_loads(model, |side| m.side(side).map(|s| s.edges.clone()).unwrap_or_default())),
+        Geometry::Solid(m) => LoadVector::solid(m, dofs, &model.loads.body, &surface_loads(model, |side| m.side(side).map(|s| s.faces.clone()).unwrap_or_default())),
+    };
     loads.check_finite(0.0)?;
     loads.check_finite(model.time.end)?;
     Ok(loads)
 }
 
+/// The loaded sides' facets with their load and key path: the tractions f2, and f3 on every
+/// contact side.
+fn surface_loads<F: Clone>(model: &Model, facets_of: impl Fn(&str) -> Vec<F>) -> Vec<(Vec<F>, VecExpr, String)> {
+    let mut surface: Vec<(Vec<F>, VecExpr, String)> =
+        model.loads.traction.iter().map(|tr| (facets_of(&tr.side), tr.value.clone(), tr.path.clone())).collect();
+    if let Some(f3) = &model.loads.contact_surface {
+        for side in &model.contact_sides {
+            surface.push((facets_of(side), f3.clone(), "loads.contact_surface".into()));
+        }
+    }
+    surface
+}
+
 /// (S.0) u^0 ∈ K^h: the initial state does not penetrate beyond the bound g.
-fn check_initial_admissible(c: &ContactModel, mesh: &Mesh, u0: &[f64]) -> Result<()> {
+fn check_initial_admissible(c: &ContactModel, mesh: &Geometry, u0: &[f64]) -> Result<()> {
     if c.n() == 0 {
         return Err(Error::scene(
             "boundary.contact",
@@ -119,28 +128,36 @@ fn check_initial_admissible(c: &ContactModel, mesh: &Mesh, u0: &[f64]) -> Result
     let Some(g) = c.constraint else { return Ok(()) };
     let d0 = c.penetration(u0);
     if let Some(i) = (0..c.n()).find(|&i| d0[i] > g * (1.0 + 1e-12) + 1e-300) {
-        let x = mesh.nodes[c.nodes[i]];
         return Err(Error::scene(
             "initial.displacement",
             format!(
-                "the initial state penetrates beyond the bound: u_ν − gap = {:.6e} > g = {g} at node {} ({}, {}); \
+                "the initial state penetrates beyond the bound: u_ν − gap = {:.6e} > g = {g} at node {} {}; \
                  u0 must satisfy the constraint (S.0)",
-                d0[i], c.nodes[i], x[0], x[1]
+                d0[i],
+                c.nodes[i],
+                at(mesh, c.nodes[i])
             ),
         ));
     }
     Ok(())
 }
 
-fn build_mesh(domain: &Domain, scene_dir: &Path) -> Result<Mesh> {
+/// Node v's coordinates for messages: "(x, y)" or "(x, y, z)".
+fn at(mesh: &Geometry, v: usize) -> String {
+    let p = mesh.point(v);
+    if mesh.dim() == 3 { format!("({}, {}, {})", p[0], p[1], p[2]) } else { format!("({}, {})", p[0], p[1]) }
+}
+
+fn build_mesh(domain: &Domain, scene_dir: &Path) -> Result<Geometry> {
     let mesh = match domain {
-        Domain::Rectangle { size, cells } => Mesh::rectangle(size[0], size[1], cells[0], cells[1]),
+        Domain::Rectangle { size, cells } => Geometry::Plane(Mesh::rectangle(size[0], size[1], cells[0], cells[1])),
+        Domain::Box { size, cells } => Geometry::Solid(SolidMesh::cuboid(*size, *cells)),
         Domain::Gmsh { file } => {
             let path: PathBuf = if Path::new(file).is_absolute() { file.into() } else { scene_dir.join(file) };
             if !path.exists() {
                 return Err(Error::scene("domain.file", format!("mesh file {:?} does not exist", path.display().to_string())));
             }
-            mesh::gmsh::read(&path)?
+            Geometry::Plane(mesh::gmsh::read(&path)?)
         }
     };
     mesh.check()?;
@@ -148,19 +165,21 @@ fn build_mesh(domain: &Domain, scene_dir: &Path) -> Result<Mesh> {
 }
 
 /// (S.0) Discrete initial data u^0 = I_h u0, v^0 = I_h v0 (nodal interpolation; zero on Γ̄1).
-pub fn initial_data(mesh: &Mesh, dofs: &Dofs, u0: &VecExpr, v0: &VecExpr) -> Result<(Vec<f64>, Vec<f64>)> {
+pub fn initial_data(mesh: &Geometry, dofs: &Dofs, u0: &VecExpr, v0: &VecExpr) -> Result<(Vec<f64>, Vec<f64>)> {
     let mut out = Vec::new();
     for (e, path) in [(u0, "initial.displacement"), (v0, "initial.velocity")] {
-        for (k, p) in mesh.nodes.iter().enumerate() {
-            let v = e.eval(p[0], p[1], 0.0);
-            if !(v[0].is_finite() && v[1].is_finite()) {
+        let d = mesh.dim();
+        for k in 0..mesh.n_nodes() {
+            let v = e.eval3(mesh.point(k), 0.0);
+            if !v[..d].iter().all(|c| c.is_finite()) {
+                let vals = v[..d].iter().map(|c| c.to_string()).collect::<Vec<_>>().join(", ");
                 return Err(Error::Expression {
                     path: path.into(),
-                    message: format!("evaluates to ({}, {}) at node {k} ({}, {}); initial data must be finite", v[0], v[1], p[0], p[1]),
+                    message: format!("evaluates to ({vals}) at node {k} {}; initial data must be finite", at(mesh, k)),
                 });
             }
         }
-        out.push(dofs.gather(|k| e.eval(mesh.nodes[k][0], mesh.nodes[k][1], 0.0)));
+        out.push(dofs.gather_dim(|k| e.eval3(mesh.point(k), 0.0)));
     }
     let v = out.pop().unwrap_or_default();
     let u = out.pop().unwrap_or_default();
@@ -169,14 +188,22 @@ pub fn initial_data(mesh: &Mesh, dofs: &Dofs, u0: &VecExpr, v0: &VecExpr) -> Res
 
 /// The contact model of the contact sides: nodes, normals, weights, gap, and the laws the
 /// contact section switches on.
-fn build_contact(c: &ContactParams, sides: &[String], mesh: &Mesh, dofs: &Dofs, clamped: &[bool]) -> Result<ContactModel> {
+fn build_contact(c: &ContactParams, sides: &[String], mesh: &Geometry, dofs: &Dofs, clamped: &[bool]) -> Result<ContactModel> {
+    if mesh.dim() == 3 {
+        // the geometry (normals, weights, tangent frames) is built and tested; the step problem's
+        // friction in the tangent plane (the disk) and the conic twin's cones are not yet
+        return Err(Error::scene(
+            "boundary.contact",
+            "contact in three dimensions is not implemented yet (the 3-D body, loads and outputs are): remove boundary.contact or use a 2-D domain",
+        ));
+    }
     let side = mesh.side_nodes(sides, clamped)?;
     let mut gap = Vec::with_capacity(side.nodes.len());
     for &v in &side.nodes {
-        let p = mesh.nodes[v];
-        let g = c.gap.eval(p[0], p[1], 0.0);
+        let p = mesh.point(v);
+        let g = c.gap.eval3(p[0], p[1], p[2], 0.0);
         if !g.is_finite() {
-            return Err(Error::scene("contact.gap", format!("evaluates to {g} at node {v} ({}, {})", p[0], p[1])));
+            return Err(Error::scene("contact.gap", format!("evaluates to {g} at node {v} {}", at(mesh, v))));
         }
         gap.push(g);
     }
@@ -199,13 +226,16 @@ fn build_contact(c: &ContactParams, sides: &[String], mesh: &Mesh, dofs: &Dofs, 
     // validation, and would be frictionless too
     let zero_bound = c.friction_bound != FrictionBound::Total && p_tau.compliance.is_zero();
     let friction = c.friction.clone().filter(|mu| !(zero_bound || (mu.is_constant() && mu.mu(0.0) == 0.0)));
-    // contact nodes are off Γ̄1 (side_nodes excludes clamped nodes), so both DOFs are free
-    let mut node_dofs = Vec::with_capacity(side.nodes.len());
+    // contact nodes are off Γ̄1 (side_nodes excludes clamped nodes), so all their DOFs are free
+    let d = dofs.dim;
+    let mut node_dofs = Vec::with_capacity(d * side.nodes.len());
     for &v in &side.nodes {
-        match (dofs.map[2 * v], dofs.map[2 * v + 1]) {
-            (Some(dx), Some(dy)) => node_dofs.extend([dx, dy]),
-            _ => return Err(Error::scene("boundary.contact", format!("contact node {v} has a clamped DOF"))),
+        for comp in 0..d {
+            match dofs.map[d * v + comp] {
+                Some(i) => node_dofs.push(i),
+                None => return Err(Error::scene("boundary.contact", format!("contact node {v} has a clamped DOF"))),
+            }
         }
     }
-    Ok(ContactModel::new(side, gap, node_dofs, normal, compliance, constraint, c.bound, c.enforcement, friction, (c.friction_bound, c.friction_bound_at), p_tau))
+    Ok(ContactModel::new(side, d, gap, node_dofs, normal, compliance, constraint, c.bound, c.enforcement, friction, (c.friction_bound, c.friction_bound_at), p_tau))
 }

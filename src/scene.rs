@@ -56,13 +56,15 @@ fn default_name() -> String {
 #[serde(deny_unknown_fields)]
 pub struct Domain {
     pub kind: DomainKind,
-    #[serde(default, deserialize_with = "opt_pair")]
-    pub size: Option<[f64; 2]>,
-    #[serde(default, deserialize_with = "opt_pair")]
-    pub cells: Option<[i64; 2]>,
+    /// [Lx, Ly] (rectangle) or [Lx, Ly, Lz] (box)
+    #[serde(default, deserialize_with = "opt_components")]
+    pub size: Option<Vec<f64>>,
+    /// [nx, ny] (rectangle) or [nx, ny, nz] (box)
+    #[serde(default, deserialize_with = "opt_components")]
+    pub cells: Option<Vec<i64>>,
     pub file: Option<String>,
-    #[serde(default)]
-    pub plane: Plane,
+    /// a 2-D key (strain when absent); an error for a 3-D domain
+    pub plane: Option<Plane>,
 }
 
 #[derive(Debug, Clone, Deserialize, Default)]
@@ -95,45 +97,43 @@ pub struct Material {
 #[serde(deny_unknown_fields)]
 pub struct Traction {
     pub side: String,
-    #[serde(deserialize_with = "pair")]
-    pub value: [String; 2],
-}
-
-fn zero_pair() -> [String; 2] {
-    ["0".into(), "0".into()]
+    #[serde(deserialize_with = "components")]
+    pub value: Vec<String>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Loads {
-    #[serde(default = "zero_pair", deserialize_with = "pair")]
-    pub body: [String; 2],
+    /// d expressions in x, y (, z), t; absent: zero
+    #[serde(default, deserialize_with = "opt_components")]
+    pub body: Option<Vec<String>>,
     /// f3: a known surface load on Γ3 (all contact sides), on top of the contact forces —
     /// for manufactured solutions with contact (spec/model.md §7.5)
-    #[serde(default = "zero_pair", deserialize_with = "pair")]
-    pub contact_surface: [String; 2],
+    #[serde(default, deserialize_with = "opt_components")]
+    pub contact_surface: Option<Vec<String>>,
     #[serde(default)]
     pub traction: Vec<Traction>,
 }
 
 impl Default for Loads {
     fn default() -> Self {
-        Loads { body: zero_pair(), contact_surface: zero_pair(), traction: Vec::new() }
+        Loads { body: None, contact_surface: None, traction: Vec::new() }
     }
 }
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Initial {
-    #[serde(default = "zero_pair", deserialize_with = "pair")]
-    pub displacement: [String; 2],
-    #[serde(default = "zero_pair", deserialize_with = "pair")]
-    pub velocity: [String; 2],
+    /// d expressions in x, y (, z); absent: zero
+    #[serde(default, deserialize_with = "opt_components")]
+    pub displacement: Option<Vec<String>>,
+    #[serde(default, deserialize_with = "opt_components")]
+    pub velocity: Option<Vec<String>>,
 }
 
 impl Default for Initial {
     fn default() -> Self {
-        Initial { displacement: zero_pair(), velocity: zero_pair() }
+        Initial { displacement: None, velocity: None }
     }
 }
 
@@ -186,12 +186,26 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Pair<T> {
     }
 }
 
-fn pair<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> std::result::Result<[T; 2], D::Error> {
-    Pair::<T>::deserialize(d).map(|p| p.0)
+/// A TOML array of 2 or 3 entries (a point or a vector field in the plane or in space; the
+/// domain's dimension decides which is right, see `Scene::validate`).
+struct Components<T>(Vec<T>);
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Components<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let v = Vec::<T>::deserialize(d)?;
+        match v.len() {
+            2 | 3 => Ok(Components(v)),
+            n => Err(serde::de::Error::invalid_length(n, &"2 entries [a, b] (2-D) or 3 [a, b, c] (3-D)")),
+        }
+    }
 }
 
-fn opt_pair<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> std::result::Result<Option<[T; 2]>, D::Error> {
-    pair(d).map(Some)
+fn components<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> std::result::Result<Vec<T>, D::Error> {
+    Components::<T>::deserialize(d).map(|c| c.0)
+}
+
+fn opt_components<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> std::result::Result<Option<Vec<T>>, D::Error> {
+    components(d).map(Some)
 }
 
 fn opt_pairs<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Option<Vec<[f64; 2]>>, D::Error> {
@@ -385,7 +399,8 @@ impl Scene {
             name: self.name.clone(),
             description: self.description.clone(),
             domain,
-            plane: self.domain.plane,
+            dim: self.dim(),
+            plane: self.domain.plane.unwrap_or_default(),
             dirichlet: self.boundary.dirichlet.clone(),
             // a [contact] section without contact sides switches nothing on
             contact_sides: if contact.is_some() { self.boundary.contact.clone() } else { Vec::new() },
@@ -435,12 +450,80 @@ impl Scene {
         w
     }
 
-    /// (P.7) The initial conditions u(0) = u0, u̇(0) = v0 of the scene, as fields in x, y.
+    /// The space dimension of the domain: 3 for a box, 2 otherwise.
+    pub fn dim(&self) -> usize {
+        match self.domain.kind {
+            DomainKind::Box => 3,
+            DomainKind::Rectangle | DomainKind::Gmsh => 2,
+        }
+    }
+
+    /// The coordinates expressions may use: x, y (, z), and t when `with_t`.
+    fn space_vars(&self, with_t: bool) -> &'static [&'static str] {
+        match (self.dim(), with_t) {
+            (3, true) => &["x", "y", "z", "t"],
+            (3, false) => &["x", "y", "z"],
+            (_, true) => &["x", "y", "t"],
+            (_, false) => &["x", "y"],
+        }
+    }
+
+    /// A vector field of the scene at `path`: d expressions (zero when absent); the number of
+    /// components must be the domain's dimension.
+    fn vector_field(&self, src: Option<&[String]>, with_t: bool, path: &str) -> Result<VecExpr> {
+        let d = self.dim();
+        match src {
+            None => Ok(VecExpr::zero(d)),
+            Some(v) if v.len() != d => Err(Error::scene(
+                path,
+                format!("has {} components; the {d}-D domain (kind = {:?}) needs {d}", v.len(), kinds::name(&self.domain.kind)),
+            )),
+            Some(v) => VecExpr::parse(v, self.space_vars(with_t), path),
+        }
+    }
+
+    /// (P.7) The initial conditions u(0) = u0, u̇(0) = v0 of the scene, as fields in x, y (, z).
     pub fn validate_initial(&self) -> Result<model::Initial> {
         Ok(model::Initial {
-            displacement: VecExpr::parse(&self.initial.displacement, &["x", "y"], "initial.displacement")?,
-            velocity: VecExpr::parse(&self.initial.velocity, &["x", "y"], "initial.velocity")?,
+            displacement: self.vector_field(self.initial.displacement.as_deref(), false, "initial.displacement")?,
+            velocity: self.vector_field(self.initial.velocity.as_deref(), false, "initial.velocity")?,
         })
+    }
+
+    /// `size` and `cells` of a structured domain with `n` entries each (checked ranges).
+    fn structured<const N: usize>(&self, what: &str, names: &str) -> Result<([f64; N], [usize; N])> {
+        let e = |p: &str, m: String| Err(Error::scene(p, m));
+        let d = &self.domain;
+        let Some(size) = &d.size else {
+            return e("domain.size", format!("missing: a {what} needs size = [{names}]"));
+        };
+        let Ok(size) = <[f64; N]>::try_from(size.as_slice()) else {
+            return e("domain.size", format!("a {what} needs {N} entries [{names}], got {}", size.len()));
+        };
+        for (i, s) in size.iter().enumerate() {
+            if !(s.is_finite() && *s > 0.0) {
+                return e(&format!("domain.size[{i}]"), format!("must be > 0, got {s}"));
+            }
+        }
+        let Some(cells) = &d.cells else {
+            return e("domain.cells", format!("missing: a {what} needs cells = [{}]", if N == 3 { "nx, ny, nz" } else { "nx, ny" }));
+        };
+        let Ok(cells) = <[i64; N]>::try_from(cells.as_slice()) else {
+            return e("domain.cells", format!("a {what} needs {N} entries, got {}", cells.len()));
+        };
+        for (i, c) in cells.iter().enumerate() {
+            if *c < 1 {
+                return e(&format!("domain.cells[{i}]"), format!("must be >= 1, got {c}"));
+            }
+            if *c > defaults::MAX_CELLS_PER_SIDE {
+                let max = defaults::MAX_CELLS_PER_SIDE;
+                return e(&format!("domain.cells[{i}]"), format!("must be <= {max}, got {c}"));
+            }
+        }
+        if d.file.is_some() {
+            return e("domain.file", "only used with kind = \"gmsh\"; remove it or set kind = \"gmsh\"".into());
+        }
+        Ok((size, cells.map(|c| c as usize)))
     }
 
     fn validate_domain(&self) -> Result<model::Domain> {
@@ -448,30 +531,15 @@ impl Scene {
         let d = &self.domain;
         match d.kind {
             DomainKind::Rectangle => {
-                let Some(size) = d.size else {
-                    return e("domain.size", "missing: a rectangle needs size = [Lx, Ly]".into());
-                };
-                for (i, s) in size.iter().enumerate() {
-                    if !(s.is_finite() && *s > 0.0) {
-                        return e(&format!("domain.size[{i}]"), format!("must be > 0, got {s}"));
-                    }
+                let (size, cells) = self.structured::<2>("rectangle", "Lx, Ly")?;
+                Ok(model::Domain::Rectangle { size, cells })
+            }
+            DomainKind::Box => {
+                if d.plane.is_some() {
+                    return e("domain.plane", "is a 2-D key (plane strain or stress); a box is three-dimensional: remove it".into());
                 }
-                let Some(cells) = d.cells else {
-                    return e("domain.cells", "missing: a rectangle needs cells = [nx, ny]".into());
-                };
-                for (i, c) in cells.iter().enumerate() {
-                    if *c < 1 {
-                        return e(&format!("domain.cells[{i}]"), format!("must be >= 1, got {c}"));
-                    }
-                    if *c > defaults::MAX_CELLS_PER_SIDE {
-                        let max = defaults::MAX_CELLS_PER_SIDE;
-                        return e(&format!("domain.cells[{i}]"), format!("must be <= {max}, got {c}"));
-                    }
-                }
-                if d.file.is_some() {
-                    return e("domain.file", "only used with kind = \"gmsh\"; remove it or set kind = \"gmsh\"".into());
-                }
-                Ok(model::Domain::Rectangle { size, cells: [cells[0] as usize, cells[1] as usize] })
+                let (size, cells) = self.structured::<3>("box", "Lx, Ly, Lz")?;
+                Ok(model::Domain::Box { size, cells })
             }
             DomainKind::Gmsh => {
                 let file = match &d.file {
@@ -480,10 +548,10 @@ impl Scene {
                     Some(f) => f.clone(),
                 };
                 if d.size.is_some() {
-                    return e("domain.size", "only used with kind = \"rectangle\"; remove it".into());
+                    return e("domain.size", "only used with kind = \"rectangle\" or \"box\"; remove it".into());
                 }
                 if d.cells.is_some() {
-                    return e("domain.cells", "only used with kind = \"rectangle\"; remove it".into());
+                    return e("domain.cells", "only used with kind = \"rectangle\" or \"box\"; remove it".into());
                 }
                 Ok(model::Domain::Gmsh { file })
             }
@@ -528,7 +596,7 @@ impl Scene {
         if !(v.zeta.is_finite() && v.zeta >= 0.0) {
             return e("material.viscosity.zeta", format!("must be >= 0, got {}", v.zeta));
         }
-        if self.domain.plane == Plane::Stress && (v.theta > 0.0 || v.zeta > 0.0) {
+        if self.domain.plane == Some(Plane::Stress) && (v.theta > 0.0 || v.zeta > 0.0) {
             // decision 11: σ_zz = 0 is algebraic only when A = β B.
             let (lam, mu) = crate::model::material::lame(m.young, m.poisson);
             let proportional = (v.theta * mu - v.zeta * lam).abs() <= 1e-12 * (v.theta * mu).abs().max((v.zeta * lam).abs());
@@ -550,8 +618,8 @@ impl Scene {
 
     fn validate_loads(&self) -> Result<model::Loads> {
         let e = |p: &str, m: String| Err(Error::scene(p, m));
-        let body = VecExpr::parse(&self.loads.body, &["x", "y", "t"], "loads.body")?;
-        let f3 = VecExpr::parse(&self.loads.contact_surface, &["x", "y", "t"], "loads.contact_surface")?;
+        let body = self.vector_field(self.loads.body.as_deref(), true, "loads.body")?;
+        let f3 = self.vector_field(self.loads.contact_surface.as_deref(), true, "loads.contact_surface")?;
         if !f3.is_zero() && self.boundary.contact.is_empty() {
             return e("loads.contact_surface", "acts on Γ3 but boundary.contact is empty".into());
         }
@@ -559,7 +627,7 @@ impl Scene {
         for (i, tr) in self.loads.traction.iter().enumerate() {
             let p = format!("loads.traction[{i}]");
             let path = format!("{p}.value");
-            let value = VecExpr::parse(&tr.value, &["x", "y", "t"], &path)?;
+            let value = self.vector_field(Some(&tr.value), true, &path)?;
             if self.boundary.dirichlet.contains(&tr.side) {
                 return e(&format!("{p}.side"), format!("{:?} is a Dirichlet side (Γ1); tractions act on Γ2 only", tr.side));
             }
@@ -652,7 +720,7 @@ impl Scene {
         let e = |p: &str, m: String| Err(Error::scene(p, m));
         let gap = match &c.gap {
             None => Expr::constant(0.0),
-            Some(NumOrStr::Str(g)) => Expr::parse(g, &["x", "y"], "contact.gap")?,
+            Some(NumOrStr::Str(g)) => Expr::parse(g, self.space_vars(false), "contact.gap")?,
             Some(NumOrStr::Num(g)) if !g.is_finite() => return e("contact.gap", format!("must be finite, got {g}")),
             Some(NumOrStr::Num(g)) => Expr::constant(*g),
         };

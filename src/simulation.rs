@@ -232,7 +232,7 @@ impl<'p> Simulation<'p> {
         let clock = Instant::now();
         let (delassus, responses) = match problem.contact.as_ref() {
             Some(c) => {
-                let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| problem.mesh.nodes[i]).map(|x| [x[0], x[1], 0.0]).collect();
+                let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| problem.mesh.point(i)).collect();
                 let (w, g) = delassus::build_with_responses(stepper.factor(), c, &positions, problem.model.solver.contact_solve);
                 (Some(w), g)
             }

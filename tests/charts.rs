@@ -46,7 +46,7 @@ fn impact() -> &'static Fixture {
     RUN.get_or_init(|| {
         let (out, problem) = run_scene("impact_friction", Some(0.1), 10);
         let contact_nodes = problem.contact.as_ref().expect("contact").n();
-        Fixture { out, triangles: problem.mesh.triangles.len(), contact_nodes }
+        Fixture { out, triangles: problem.mesh.plane().expect("a 2-D mesh").triangles.len(), contact_nodes }
     })
 }
 
@@ -331,10 +331,10 @@ fn no_contact_scene_writes_only_energy_and_deformed() {
     println!(
         "gmsh_square: energy.svg {} polylines, deformed.svg {edges} edges for {} triangles",
         polylines(&energy).len(),
-        problem.mesh.triangles.len()
+        problem.mesh.plane().expect("a 2-D mesh").triangles.len()
     );
     assert!(polylines(&energy).len() >= 8);
-    assert!(edges >= problem.mesh.triangles.len());
+    assert!(edges >= problem.mesh.plane().expect("a 2-D mesh").triangles.len());
     for name in CONTACT_CHARTS {
         assert!(!out.join("plots").join(name).exists(), "{name} written without contact");
     }
@@ -394,9 +394,9 @@ fn positions_follow_the_arc_length_on_a_bent_contact_boundary() {
     scene.boundary.contact = vec!["bottom".into(), "right".into()];
     let problem = Problem::from_scene(&scene, &scene_dir()).expect("problem");
     let c = problem.contact.as_ref().expect("contact");
-    let along = Along::of(&problem.mesh, c, &problem.model.contact_sides);
+    let along = Along::of(problem.mesh.plane().expect("a 2-D mesh"), c, &problem.model.contact_sides);
     let at = |x: f64, y: f64| {
-        let i = c.nodes.iter().position(|&v| problem.mesh.nodes[v] == [x, y]).expect("node");
+        let i = c.nodes.iter().position(|&v| problem.mesh.plane().expect("a 2-D mesh").nodes[v] == [x, y]).expect("node");
         along.s[i]
     };
     println!("{} nodes; s(0,0) = {}, s(1,0) = {}, s(1,0.5) = {}", c.n(), at(0.0, 0.0), at(1.0, 0.0), at(1.0, 0.5));

@@ -141,7 +141,7 @@ fn r1_r2_bar_impact_chatter_and_remedies() {
             .iter()
             .map(|&c| {
                 let mut s = with(fixture("bar_impact"), v);
-                s.domain.cells = Some([c, 1]);
+                s.domain.cells = Some([c, 1].to_vec());
                 s.time.step = 0.25 / c as f64;
                 s.time.end = 2.5;
                 measure(s).force_error
@@ -158,7 +158,7 @@ fn r1_r2_bar_impact_chatter_and_remedies() {
 #[test]
 fn r1_r2_academic_chatter_and_remedies() {
     let mut base = fixture("academic");
-    base.domain.cells = Some([16, 8]);
+    base.domain.cells = Some([16, 8].to_vec());
     base.time.step = 1e-3;
     base.time.end = 0.5;
     for v in VARIANTS {
@@ -200,10 +200,10 @@ fn r1_modified_mass_keeps_total_mass_and_centre_of_mass() {
     for (name, s) in [("academic", fixture("academic")), ("bar_impact", fixture("bar_impact")), ("half disk", half_disk)] {
         let p = problem(s);
         let c = p.contact.as_ref().expect("contact");
-        let m = modified_masses(&p.mesh, &p.material, &p.dofs, &c.nodes).expect("modified mass");
-        let mut lumped = vec![0.0; p.mesh.nodes.len()];
-        for tri in &p.mesh.triangles {
-            let x = [p.mesh.nodes[tri[0]], p.mesh.nodes[tri[1]], p.mesh.nodes[tri[2]]];
+        let m = modified_masses(p.mesh.plane().expect("a 2-D mesh"), &p.material, &p.dofs, &c.nodes).expect("modified mass");
+        let mut lumped = vec![0.0; p.mesh.plane().expect("a 2-D mesh").nodes.len()];
+        for tri in &p.mesh.plane().expect("a 2-D mesh").triangles {
+            let x = [p.mesh.plane().expect("a 2-D mesh").nodes[tri[0]], p.mesh.plane().expect("a 2-D mesh").nodes[tri[1]], p.mesh.plane().expect("a 2-D mesh").nodes[tri[2]]];
             let a = dyncontact::fem::element::gradients(x).1.abs();
             for &v in tri {
                 lumped[v] += p.material.rho * a / 3.0;
@@ -211,8 +211,8 @@ fn r1_modified_mass_keeps_total_mass_and_centre_of_mass() {
         }
         let moments = |w: &[f64]| {
             let t: f64 = w.iter().sum();
-            let mx: f64 = w.iter().zip(&p.mesh.nodes).map(|(m, x)| m * x[0]).sum();
-            let my: f64 = w.iter().zip(&p.mesh.nodes).map(|(m, x)| m * x[1]).sum();
+            let mx: f64 = w.iter().zip(&p.mesh.plane().expect("a 2-D mesh").nodes).map(|(m, x)| m * x[0]).sum();
+            let my: f64 = w.iter().zip(&p.mesh.plane().expect("a 2-D mesh").nodes).map(|(m, x)| m * x[1]).sum();
             (t, mx, my)
         };
         let (t0, x0, y0) = moments(&lumped);

@@ -105,7 +105,7 @@ fn twins_on(p: &Problem, steps: usize) -> (f64, f64) {
 #[test]
 fn s6_twins_newton_and_conic_agree() {
     let mut academic = fixture("academic");
-    academic.domain.cells = Some([16, 8]);
+    academic.domain.cells = Some([16, 8].to_vec());
     academic.time.step = 1e-3;
     academic.time.end = 0.3;
     let mut penalty = fixture("impact_friction");
@@ -276,7 +276,7 @@ fn f1_step_functional_decreases_under_ck() {
 #[test]
 fn f1_relaxation_gives_the_same_solution() {
     let mut s = fixture("academic");
-    s.domain.cells = Some([16, 8]);
+    s.domain.cells = Some([16, 8].to_vec());
     s.time.end = 0.1;
     s.time.step = 5e-4;
     let p = problem(s);

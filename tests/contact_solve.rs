@@ -32,8 +32,8 @@ fn with_form(mut s: Scene, form: ContactSolve) -> Scene {
 /// k: n + 1 contact nodes, W decaying within ~16 nodes.
 fn strip(n: i64, k: f64, steps: usize) -> Scene {
     let mut s = fixture("academic");
-    s.domain.size = Some([n as f64 / 16.0, 1.0]);
-    s.domain.cells = Some([n, 16]);
+    s.domain.size = Some([n as f64 / 16.0, 1.0].to_vec());
+    s.domain.cells = Some([n, 16].to_vec());
     s.time.step = k;
     s.time.end = k * steps as f64;
     s
@@ -43,7 +43,7 @@ fn strip(n: i64, k: f64, steps: usize) -> Scene {
 /// with each form of W; the worst relative differences of the contact velocities and forces.
 fn per_step(p: &Problem, steps: usize) -> (f64, f64) {
     let c = p.contact.as_ref().expect("contact");
-    let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| p.mesh.nodes[i]).map(|x| [x[0], x[1], 0.0]).collect();
+    let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| p.mesh.plane().expect("a 2-D mesh").nodes[i]).map(|x| [x[0], x[1], 0.0]).collect();
     let setup = Simulation::new(p).expect("setup");
     let w_sparse = delassus::build(setup.stepper.factor(), c, &positions, ContactSolve::Sparse);
     assert_eq!(w_sparse.form(), "sparse");

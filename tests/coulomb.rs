@@ -92,7 +92,7 @@ fn co1_b3_signorini_coulomb_block_slides_with_closed_form() {
 #[test]
 fn co1_b3_signorini_coulomb_block_sticks_below_threshold() {
     let mut s = signorini_coulomb_block();
-    s.loads.body[0] = "27.5*if(t < 0.1, 0, if(t < 0.15, 0.5*(1 - cos(pi*(t - 0.1)/0.05)), 1))".into();
+    s.loads.body.as_mut().expect("the fixture gives a body force")[0] = "27.5*if(t < 0.1, 0, if(t < 0.15, 0.5*(1 - cos(pi*(t - 0.1)/0.05)), 1))".into();
     let p = problem(s);
     let mut sim = Simulation::new(&p).expect("setup");
     let mut worst: f64 = 0.0;
@@ -116,7 +116,7 @@ fn co1_b3_signorini_coulomb_block_sticks_below_threshold() {
 #[test]
 fn co1_oblique_bar_impact_slips_with_coulomb_force() {
     let mut s = fixture("bar_impact");
-    s.initial.velocity = ["-0.1".into(), "0.2".into()];
+    s.initial.velocity = Some(vec!["-0.1".into(), "0.2".into()]);
     let c = s.contact.as_mut().expect("contact");
     c.friction_bound = FrictionBound::Total;
     c.friction.law = FrictionLaw::Constant;
@@ -191,7 +191,7 @@ fn co3_coupled_newton_agrees_with_the_fixed_point() {
     let oblique = {
         let mut s = fixture("bar_impact");
         s.time.end = 1.0;
-        s.initial.velocity = ["-0.1".into(), "0.2".into()];
+        s.initial.velocity = Some(vec!["-0.1".into(), "0.2".into()]);
         let c = s.contact.as_mut().expect("contact");
         c.friction_bound = FrictionBound::Total;
         c.friction.law = FrictionLaw::Constant;

@@ -51,8 +51,8 @@ fn rel_diff(ours: &linalg::SpMat, theirs: &HashMap<(usize, usize), f64>) -> f64 
 fn p1_p2_p4_operators_match_scikit_fem() {
     for name in ["crosscheck_strain", "crosscheck_stress", "crosscheck_elastic", "crosscheck_gmsh"] {
         let p = problem(fixture(name));
-        let (m, k, c) = assemble_full(&p.mesh, &p.material, p.model.solver.mass).expect("assembly");
-        let n = 2 * p.mesh.nodes.len();
+        let (m, k, c) = assemble_full(p.mesh.plane().expect("a 2-D mesh"), &p.material, p.model.solver.mass).expect("assembly");
+        let n = 2 * p.mesh.plane().expect("a 2-D mesh").nodes.len();
         let mut report = Vec::new();
         for (label, ours) in [("M", &m), ("K", &k), ("C", &c)] {
             let (size, theirs) = read_mtx(&format!("{name}_{label}.mtx"));
@@ -61,7 +61,7 @@ fn p1_p2_p4_operators_match_scikit_fem() {
             report.push(format!("{label} {d:.2e}"));
             assert!(d <= 1e-12, "{name}: {label} differs from scikit-fem by {d:.3e}");
         }
-        let all = Dofs::new(p.mesh.nodes.len(), &vec![false; p.mesh.nodes.len()]);
+        let all = Dofs::new(p.mesh.plane().expect("a 2-D mesh").nodes.len(), &vec![false; p.mesh.plane().expect("a 2-D mesh").nodes.len()]);
         let f = dyncontact::problem::build_loads(&p.model, &p.mesh, &all).expect("loads").at(0.0);
         let text = std::fs::read_to_string(reference(&format!("{name}_f.txt"))).expect("f");
         let theirs: Vec<f64> = text.lines().filter(|l| !l.starts_with('%') && !l.trim().is_empty()).map(|l| l.trim().parse().expect("value")).collect();

@@ -1087,8 +1087,10 @@ fn pipeline(input: &Input, reached: &mut Vec<String>) -> Result<Outcome, String>
         Err(e) => return check_clean("Scene::from_toml", &e),
     };
     // harness time bounds (see the module docs)
-    if scene.domain.cells.is_some_and(|[nx, ny]| nx.max(ny) > MAX_CELLS_PER_SIDE || nx.saturating_mul(ny) > MAX_CELLS) {
-        return Ok(Outcome::Skipped("rectangle with more than 64 x 64 cells or more than 512 on a side"));
+    if scene.domain.cells.as_ref().is_some_and(|c| {
+        c.iter().any(|&n| n > MAX_CELLS_PER_SIDE) || c.iter().fold(1i64, |p, &n| p.saturating_mul(n)) > MAX_CELLS
+    }) {
+        return Ok(Outcome::Skipped("rectangle or box with more than 64 x 64 cells in all or more than 512 on a side"));
     }
     if scene.solver.max_newton_iterations.saturating_mul(scene.solver.max_fixed_point_iterations) > MAX_ITERATION_PRODUCT {
         return Ok(Outcome::Skipped("more than 10^4 Newton x fixed-point iterations"));
@@ -1112,6 +1114,7 @@ fn pipeline(input: &Input, reached: &mut Vec<String>) -> Result<Outcome, String>
     reached.push("time loop".into());
     reached.push(match sc.domain {
         dyncontact::model::Domain::Rectangle { .. } => "Rectangle mesh".into(),
+        dyncontact::model::Domain::Box { .. } => "Box mesh".into(),
         dyncontact::model::Domain::Gmsh { .. } => "Gmsh mesh".to_string(),
     });
     reached.push(format!("{:?}", sc.time.scheme));

@@ -249,8 +249,8 @@ fn gmsh_scene_runs() {
     let scene = Scene::from_file(&path).expect("gmsh_square.toml parses");
     let dir = path.parent().expect("scene dir");
     let problem = Problem::from_scene(&scene, dir).expect("gmsh_square.toml builds");
-    assert_eq!(problem.mesh.nodes.len(), 12);
-    assert_eq!(problem.mesh.triangles.len(), 14);
+    assert_eq!(problem.mesh.plane().expect("a 2-D mesh").nodes.len(), 12);
+    assert_eq!(problem.mesh.plane().expect("a 2-D mesh").triangles.len(), 14);
     assert!(problem.contact.is_none());
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("gmsh_scene_runs");
     let _ = std::fs::remove_dir_all(&out);

@@ -98,7 +98,7 @@ fn b5_manufactured_orders_in_h() {
         let (p, u) = solve(scene(cells, 1.0 / 1024.0, "midpoint", "lumped"));
         let mat = p.material;
         let uh = p.dofs.expand(&u);
-        let (e0, e1) = error_norms(&p.mesh, &mat, &uh, |x, y| m.u(x, y, END), |x, y| m.grad_u(x, y, END));
+        let (e0, e1) = error_norms(p.mesh.plane().expect("a 2-D mesh"), &mat, &uh, |x, y| m.u(x, y, END), |x, y| m.grad_u(x, y, END));
         println!("{cells:5}  {:.5}  {e0:.4e}    {e1:.4e}", 1.0 / cells as f64);
         l2.push(e0);
         en.push(e1);
@@ -155,7 +155,7 @@ fn b5_consistent_mass_order_in_h() {
     for cells in [8, 16, 32] {
         let (p, u) = solve(scene(cells, 1.0 / 1024.0, "midpoint", "consistent"));
         let mat = p.material;
-        let (e0, _) = error_norms(&p.mesh, &mat, &p.dofs.expand(&u), |x, y| m.u(x, y, END), |x, y| m.grad_u(x, y, END));
+        let (e0, _) = error_norms(p.mesh.plane().expect("a 2-D mesh"), &mat, &p.dofs.expand(&u), |x, y| m.u(x, y, END), |x, y| m.grad_u(x, y, END));
         l2.push(e0);
     }
     let o = order(&l2);

@@ -208,7 +208,7 @@ fn check(regime: Regime) {
     for cells in [4, 8, 16, 32] {
         let (p, u, seen) = solve(m.scene(cells, 1.0 / 512.0));
         let mat = p.material;
-        let (_, e1) = error_norms(&p.mesh, &mat, &p.dofs.expand(&u), |x, y| m.u(x, y, END), |x, y| m.grad(x, y, END));
+        let (_, e1) = error_norms(p.mesh.plane().expect("a 2-D mesh"), &mat, &p.dofs.expand(&u), |x, y| m.u(x, y, END), |x, y| m.grad(x, y, END));
         en.push(e1);
         if cells == 32 {
             match regime {
@@ -264,7 +264,7 @@ fn b5_mms_velocity_weakening_slip_is_unstable() {
             stuck |= r.expect("step").stick_nodes > 0;
         }
         let mat = p.material;
-        en.push(error_norms(&p.mesh, &mat, &p.dofs.expand(&sim.state.u), |x, y| m.u(x, y, END), |x, y| m.grad(x, y, END)).1);
+        en.push(error_norms(p.mesh.plane().expect("a 2-D mesh"), &mat, &p.dofs.expand(&sim.state.u), |x, y| m.u(x, y, END), |x, y| m.grad(x, y, END)).1);
     }
     println!("velocity weakening: energy errors {en:?}, orders {:?}, a node stuck: {stuck}", orders(&en));
     common::measured("manufactured_contact", "velocity-weakening slip: energy order in h (unstable)", orders(&en)[1], "reported");

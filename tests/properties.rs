@@ -115,7 +115,7 @@ proptest! {
         prop_assert!((sx - fx * lx * ly).abs() <= tol && (sy - fy * lx * ly).abs() <= tol);
         let top = mesh.side("top").expect("top").edges.clone();
         let tr = VecExpr::parse(&[format!("{fy}"), format!("{fx}")], &["x", "y", "t"], "t").expect("expr");
-        let g = LoadVector::new(&mesh, &dofs, &VecExpr::zero(), &[(top, tr, "t".into())]).at(0.0);
+        let g = LoadVector::new(&mesh, &dofs, &VecExpr::zero(2), &[(top, tr, "t".into())]).at(0.0);
         let (gx, gy): (f64, f64) = (g.iter().step_by(2).sum(), g.iter().skip(1).step_by(2).sum());
         prop_assert!((gx - fy * lx).abs() <= 1e-12 * (fy.abs() + 1.0) * lx && (gy - fx * lx).abs() <= 1e-12 * (fx.abs() + 1.0) * lx);
     }

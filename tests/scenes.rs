@@ -112,7 +112,14 @@ fn cases() -> Vec<Case> {
             "loads.traction[0].value[1]",
             "invalid type",
         ),
-        case("pair with three entries", edit("size = [2.0, 1.0]", "size = [2.0, 1.0, 3.0]"), "domain.size", "invalid length 3, expected exactly 2 entries"),
+        case("rectangle size with three entries", edit("size = [2.0, 1.0]", "size = [2.0, 1.0, 3.0]"), "domain.size", "a rectangle needs 2 entries [Lx, Ly], got 3"),
+        case("size with four entries", edit("size = [2.0, 1.0]", "size = [2.0, 1.0, 3.0, 4.0]"), "domain.size", "invalid length 4, expected 2 entries [a, b] (2-D) or 3 [a, b, c] (3-D)"),
+        case(
+            "3-D expression in a 2-D scene",
+            edit("value = [\"0\", \"-40*min(t/0.2, 1)\"]", "value = [\"0\", \"-40\", \"0\"]"),
+            "loads.traction[0].value",
+            "has 3 components; the 2-D domain (kind = \"rectangle\") needs 2",
+        ),
         case(
             "expression pair with one entry",
             edit("value = [\"0\", \"-40*min(t/0.2, 1)\"]", "value = [\"-40\"]"),
@@ -493,16 +500,18 @@ step = 0.1
 "#;
     let s = Scene::from_toml(text, "minimal.toml").expect("a minimal scene is valid");
     assert_eq!(s.domain.kind, DomainKind::Rectangle);
-    assert_eq!(s.domain.plane, Plane::Strain);
+    assert_eq!(s.domain.plane, None);
+    assert_eq!(s.validate().expect("valid").plane, Plane::Strain);
     assert!(s.boundary.dirichlet.is_empty());
     assert!(s.boundary.contact.is_empty());
     assert!(s.contact.is_none());
     assert!(s.validate().expect("valid").contact.is_none());
     assert_eq!((s.material.viscosity.theta, s.material.viscosity.zeta), (0.0, 0.0));
-    assert_eq!(s.loads.body, ["0".to_string(), "0".to_string()]);
+    let m = s.validate().expect("valid");
+    assert!(m.loads.body.is_zero() && m.loads.body.dim() == 2, "absent body force: zero with 2 components");
     assert!(s.loads.traction.is_empty());
-    assert_eq!(s.initial.displacement, ["0".to_string(), "0".to_string()]);
-    assert_eq!(s.initial.velocity, ["0".to_string(), "0".to_string()]);
+    assert!(m.initial.displacement.is_zero() && m.initial.displacement.dim() == 2);
+    assert!(m.initial.velocity.is_zero() && m.initial.velocity.dim() == 2);
     assert_eq!(s.time.scheme, SchemeKind::Midpoint);
     assert_eq!(s.validate().expect("valid").time.steps, 10);
     assert_eq!(s.solver.inner, InnerSolver::Newton);

@@ -51,7 +51,7 @@ fn summary(recs: &[StepRecord], times: &[f64], digits: usize, cum_digits: usize)
 
 fn coarse_academic() -> Scene {
     let mut s = fixture("academic");
-    s.domain.cells = Some([16, 8]);
+    s.domain.cells = Some([16, 8].to_vec());
     s.time.step = 1e-3;
     s
 }

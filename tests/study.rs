@@ -19,7 +19,7 @@ use dyncontact::studies::penalty::penalty_study;
 #[test]
 fn e0_penalty_study_penetration_and_error_fall_with_eps() {
     let mut s = fixture("academic");
-    s.domain.cells = Some([16, 8]);
+    s.domain.cells = Some([16, 8].to_vec());
     s.time.step = 1e-3;
     let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes");
     let eps = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7];

@@ -4,7 +4,7 @@
 use crate::error::{Error, Result};
 use crate::linalg::{self, SpMat};
 use crate::mesh::solid::SolidMesh;
-use crate::mesh::Mesh;
+use crate::mesh::{Geometry, Mesh};
 use crate::model::material::Material;
 use crate::model::kinds::MassKind;
 
@@ -51,6 +51,27 @@ impl Dofs {
                 let g = |c: usize| self.map[2 * k + c].map(|i| x[i]).unwrap_or(0.0);
                 [g(0), g(1)]
             })
+            .collect()
+    }
+
+    /// Free-DOF vector from nodal values with three components (the first d are read).
+    pub fn gather_dim(&self, nodal: impl Fn(usize) -> [f64; 3]) -> Vec<f64> {
+        let mut x = vec![0.0; self.n_free];
+        for k in 0..self.n_nodes {
+            let v = nodal(k);
+            for c in 0..self.dim {
+                if let Some(i) = self.map[self.dim * k + c] {
+                    x[i] = v[c];
+                }
+            }
+        }
+        x
+    }
+
+    /// Nodal vectors with three components (z = 0 in 2-D) from a free-DOF vector (zero on Γ̄1).
+    pub fn expand_dim(&self, x: &[f64]) -> Vec<[f64; 3]> {
+        (0..self.n_nodes)
+            .map(|k| std::array::from_fn(|c| if c < self.dim { self.map[self.dim * k + c].map(|i| x[i]).unwrap_or(0.0) } else { 0.0 }))
             .collect()
     }
 
@@ -171,9 +192,12 @@ pub fn restrict(a: &SpMat, dofs: &Dofs) -> Result<SpMat> {
 impl Operators {
     /// The operators of a scene; `contact_nodes` are the mesh nodes of Γ̄3 \ Γ̄1 (used by the
     /// modified mass).
-    pub fn new(mesh: &Mesh, mat: &Material, mass: MassKind, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Operators> {
+    pub fn new(mesh: &Geometry, mat: &Material, mass: MassKind, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Operators> {
         let kind = if mass == MassKind::Modified { MassKind::Lumped } else { mass };
-        let (m, k, c) = assemble_full(mesh, mat, kind)?;
+        let (m, k, c) = match mesh {
+            Geometry::Plane(mesh) => assemble_full(mesh, mat, kind)?,
+            Geometry::Solid(mesh) => assemble_solid(mesh, mat, kind)?,
+        };
         let m_lumped = nodal_masses(mesh, mat, mass, dofs, contact_nodes)?;
         let m = if mass == MassKind::Modified {
             let trip: Vec<(usize, usize, f64)> = (0..dofs.n_free).map(|i| (i, i, m_lumped[i])).collect();
@@ -186,13 +210,28 @@ impl Operators {
 }
 
 /// The diagonal (lumped or modified) nodal mass per free DOF, the m_i of (C.k).
-pub fn nodal_masses(mesh: &Mesh, mat: &Material, mass: MassKind, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Vec<f64>> {
-    let lumped = lumped_masses(mesh, mat, dofs);
-    if mass != MassKind::Modified {
-        return Ok(lumped);
+pub fn nodal_masses(mesh: &Geometry, mat: &Material, mass: MassKind, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Vec<f64>> {
+    match (mesh, mass) {
+        (Geometry::Plane(m), MassKind::Modified) => Ok(per_dof(&modified_masses(m, mat, dofs, contact_nodes)?, dofs)),
+        (Geometry::Plane(m), _) => Ok(lumped_masses(m, mat, dofs)),
+        (Geometry::Solid(_), MassKind::Modified) => Err(Error::scene(
+            "solver.mass",
+            "\"modified\" (R.1) is implemented for 2-D meshes only; use mass = \"lumped\" or \"consistent\" in 3-D",
+        )),
+        (Geometry::Solid(m), _) => Ok(per_dof(&solid_vertex_masses(m, mat), dofs)),
     }
-    let per_node = modified_masses(mesh, mat, dofs, contact_nodes)?;
-    Ok(per_dof(&per_node, dofs))
+}
+
+/// Row-sum lumped mass per node of a tetrahedral mesh: Σ over adjacent tetrahedra of ρ|T|/4.
+pub fn solid_vertex_masses(mesh: &SolidMesh, mat: &Material) -> Vec<f64> {
+    let mut mass = vec![0.0; mesh.nodes.len()];
+    for (t, tet) in mesh.tets.iter().enumerate() {
+        let m = tet::vertex_mass(mesh.signed_volume(t).abs(), mat.rho);
+        for &v in tet {
+            mass[v] += m;
+        }
+    }
+    mass
 }
 
 /// (R.1) Modified mass (the Khenous–Laborde–Renard family, as classified by Doyen–Ern–Piperno):

@@ -240,3 +240,116 @@ impl Mesh {
         ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2)).sqrt()
     }
 }
+
+/// The body's mesh in either dimension: P1 triangles (d = 2) or P1 tetrahedra (d = 3). The
+/// time loop and the outputs ask it for what they need; 2-D-only consumers (the Γ3 charts, the
+/// convergence probes) take [`Geometry::plane`].
+#[derive(Debug, Clone)]
+pub enum Geometry {
+    Plane(Mesh),
+    Solid(solid::SolidMesh),
+}
+
+/// Nodes of a set of sides (Γ3) in either dimension: outward unit normals with three
+/// components (z = 0 in 2-D) and weights ω_i.
+#[derive(Debug, Clone, Default)]
+pub struct BoundaryNodes {
+    pub nodes: Vec<usize>,
+    pub normals: Vec<[f64; 3]>,
+    pub omega: Vec<f64>,
+}
+
+impl Geometry {
+    /// The space dimension d.
+    pub fn dim(&self) -> usize {
+        match self {
+            Geometry::Plane(_) => 2,
+            Geometry::Solid(_) => 3,
+        }
+    }
+    pub fn n_nodes(&self) -> usize {
+        match self {
+            Geometry::Plane(m) => m.nodes.len(),
+            Geometry::Solid(m) => m.nodes.len(),
+        }
+    }
+    /// Triangles or tetrahedra.
+    pub fn n_cells(&self) -> usize {
+        match self {
+            Geometry::Plane(m) => m.triangles.len(),
+            Geometry::Solid(m) => m.tets.len(),
+        }
+    }
+    /// Node i's coordinates (z = 0 in 2-D).
+    pub fn point(&self, i: usize) -> [f64; 3] {
+        match self {
+            Geometry::Plane(m) => [m.nodes[i][0], m.nodes[i][1], 0.0],
+            Geometry::Solid(m) => m.nodes[i],
+        }
+    }
+    /// The 2-D mesh, if the body is planar.
+    pub fn plane(&self) -> Option<&Mesh> {
+        match self {
+            Geometry::Plane(m) => Some(m),
+            Geometry::Solid(_) => None,
+        }
+    }
+    /// The tetrahedral mesh, if the body is three-dimensional.
+    pub fn solid(&self) -> Option<&solid::SolidMesh> {
+        match self {
+            Geometry::Plane(_) => None,
+            Geometry::Solid(m) => Some(m),
+        }
+    }
+    pub fn source(&self) -> &str {
+        match self {
+            Geometry::Plane(m) => &m.source,
+            Geometry::Solid(m) => &m.source,
+        }
+    }
+    pub fn has_side(&self, name: &str) -> bool {
+        match self {
+            Geometry::Plane(m) => m.side(name).is_some(),
+            Geometry::Solid(m) => m.side(name).is_some(),
+        }
+    }
+    pub fn side_list(&self) -> String {
+        let names: Vec<&str> = match self {
+            Geometry::Plane(m) => m.sides.iter().map(|s| s.name.as_str()).collect(),
+            Geometry::Solid(m) => m.sides.iter().map(|s| s.name.as_str()).collect(),
+        };
+        names.iter().map(|s| s.escape_debug().to_string()).collect::<Vec<_>>().join(", ")
+    }
+    pub fn nodes_on(&self, names: &[String]) -> Result<Vec<bool>> {
+        match self {
+            Geometry::Plane(m) => m.nodes_on(names),
+            Geometry::Solid(m) => m.nodes_on(names),
+        }
+    }
+    /// Nodes of the named sides with outward nodal normals and weights (see
+    /// [`Mesh::side_nodes`], [`solid::SolidMesh::side_nodes`]).
+    pub fn side_nodes(&self, names: &[String], exclude: &[bool]) -> Result<BoundaryNodes> {
+        Ok(match self {
+            Geometry::Plane(m) => {
+                let s = m.side_nodes(names, exclude)?;
+                BoundaryNodes { nodes: s.nodes, normals: s.normals.iter().map(|n| [n[0], n[1], 0.0]).collect(), omega: s.omega }
+            }
+            Geometry::Solid(m) => {
+                let s = m.side_nodes(names, exclude)?;
+                BoundaryNodes { nodes: s.nodes, normals: s.normals, omega: s.omega }
+            }
+        })
+    }
+    pub fn check(&self) -> Result<()> {
+        match self {
+            Geometry::Plane(m) => m.check(),
+            Geometry::Solid(m) => m.check(),
+        }
+    }
+    pub fn bbox_diameter(&self) -> f64 {
+        match self {
+            Geometry::Plane(m) => m.bbox_diameter(),
+            Geometry::Solid(m) => m.bbox_diameter(),
+        }
+    }
+}

@@ -2,7 +2,7 @@
 //! with their frames (normal and tangents) and weights, the gap, and the laws — normal compliance with the
 //! bound g (exact, Problem P) or its penalty (Problem P_ε), and friction.
 
-use crate::mesh::SideNodes;
+use crate::mesh::BoundaryNodes;
 
 use super::kinds::{Bound, BoundAt, FrictionBound};
 use super::laws::{FrictionBoundLaw, FrictionCoefficient, NormalLaw};
@@ -135,7 +135,8 @@ impl ContactModel {
     /// of each of its nodes (d per node, in order).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
-        side: SideNodes,
+        side: BoundaryNodes,
+        dim: usize,
         gap: Vec<f64>,
         node_dofs: Vec<usize>,
         normal: NormalLaw,
@@ -148,9 +149,9 @@ impl ContactModel {
         p_tau: FrictionBoundLaw,
     ) -> ContactModel {
         ContactModel {
-            dim: 2,
+            dim,
             nodes: side.nodes,
-            frames: side.normals.iter().map(|&n| Frame::planar(n)).collect(),
+            frames: side.normals.iter().map(|&n| if dim == 3 { Frame::spatial(n) } else { Frame::planar([n[0], n[1]]) }).collect(),
             omega: side.omega,
             gap,
             dofs: node_dofs,

@@ -19,6 +19,7 @@ pub struct Expr {
     program: Vec<Instr>,
     uses_x: bool,
     uses_y: bool,
+    uses_z: bool,
     uses_t: bool,
 }
 
@@ -34,6 +35,7 @@ enum Instr {
     Num(f64),
     X,
     Y,
+    Z,
     T,
     Neg,
     Not,
@@ -452,7 +454,7 @@ impl Parser<'_> {
                     "e" => return Ok(Ast::Num(std::f64::consts::E)),
                     _ => {}
                 }
-                if let Some(k) = ["x", "y", "t"].iter().position(|v| *v == name) {
+                if let Some(k) = ["x", "y", "z", "t"].iter().position(|v| *v == name) {
                     if self.vars.contains(&name.as_str()) {
                         return Ok(Ast::Var(k as u8));
                     }
@@ -604,6 +606,7 @@ fn compile(ast: &Ast, out: &mut Vec<Instr>) {
         Ast::Num(v) => out.push(Instr::Num(*v)),
         Ast::Var(0) => out.push(Instr::X),
         Ast::Var(1) => out.push(Instr::Y),
+        Ast::Var(2) => out.push(Instr::Z),
         Ast::Var(_) => out.push(Instr::T),
         Ast::Neg(a) => {
             compile(a, out);
@@ -648,7 +651,7 @@ fn max_depth(program: &[Instr]) -> usize {
     let (mut d, mut m) = (0usize, 0usize);
     for ins in program {
         match ins {
-            Instr::Num(_) | Instr::X | Instr::Y | Instr::T => d += 1,
+            Instr::Num(_) | Instr::X | Instr::Y | Instr::Z | Instr::T => d += 1,
             Instr::Neg | Instr::Not | Instr::F1(_) => {}
             Instr::Bin(_) | Instr::F2(_) => d -= 1,
             Instr::MinN(n) | Instr::MaxN(n) => d -= n - 1,
@@ -696,6 +699,7 @@ impl Expr {
             source: source.to_string(),
             uses_x: uses(Instr::X),
             uses_y: uses(Instr::Y),
+            uses_z: uses(Instr::Z),
             uses_t: uses(Instr::T),
             program,
         })
@@ -708,6 +712,7 @@ impl Expr {
             program: vec![Instr::Num(value)],
             uses_x: false,
             uses_y: false,
+            uses_z: false,
             uses_t: false,
         }
     }
@@ -719,7 +724,7 @@ impl Expr {
         self.uses_t
     }
     pub fn depends_on_space(&self) -> bool {
-        self.uses_x || self.uses_y
+        self.uses_x || self.uses_y || self.uses_z
     }
     /// The value if the expression is a constant.
     pub fn as_constant(&self) -> Option<f64> {
@@ -732,8 +737,13 @@ impl Expr {
         self.as_constant() == Some(0.0)
     }
 
-    /// Evaluate at (x, y, t).
+    /// Evaluate at (x, y, t) in the plane (z = 0).
     pub fn eval(&self, x: f64, y: f64, t: f64) -> f64 {
+        self.eval3(x, y, 0.0, t)
+    }
+
+    /// Evaluate at (x, y, z, t).
+    pub fn eval3(&self, x: f64, y: f64, z: f64, t: f64) -> f64 {
         if let [Instr::Num(v)] = self.program.as_slice() {
             return *v;
         }
@@ -751,6 +761,10 @@ impl Expr {
                 }
                 Instr::Y => {
                     s[n] = y;
+                    n += 1;
+                }
+                Instr::Z => {
+                    s[n] = z;
                     n += 1;
                 }
                 Instr::T => {
@@ -790,30 +804,42 @@ impl Expr {
 
 /// A pair of expressions (the two components of a vector field).
 #[derive(Debug, Clone)]
-pub struct VecExpr(pub [Expr; 2]);
+pub struct VecExpr(pub Vec<Expr>);
 
 impl VecExpr {
-    /// The two source strings, as the scene wrote them.
-    pub fn sources(&self) -> [String; 2] {
-        [self.0[0].source().to_string(), self.0[1].source().to_string()]
+    /// The source strings, as the scene wrote them.
+    pub fn sources(&self) -> Vec<String> {
+        self.0.iter().map(|e| e.source().to_string()).collect()
     }
-    pub fn parse(src: &[String; 2], vars: &[&str], path: &str) -> Result<VecExpr> {
-        Ok(VecExpr([
-            Expr::parse(&src[0], vars, &format!("{path}[0]"))?,
-            Expr::parse(&src[1], vars, &format!("{path}[1]"))?,
-        ]))
+    /// One expression per component (d of them); `path[c]` names component c in errors.
+    pub fn parse(src: &[String], vars: &[&str], path: &str) -> Result<VecExpr> {
+        src.iter().enumerate().map(|(c, s)| Expr::parse(s, vars, &format!("{path}[{c}]"))).collect::<Result<Vec<_>>>().map(VecExpr)
     }
-    pub fn zero() -> VecExpr {
-        VecExpr([Expr::constant(0.0), Expr::constant(0.0)])
+    /// The zero field with `dim` components.
+    pub fn zero(dim: usize) -> VecExpr {
+        VecExpr((0..dim).map(|_| Expr::constant(0.0)).collect())
     }
+    /// Components.
+    pub fn dim(&self) -> usize {
+        self.0.len()
+    }
+    /// The first two components at (x, y, t) in the plane.
     pub fn eval(&self, x: f64, y: f64, t: f64) -> [f64; 2] {
         [self.0[0].eval(x, y, t), self.0[1].eval(x, y, t)]
     }
+    /// All components at the point p and time t (missing ones zero).
+    pub fn eval3(&self, p: [f64; 3], t: f64) -> [f64; 3] {
+        let mut v = [0.0; 3];
+        for (c, e) in self.0.iter().take(3).enumerate() {
+            v[c] = e.eval3(p[0], p[1], p[2], t);
+        }
+        v
+    }
     pub fn is_zero(&self) -> bool {
-        self.0[0].is_zero() && self.0[1].is_zero()
+        self.0.iter().all(Expr::is_zero)
     }
     pub fn depends_on_t(&self) -> bool {
-        self.0[0].depends_on_t() || self.0[1].depends_on_t()
+        self.0.iter().any(Expr::depends_on_t)
     }
 }
 
@@ -868,7 +894,8 @@ mod tests {
         let cases = [
             ("1 +", "expected a number"),
             ("foo(1)", "unknown function `foo`"),
-            ("z + 1", "unknown name `z`"),
+            ("w + 1", "unknown name `w`"),
+            ("z + 1", "the variable `z` (column 1) is not allowed here; allowed: x, y, t"),
             ("sin(1, 2)", "takes 1 argument"),
             ("min(1)", "2 or more"),
             ("if(1, 2)", "takes 3"),

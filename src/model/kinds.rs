@@ -17,6 +17,8 @@ pub fn name<T: Serialize>(kind: &T) -> String {
 #[serde(rename_all = "lowercase")]
 pub enum DomainKind {
     Rectangle,
+    /// [0, Lx] × [0, Ly] × [0, Lz] cut into nx × ny × nz cells of six tetrahedra
+    Box,
     Gmsh,
 }
 

@@ -20,6 +20,9 @@ pub struct Model {
     pub name: String,
     pub description: String,
     pub domain: Domain,
+    /// the space dimension d (2 or 3)
+    pub dim: usize,
+    /// the plane reduction (2-D only)
     pub plane: Plane,
     /// Γ1: clamped sides
     pub dirichlet: Vec<String>,
@@ -45,6 +48,8 @@ pub struct Model {
 pub enum Domain {
     /// [0, Lx] × [0, Ly] cut into nx × ny cells of two triangles
     Rectangle { size: [f64; 2], cells: [usize; 2] },
+    /// [0, Lx] × [0, Ly] × [0, Lz] cut into nx × ny × nz cells of six tetrahedra
+    Box { size: [f64; 3], cells: [usize; 3] },
     /// a Gmsh file, the path as written in the scene (relative to the scene's folder)
     Gmsh { file: String },
 }

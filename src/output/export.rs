@@ -28,14 +28,17 @@ fn matrix_market(a: &SpMat) -> String {
 /// Write mesh.vtu, M.mtx, K.mtx, C.mtx, f.txt and params.json into `dir`. The load vector is
 /// the problem's own (f0, f2 and f3, assembled by `problem::build_loads`) on all 2N DOFs.
 pub fn export_operators(p: &Problem, dir: &Path) -> Result<()> {
+    let Some(mesh) = p.mesh.plane() else {
+        return Err(Error::scene("domain", "export-operators writes 2-D meshes only (the 3-D operators are cross-checked by tests/crosscheck.rs)"));
+    };
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let n = p.mesh.nodes.len();
-    let zero = vec![[0.0; 2]; n];
+    let n = mesh.nodes.len();
+    let zero = vec![[0.0; 3]; n];
     let contact = vec![(0.0, 0.0, 0.0, 0.0, -1); n];
     let frame = vtu::Frame { mesh: &p.mesh, material: &p.material, u: &zero, v: &zero, contact: &contact };
     write_atomic(&dir.join("mesh.vtu"), vtu::vtu(&frame).as_bytes())?;
     let model = &p.model;
-    let (m, k, c) = assemble_full(&p.mesh, &p.material, model.solver.mass)?;
+    let (m, k, c) = assemble_full(mesh, &p.material, model.solver.mass)?;
     write_atomic(&dir.join("M.mtx"), matrix_market(&m).as_bytes())?;
     write_atomic(&dir.join("K.mtx"), matrix_market(&k).as_bytes())?;
     write_atomic(&dir.join("C.mtx"), matrix_market(&c).as_bytes())?;
@@ -48,7 +51,7 @@ pub fn export_operators(p: &Problem, dir: &Path) -> Result<()> {
     write_atomic(&dir.join("f.txt"), ft.as_bytes())?;
     // every surface load the vector holds, as (side, expression source, edges)
     let surface = |side: &str, value: &VecExpr| {
-        let edges = p.mesh.side(side).map(|s| s.edges.clone()).unwrap_or_default();
+        let edges = mesh.side(side).map(|s| s.edges.clone()).unwrap_or_default();
         serde_json::json!({"side": side, "value": value.sources(), "edges": edges})
     };
     let mut tractions: Vec<_> = model.loads.traction.iter().map(|tr| surface(&tr.side, &tr.value)).collect();

@@ -113,7 +113,7 @@ pub struct Writer {
     /// the contact nodes of every frame: (step, t, records), for the contact charts
     pub contact_frames: Vec<(usize, f64, Vec<NodeRecord>)>,
     /// the mesh, shared with the frame thread
-    mesh: Arc<crate::mesh::Mesh>,
+    mesh: Arc<crate::mesh::Geometry>,
     /// the frame being written (VTU, then series.pvd)
     pending: Option<JoinHandle<Result<()>>>,
 }
@@ -226,12 +226,12 @@ impl Writer {
     }
 
     fn frame(&mut self, rec: &StepRecord, p: &Problem, state: &State) -> Result<()> {
-        let mut contact = vec![(0.0, 0.0, 0.0, 0.0, -1); p.mesh.nodes.len()];
+        let mut contact = vec![(0.0, 0.0, 0.0, 0.0, -1); p.mesh.n_nodes()];
         if let (Some(c), Some(w)) = (&p.contact, self.contact.as_mut()) {
             let cp = self.dir.join("contact.csv");
             for (i, nr) in rec.nodes.iter().enumerate() {
                 let node = c.nodes[i];
-                let x = p.mesh.nodes[node];
+                let x = p.mesh.point(node);
                 contact[node] = (nr.p + nr.lambda, nr.p, nr.lambda, nr.friction, nr.status.code());
                 writeln!(
                     w,
@@ -257,8 +257,8 @@ impl Writer {
         if !rec.nodes.is_empty() {
             self.contact_frames.push((rec.step, rec.t, rec.nodes.clone()));
         }
-        let u = p.dofs.expand(&state.u);
-        let v = p.dofs.expand(&state.v);
+        let u = p.dofs.expand_dim(&state.u);
+        let v = p.dofs.expand_dim(&state.v);
         self.wait()?;
         let name = format!("frames/frame_{:05}.vtu", rec.step);
         self.frames.push((rec.t, name.clone()));
@@ -313,7 +313,9 @@ impl Writer {
             &plots::Options::default(),
         );
         save("energy.svg", energy)?;
-        save("deformed.svg", contact_charts::deformed(&p.mesh, &p.dofs.expand(&state.u), p.time(state.n)))?;
+        // the 2-D charts of the mesh and of Γ3 (3-D charts: issue 14)
+        let Some(mesh) = p.mesh.plane() else { return Ok(()) };
+        save("deformed.svg", contact_charts::deformed(mesh, &p.dofs.expand(&state.u), p.time(state.n)))?;
         let Some(c) = &p.contact else {
             for stale in ["forces.svg", "contact_status.svg", "normal_stress.svg"] {
                 let _ = std::fs::remove_file(self.dir.join("plots").join(stale));
@@ -323,7 +325,7 @@ impl Writer {
         let p_g = contact_charts::p_at_bound(c);
         let gamma3: f64 = c.omega.iter().sum();
         save("forces.svg", contact_charts::forces(&self.rows, p_g.map(|q| q * gamma3)))?;
-        let along = contact_charts::Along::of(&p.mesh, c, &p.model.contact_sides);
+        let along = contact_charts::Along::of(mesh, c, &p.model.contact_sides);
         save("contact_status.svg", contact_charts::contact_status(&self.contact_frames, &along))?;
         save("normal_stress.svg", contact_charts::normal_stress(&self.contact_frames, &along, p_g))
     }

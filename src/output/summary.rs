@@ -28,7 +28,10 @@ pub struct ModelInfo {
     pub inner_solver: String,
     pub mass: String,
     pub nodes: usize,
+    /// the space dimension d
+    pub dim: usize,
     pub triangles: usize,
+    pub tetrahedra: usize,
     pub velocity_unknowns: usize,
     pub contact_nodes: usize,
     pub multipliers: usize,
@@ -55,7 +58,7 @@ impl ModelInfo {
             format!("elastic (no viscosity): E = {}, ν = {}, ρ = {}", m.young, m.poisson, m.density)
         };
         let mut info = ModelInfo {
-            plane: kinds::name(&s.plane),
+            plane: if s.dim == 3 { "-".into() } else { kinds::name(&s.plane) },
             material,
             contact: "none (no contact side): one linear solve per step".into(),
             normal_law: "-".into(),
@@ -66,8 +69,10 @@ impl ModelInfo {
             scheme: kinds::name(&s.time.scheme),
             inner_solver: kinds::name(&s.solver.inner),
             mass: kinds::name(&s.solver.mass),
-            nodes: p.mesh.nodes.len(),
-            triangles: p.mesh.triangles.len(),
+            dim: p.mesh.dim(),
+            nodes: p.mesh.n_nodes(),
+            triangles: p.mesh.plane().map_or(0, |m| m.triangles.len()),
+            tetrahedra: p.mesh.solid().map_or(0, |m| m.tets.len()),
             velocity_unknowns: p.dofs.n_free,
             contact_nodes: 0,
             multipliers: 0,
@@ -181,7 +186,11 @@ impl ModelInfo {
     /// Human-readable lines for `dyncontact check`.
     pub fn lines(&self) -> Vec<String> {
         let mut v = vec![
-            format!("plane          : {}", self.plane),
+            if self.dim == 3 {
+                "dimension      : 3 (P1 tetrahedra)".to_string()
+            } else {
+                format!("plane          : {}", self.plane)
+            },
             format!("material       : {}", self.material),
             format!("contact        : {}", self.contact),
             format!("normal law     : {}", self.normal_law),
@@ -191,8 +200,10 @@ impl ModelInfo {
             format!("contact solve  : {}", self.contact_solve),
             format!("scheme         : {}, inner solver {}, {} mass", self.scheme, self.inner_solver, self.mass),
             format!(
-                "sizes          : {} nodes, {} triangles, {} velocity unknowns, {} contact nodes, {} multipliers, {} friction unknowns",
-                self.nodes, self.triangles, self.velocity_unknowns, self.contact_nodes, self.multipliers, self.friction_unknowns
+                "sizes          : {} nodes, {}, {} velocity unknowns, {} contact nodes, {} multipliers, {} friction unknowns",
+                self.nodes,
+                if self.dim == 3 { format!("{} tetrahedra", self.tetrahedra) } else { format!("{} triangles", self.triangles) },
+                self.velocity_unknowns, self.contact_nodes, self.multipliers, self.friction_unknowns
             ),
             format!("time           : {} steps of k = {}", self.steps, self.step),
         ];

@@ -9,17 +9,17 @@ use std::fmt::Write as _;
 
 use base64::Engine as _;
 
-use crate::fem::element;
-use crate::mesh::Mesh;
+use crate::fem::{element, tet};
+use crate::mesh::Geometry;
 use crate::model::material::Material;
 
 /// Point and cell fields of one frame.
 pub struct Frame<'a> {
-    pub mesh: &'a Mesh,
+    pub mesh: &'a Geometry,
     pub material: &'a Material,
-    /// nodal displacement and velocity
-    pub u: &'a [[f64; 2]],
-    pub v: &'a [[f64; 2]],
+    /// nodal displacement and velocity (z = 0 in 2-D)
+    pub u: &'a [[f64; 3]],
+    pub v: &'a [[f64; 3]],
     /// contact data per mesh node: (pressure q + λ, q, λ, friction −t, status code), status −1
     /// off Γ3
     pub contact: &'a [(f64, f64, f64, f64, i32)],
@@ -46,16 +46,17 @@ fn ints(out: &mut String, name: &str, comps: usize, vals: impl Iterator<Item = i
     array(out, "Int64", name, comps, &data);
 }
 
-/// The VTU document of a frame.
+/// The VTU document of a frame: triangles (VTK type 5) with the stress (σ_xx, σ_yy, σ_xy, σ_zz)
+/// per cell in 2-D, tetrahedra (VTK type 10) with (σ_xx, σ_yy, σ_zz, σ_yz, σ_xz, σ_xy) in 3-D.
 pub fn vtu(frame: &Frame) -> String {
     let mesh = frame.mesh;
-    let (np, nc) = (mesh.nodes.len(), mesh.triangles.len());
+    let (np, nc) = (mesh.n_nodes(), mesh.n_cells());
     let mut s = String::with_capacity(120 * np + 60 * nc);
     s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n");
     let _ = writeln!(s, "<Piece NumberOfPoints=\"{np}\" NumberOfCells=\"{nc}\">");
     s.push_str("<PointData Vectors=\"displacement\">\n");
-    floats(&mut s, "displacement", 3, frame.u.iter().flat_map(|p| [p[0], p[1], 0.0]));
-    floats(&mut s, "velocity", 3, frame.v.iter().flat_map(|p| [p[0], p[1], 0.0]));
+    floats(&mut s, "displacement", 3, frame.u.iter().flatten().copied());
+    floats(&mut s, "velocity", 3, frame.v.iter().flatten().copied());
     floats(&mut s, "contact_pressure", 1, frame.contact.iter().map(|c| c.0));
     floats(&mut s, "compliance_pressure", 1, frame.contact.iter().map(|c| c.1));
     floats(&mut s, "lambda", 1, frame.contact.iter().map(|c| c.2));
@@ -63,30 +64,51 @@ pub fn vtu(frame: &Frame) -> String {
     let status: Vec<u8> = frame.contact.iter().flat_map(|c| c.4.to_le_bytes()).collect();
     array(&mut s, "Int32", "contact_status", 1, &status);
     s.push_str("</PointData>\n<CellData>\n");
-    // stress (σ_xx, σ_yy, σ_xy, σ_zz) per triangle, from (P.1)
-    let mut stress = Vec::with_capacity(4 * nc);
-    for tri in &mesh.triangles {
-        let x = [mesh.nodes[tri[0]], mesh.nodes[tri[1]], mesh.nodes[tri[2]]];
-        let (grad, _) = element::gradients(x);
-        let strain = |f: &[[f64; 2]]| {
-            let mut e = [0.0; 3];
-            for (k, g) in grad.iter().enumerate() {
-                let w = f[tri[k]];
-                e[0] += g[0] * w[0];
-                e[1] += g[1] * w[1];
-                e[2] += g[1] * w[0] + g[0] * w[1];
+    let (stress, comps, connectivity, nv, vtk_type) = match mesh {
+        Geometry::Plane(m) => {
+            // stress (σ_xx, σ_yy, σ_xy, σ_zz) per triangle, from (P.1)
+            let mut stress = Vec::with_capacity(4 * nc);
+            for tri in &m.triangles {
+                let x = [m.nodes[tri[0]], m.nodes[tri[1]], m.nodes[tri[2]]];
+                let (grad, _) = element::gradients(x);
+                let strain = |f: &[[f64; 3]]| {
+                    let mut e = [0.0; 3];
+                    for (k, g) in grad.iter().enumerate() {
+                        let w = f[tri[k]];
+                        e[0] += g[0] * w[0];
+                        e[1] += g[1] * w[1];
+                        e[2] += g[1] * w[0] + g[0] * w[1];
+                    }
+                    e
+                };
+                stress.extend(frame.material.stress(strain(frame.u), strain(frame.v)));
             }
-            e
-        };
-        stress.extend(frame.material.stress(strain(frame.u), strain(frame.v)));
-    }
-    floats(&mut s, "stress", 4, stress.into_iter());
+            (stress, 4, m.triangles.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 3, 5u8)
+        }
+        Geometry::Solid(m) => {
+            // stress (σ_xx, σ_yy, σ_zz, σ_yz, σ_xz, σ_xy) per tetrahedron, from (P.1)
+            let (b, a) = (frame.material.elasticity_3d(), frame.material.viscosity_3d());
+            let mut stress = Vec::with_capacity(6 * nc);
+            for t in &m.tets {
+                let Some((grad, _)) = tet::gradients(t.map(|v| m.nodes[v])) else {
+                    stress.extend([0.0; 6]);
+                    continue;
+                };
+                let sm = tet::strain_matrix(&grad);
+                let nodal = |f: &[[f64; 3]]| nalgebra::SVector::<f64, 12>::from_iterator(t.iter().flat_map(|&v| f[v]));
+                let sigma = b * (sm * nodal(frame.u)) + a * (sm * nodal(frame.v));
+                stress.extend(sigma.iter().copied());
+            }
+            (stress, 6, m.tets.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 4, 10u8)
+        }
+    };
+    floats(&mut s, "stress", comps, stress.into_iter());
     s.push_str("</CellData>\n<Points>\n");
-    floats(&mut s, "Points", 3, mesh.nodes.iter().flat_map(|p| [p[0], p[1], 0.0]));
+    floats(&mut s, "Points", 3, (0..np).flat_map(|i| mesh.point(i)));
     s.push_str("</Points>\n<Cells>\n");
-    ints(&mut s, "connectivity", 1, mesh.triangles.iter().flat_map(|t| t.map(|i| i as i64)));
-    ints(&mut s, "offsets", 1, (1..=nc).map(|k| 3 * k as i64));
-    array(&mut s, "UInt8", "types", 1, &vec![5u8; nc]);
+    ints(&mut s, "connectivity", 1, connectivity.into_iter());
+    ints(&mut s, "offsets", 1, (1..=nc).map(|k| (nv * k) as i64));
+    array(&mut s, "UInt8", "types", 1, &vec![vtk_type; nc]);
     s.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
     s
 }

@@ -155,7 +155,7 @@ impl RunSpec {
     /// The academic scene at this configuration, shortened to `t_end`, validated.
     fn model(&self, t_end: f64) -> Result<Model> {
         let mut s = Scene::default_scene();
-        s.domain.cells = Some(self.level.cells);
+        s.domain.cells = Some(self.level.cells.to_vec());
         s.time.step = self.level.k;
         s.time.end = t_end;
         s.time.scheme = self.scheme;
@@ -408,7 +408,7 @@ struct Agreement {
 /// The academic scene on the race mesh with decay α, step k and an inner solver, validated.
 fn race_model(race: &RacePlan, decay: f64, k: f64, inner: InnerSolver) -> Result<Model> {
     let mut s = Scene::default_scene();
-    s.domain.cells = Some(race.cells);
+    s.domain.cells = Some(race.cells.to_vec());
     s.time.end = race.t_end;
     s.time.step = k;
     s.solver.inner = inner;

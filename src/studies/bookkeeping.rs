@@ -58,7 +58,7 @@ impl BookkeepingRow {
 /// Run the part into `out`/bookkeeping-run (overwritten each repetition).
 pub fn run_part(plan: &BookkeepingPlan, out: &Path) -> Result<Vec<BookkeepingRow>> {
     let mut scene = Scene::default_scene();
-    scene.domain.cells = Some(plan.cells);
+    scene.domain.cells = Some(plan.cells.to_vec());
     scene.boundary.contact = Vec::new();
     scene.contact = None;
     scene.time.end = plan.end;

@@ -59,7 +59,7 @@ fn scene(case: &Case, c: f64, k: f64, at: BoundAt) -> Result<Scene> {
     let mut s = match case.name {
         "academic" => {
             let mut s = Scene::default_scene();
-            s.domain.cells = Some([16, 8]);
+            s.domain.cells = Some([16, 8].to_vec());
             s
         }
         _ => Scene::from_toml(BLOCK_SCENE, "fixtures/scenes/sliding_block.toml")?,

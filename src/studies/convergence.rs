@@ -66,7 +66,7 @@ pub(super) fn probe_dofs(p: &Problem) -> Result<Vec<[Option<usize>; 2]>> {
     PROBES
         .iter()
         .map(|x| {
-            let node = p.mesh.nodes.iter().position(|y| (y[0] - x[0]).abs() <= tol && (y[1] - x[1]).abs() <= tol);
+            let node = (0..p.mesh.n_nodes()).map(|i| p.mesh.point(i)).position(|y| (y[0] - x[0]).abs() <= tol && (y[1] - x[1]).abs() <= tol && y[2] == 0.0);
             let node = node.ok_or_else(|| Error::Output(format!("bench: the probe point ({}, {}) is not a mesh node", x[0], x[1])))?;
             Ok([p.dofs.map[2 * node], p.dofs.map[2 * node + 1]])
         })
@@ -209,7 +209,7 @@ pub fn convergence(scheme: SchemeKind, levels: usize, t_end: f64) -> Result<Vec<
     let (runs, reference) = all.split_at(levels);
     let build = |l: &Level| -> Result<(Problem, Vec<[Option<usize>; 2]>)> {
         let mut s = Scene::default_scene();
-        s.domain.cells = Some(l.cells);
+        s.domain.cells = Some(l.cells.to_vec());
         s.time.step = l.k;
         s.time.end = t_end;
         s.time.scheme = scheme;

@@ -52,7 +52,8 @@ fn norm_matrices(p: &Problem) -> Result<(SpMat, SpMat)> {
     unit.theta = 0.0;
     unit.zeta = 0.0;
     unit.rho = 1.0;
-    let (m, k, _) = assemble_full(&p.mesh, &unit, MassKind::Consistent)?;
+    let mesh = p.mesh.plane().ok_or_else(|| Error::Output("the penalty study runs on 2-D scenes".into()))?;
+    let (m, k, _) = assemble_full(mesh, &unit, MassKind::Consistent)?;
     Ok((restrict(&k, &p.dofs)?, restrict(&m, &p.dofs)?))
 }
 

@@ -53,8 +53,8 @@ pub struct ScalingRow {
 fn strip(n: i64, plan: &ScalingPlan, form: ContactSolve) -> Scene {
     let mut s = Scene::default_scene();
     s.name = format!("strip_{n}");
-    s.domain.size = Some([n as f64 / 16.0, 1.0]);
-    s.domain.cells = Some([n, 16]);
+    s.domain.size = Some([n as f64 / 16.0, 1.0].to_vec());
+    s.domain.cells = Some([n, 16].to_vec());
     s.time.step = plan.k;
     s.time.end = plan.k * plan.steps as f64;
     s.solver.contact_solve = form;

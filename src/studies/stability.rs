@@ -291,7 +291,7 @@ impl Sweep {
 pub fn base_scene(end: f64) -> Scene {
     let mut s = Scene::default_scene();
     s.name = "stability".into();
-    s.domain.cells = Some([16, 8]);
+    s.domain.cells = Some([16, 8].to_vec());
     s.time.end = end;
     s.time.step = BASE_STEP;
     s
@@ -340,8 +340,9 @@ impl Case {
                 }
             }
             Sweep::Impact => {
-                let [a, b] = s.initial.velocity.clone();
-                s.initial.velocity = [format!("{v}*({a})"), format!("{v}*({b})")];
+                let v0 = s.initial.velocity.clone().unwrap_or_else(|| vec!["0".into(), "0".into()]);
+                let (a, b) = (&v0[0], &v0[1]);
+                s.initial.velocity = Some(vec![format!("{v}*({a})"), format!("{v}*({b})")]);
             }
             Sweep::Relaxation => {
                 s.time.step = BEYOND_CK_STEP;

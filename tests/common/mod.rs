@@ -44,7 +44,7 @@ pub fn measured(test: &str, quantity: &str, value: f64, expected: &str) {
 pub fn l2_diff(p: &Problem, a: &[f64], b: &[f64]) -> f64 {
     let mut mat = p.material;
     mat.rho = 1.0;
-    let (m, _, _) = dyncontact::fem::assemble::assemble_full(&p.mesh, &mat, dyncontact::model::kinds::MassKind::Consistent)
+    let (m, _, _) = dyncontact::fem::assemble::assemble_full(p.mesh.plane().expect("a 2-D mesh"), &mat, dyncontact::model::kinds::MassKind::Consistent)
         .expect("assembly");
     let m = dyncontact::fem::assemble::restrict(&m, &p.dofs).expect("restrict");
     let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
