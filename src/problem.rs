@@ -59,6 +59,12 @@ impl Problem {
         };
         if let Some(c) = &contact {
             check_initial_admissible(c, &mesh, &u0)?;
+            if c.dim == 3 && model.solver.inner == crate::model::kinds::InnerSolver::Conic {
+                return Err(Error::scene(
+                    "solver.inner",
+                    "\"conic\" in three dimensions (second-order cones) is not implemented yet: use \"newton\"",
+                ));
+            }
         }
         let (steps, k) = (model.time.steps, model.time.step);
         Ok(Problem { model, mesh, material, dofs, loads, u0, v0, contact, k, steps })
@@ -189,14 +195,6 @@ pub fn initial_data(mesh: &Geometry, dofs: &Dofs, u0: &VecExpr, v0: &VecExpr) ->
 /// The contact model of the contact sides: nodes, normals, weights, gap, and the laws the
 /// contact section switches on.
 fn build_contact(c: &ContactParams, sides: &[String], mesh: &Geometry, dofs: &Dofs, clamped: &[bool]) -> Result<ContactModel> {
-    if mesh.dim() == 3 {
-        // the geometry (normals, weights, tangent frames) is built and tested; the step problem's
-        // friction in the tangent plane (the disk) and the conic twin's cones are not yet
-        return Err(Error::scene(
-            "boundary.contact",
-            "contact in three dimensions is not implemented yet (the 3-D body, loads and outputs are): remove boundary.contact or use a 2-D domain",
-        ));
-    }
     let side = mesh.side_nodes(sides, clamped)?;
     let mut gap = Vec::with_capacity(side.nodes.len());
     for &v in &side.nodes {
@@ -226,6 +224,15 @@ fn build_contact(c: &ContactParams, sides: &[String], mesh: &Geometry, dofs: &Do
     // validation, and would be frictionless too
     let zero_bound = c.friction_bound != FrictionBound::Total && p_tau.compliance.is_zero();
     let friction = c.friction.clone().filter(|mu| !(zero_bound || (mu.is_constant() && mu.mu(0.0) == 0.0)));
+    if mesh.dim() == 3 && friction.is_some() {
+        // frictionless contact runs in 3-D; the step problem's friction in the tangent plane
+        // (Coulomb's disk, its Alart–Curnier projection and the conic twin's cones) does not yet
+        return Err(Error::scene(
+            "contact.friction",
+            "friction in three dimensions (the disk in the tangent plane) is not implemented yet: \
+             law = \"none\" runs frictionless contact on a 3-D body",
+        ));
+    }
     // contact nodes are off Γ̄1 (side_nodes excludes clamped nodes), so all their DOFs are free
     let d = dofs.dim;
     let mut node_dofs = Vec::with_capacity(d * side.nodes.len());

@@ -62,6 +62,10 @@ pub struct NodeRecord {
     /// the frozen friction bound S used
     pub bound: f64,
     pub status: NodeStatus,
+    /// v̄ in global components (along τ in 2-D; in the tangent plane in 3-D)
+    pub v_t_vec: [f64; 3],
+    /// −t in global components: the friction traction on the body
+    pub friction_vec: [f64; 3],
 }
 
 /// Wall-clock split of the setup, in seconds.
@@ -96,7 +100,10 @@ pub struct StepRecord {
     /// the energy scale (for relative residuals)
     pub energy_scale: f64,
     pub normal_force: f64,
+    /// the total friction force on the body along τ (2-D, signed), or its magnitude (3-D)
     pub tangential_force: f64,
+    /// −Σ ω_i t_i in global components (z = 0 in 2-D)
+    pub friction_force: [f64; 3],
     pub max_penetration: f64,
     /// max |v_c^{n+1}| over nodes that stayed on the constraint (normal component) or in
     /// stick (tangential component) over the step: the velocity they should not have
@@ -121,6 +128,7 @@ impl StepRecord {
             energy_scale: 0.0,
             normal_force: 0.0,
             tangential_force: 0.0,
+            friction_force: [0.0; 3],
             max_penetration: 0.0,
             chatter: 0.0,
             trapped_kinetic: 0.0,
@@ -285,15 +293,18 @@ impl<'p> Simulation<'p> {
         if let Some(c) = &self.problem.contact {
             let d = c.penetration(&self.state.u);
             for (i, &d_i) in d.iter().enumerate() {
+                let v_tan = c.tangential(i, &self.state.v);
                 nodes.push(NodeRecord {
                     u_n: d_i,
-                    u_t: c.components(i, &self.state.u).1,
-                    v_t: c.components(i, &self.state.v).1,
+                    u_t: c.tangential_size(i, &self.state.u),
+                    v_t: c.tangential_size(i, &self.state.v),
                     p: c.compliance.p(d_i),
                     lambda: 0.0,
                     friction: 0.0,
                     bound: 0.0,
                     status: NodeStatus::Separated,
+                    v_t_vec: c.global(i, &v_tan),
+                    friction_vec: [0.0; 3],
                 });
             }
         }
@@ -427,7 +438,14 @@ impl<'p> Simulation<'p> {
                 se.constraint += omega * sol.lambda[i] * (g - cs.d_n[i]);
             }
             rec.normal_force += omega * (sol.q[i] + sol.lambda[i]);
-            rec.tangential_force -= omega * sol.t[i];
+            // the friction traction −t (one tangential component: friction is 2-D only so far)
+            let friction_vec = c.global(i, &[-sol.t[i], 0.0]);
+            for (f, v) in rec.friction_force.iter_mut().zip(friction_vec) {
+                *f += omega * v;
+            }
+            if c.dim == 2 {
+                rec.tangential_force -= omega * sol.t[i];
+            }
             max_pen = max_pen.max(d_new[i]);
             match sol.status[i] {
                 NodeStatus::Separated => {}
@@ -435,16 +453,24 @@ impl<'p> Simulation<'p> {
                 NodeStatus::Slip => rec.slip_nodes += 1,
             }
             let k = self.kinematics;
+            let v_now = c.tangential(i, &self.state.v);
+            let vbar: [f64; 2] = std::array::from_fn(|j| if j + 1 < c.dim { k.a_v * (sol.y[c.dim * i + 1 + j] + k.b_v * v_now[j]) } else { 0.0 });
+            let (v_t, friction) = if c.dim == 2 { (vbar[0], -sol.t[i]) } else { (vbar[0].hypot(vbar[1]), sol.t[i].abs()) };
             rec.nodes.push(NodeRecord {
                 u_n: d_new[i],
-                u_t: c.components(i, u_new).1,
-                v_t: k.a_v * (sol.y[c.dim * i + 1] + k.b_v * c.components(i, &self.state.v).1),
+                u_t: c.tangential_size(i, u_new),
+                v_t,
                 p: sol.q[i],
                 lambda: sol.lambda[i],
-                friction: -sol.t[i],
+                friction,
                 bound: s_bound[i],
                 status: sol.status[i],
+                v_t_vec: c.global(i, &vbar),
+                friction_vec,
             });
+        }
+        if c.dim == 3 {
+            rec.tangential_force = rec.friction_force.iter().map(|f| f * f).sum::<f64>().sqrt();
         }
         rec.contact_nodes = rec.stick_nodes + rec.slip_nodes;
         rec.max_penetration = if rec.nodes.is_empty() { 0.0 } else { max_pen };

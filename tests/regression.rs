@@ -34,6 +34,9 @@
 //! ≤ 2.4e-12 of the largest energy; no status change) except the academic stick–slip
 //! trajectory, which moves by 5.9e-2 of its largest tangential force (39 of 2,001 steps change a
 //! count), as in (2).
+//! (5) with history.csv's columns friction_force_x, friction_force_y, friction_force_z (the 3-D
+//! contract's global friction force; z = 0 in 2-D) appended: every earlier column identical,
+//! digit for digit; the 3-D fixture cantilever3d added (and its contact.csv header is the 3-D one).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

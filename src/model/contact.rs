@@ -99,6 +99,25 @@ impl ContactModel {
         (self.project(i, &f.normal, x), self.project(i, &f.tangents[0], x))
     }
 
+    /// The tangential components (x_τ1, x_τ2) at contact node i (x_τ2 = 0 in 2-D).
+    pub fn tangential(&self, i: usize, x: &[f64]) -> [f64; 2] {
+        let f = &self.frames[i];
+        std::array::from_fn(|j| if j + 1 < self.dim { self.project(i, &f.tangents[j], x) } else { 0.0 })
+    }
+
+    /// The tangential part of x at node i as contact.csv writes it: the component along τ
+    /// (signed) in 2-D, the magnitude in the tangent plane in 3-D.
+    pub fn tangential_size(&self, i: usize, x: &[f64]) -> f64 {
+        let t = self.tangential(i, x);
+        if self.dim == 2 { t[0] } else { t[0].hypot(t[1]) }
+    }
+
+    /// Global components Σ_j a_j τ_j of tangential components a at node i.
+    pub fn global(&self, i: usize, a: &[f64; 2]) -> [f64; 3] {
+        let f = &self.frames[i];
+        std::array::from_fn(|c| (0..self.dim - 1).map(|j| a[j] * f.tangents[j][c]).sum())
+    }
+
     /// H x: the contact components [x_ν,1, x_τ,1, (x_τ2,1,) x_ν,2, …] of a free-DOF vector.
     pub fn restrict(&self, x: &[f64]) -> Vec<f64> {
         let mut y = Vec::with_capacity(self.dim * self.n());

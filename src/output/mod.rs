@@ -51,7 +51,7 @@ pub type Column = (&'static str, fn(&StepRecord) -> Cell);
 
 /// history.csv, column by column: the required columns of the README's output contract, then
 /// our additions. The header and every row are written from this one table.
-pub const HISTORY: [Column; 24] = [
+pub const HISTORY: [Column; 27] = [
     ("step", |r| Cell::Count(r.step)),
     ("t", |r| Cell::Real(r.t)),
     ("kinetic", |r| Cell::Real(r.energy.kinetic)),
@@ -76,6 +76,9 @@ pub const HISTORY: [Column; 24] = [
     ("persistency_dissipation", |r| Cell::Real(r.energy.persistency_dissipation)),
     ("chatter", |r| Cell::Real(r.chatter)),
     ("trapped_kinetic", |r| Cell::Real(r.trapped_kinetic)),
+    ("friction_force_x", |r| Cell::Real(r.friction_force[0])),
+    ("friction_force_y", |r| Cell::Real(r.friction_force[1])),
+    ("friction_force_z", |r| Cell::Real(r.friction_force[2])),
 ];
 
 /// The history.csv header line (without the newline).
@@ -85,6 +88,15 @@ pub fn history_header() -> String {
 
 /// The contact.csv columns (the README's output contract), then our additions.
 pub const CONTACT_COLUMNS: &str = "step,t,node,x,y,u_n,u_t,v_t,p,lambda,friction,status,friction_bound";
+/// The 3-D contact.csv columns (SCENES.md, "Three dimensions"): z after y, magnitudes in the
+/// tangent plane, then the global components of v̄ and of the friction traction.
+pub const CONTACT_COLUMNS_3D: &str =
+    "step,t,node,x,y,z,u_n,u_t,v_t,p,lambda,friction,status,v_tx,v_ty,v_tz,friction_x,friction_y,friction_z,friction_bound";
+
+/// The contact.csv header for a problem of dimension d.
+pub fn contact_columns(dim: usize) -> &'static str {
+    if dim == 3 { CONTACT_COLUMNS_3D } else { CONTACT_COLUMNS }
+}
 
 /// A light copy of a history row for the charts.
 #[derive(Debug, Clone, Copy)]
@@ -152,11 +164,11 @@ impl Writer {
         let cp = dir.join("contact.csv");
         let contact = if problem.contact.is_some() {
             let mut w = BufWriter::new(File::create(&cp).map_err(csv_io(&cp))?);
-            writeln!(w, "{CONTACT_COLUMNS}").map_err(csv_io(&cp))?;
+            writeln!(w, "{}", contact_columns(problem.mesh.dim())).map_err(csv_io(&cp))?;
             Some(w)
         } else {
             // a scene without contact still gets the file, with its header only
-            std::fs::write(&cp, format!("{CONTACT_COLUMNS}\n")).map_err(csv_io(&cp))?;
+            std::fs::write(&cp, format!("{}\n", contact_columns(problem.mesh.dim()))).map_err(csv_io(&cp))?;
             None
         };
         Ok(Writer::new(dir, problem, history, contact, Vec::new(), Vec::new(), Vec::new()))
@@ -233,6 +245,34 @@ impl Writer {
                 let node = c.nodes[i];
                 let x = p.mesh.point(node);
                 contact[node] = (nr.p + nr.lambda, nr.p, nr.lambda, nr.friction, nr.status.code());
+                if c.dim == 3 {
+                    let (v, f) = (nr.v_t_vec, nr.friction_vec);
+                    writeln!(
+                        w,
+                        "{},{},{node},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                        rec.step,
+                        rec.t,
+                        x[0],
+                        x[1],
+                        x[2],
+                        nr.u_n,
+                        nr.u_t,
+                        nr.v_t,
+                        nr.p,
+                        nr.lambda,
+                        nr.friction,
+                        nr.status.as_str(),
+                        v[0],
+                        v[1],
+                        v[2],
+                        f[0],
+                        f[1],
+                        f[2],
+                        nr.bound
+                    )
+                    .map_err(csv_io(&cp))?;
+                    continue;
+                }
                 writeln!(
                     w,
                     "{},{},{},{},{},{},{},{},{},{},{},{},{}",
@@ -313,9 +353,10 @@ impl Writer {
             &plots::Options::default(),
         );
         save("energy.svg", energy)?;
-        // the 2-D charts of the mesh and of Γ3 (3-D charts: issue 14)
-        let Some(mesh) = p.mesh.plane() else { return Ok(()) };
-        save("deformed.svg", contact_charts::deformed(mesh, &p.dofs.expand(&state.u), p.time(state.n)))?;
+        // the charts of the mesh and of Γ3 along its arc are 2-D (3-D maps of Γ3: issue 14)
+        if let Some(mesh) = p.mesh.plane() {
+            save("deformed.svg", contact_charts::deformed(mesh, &p.dofs.expand(&state.u), p.time(state.n)))?;
+        }
         let Some(c) = &p.contact else {
             for stale in ["forces.svg", "contact_status.svg", "normal_stress.svg"] {
                 let _ = std::fs::remove_file(self.dir.join("plots").join(stale));
@@ -325,6 +366,7 @@ impl Writer {
         let p_g = contact_charts::p_at_bound(c);
         let gamma3: f64 = c.omega.iter().sum();
         save("forces.svg", contact_charts::forces(&self.rows, p_g.map(|q| q * gamma3)))?;
+        let Some(mesh) = p.mesh.plane() else { return Ok(()) };
         let along = contact_charts::Along::of(mesh, c, &p.model.contact_sides);
         save("contact_status.svg", contact_charts::contact_status(&self.contact_frames, &along))?;
         save("normal_stress.svg", contact_charts::normal_stress(&self.contact_frames, &along, p_g))

@@ -52,7 +52,7 @@ impl Writer {
         let rows = cut_csv(&hp, step)?;
         let chart_rows = chart_rows(&header, &rows)?;
         let cp = dir.join("contact.csv");
-        let contact_frames = contact_frames(&cut_csv(&cp, step)?);
+        let contact_frames = contact_frames(&cut_csv(&cp, step)?, problem.mesh.dim());
         let frames = kept_frames(dir, problem, step);
         write_atomic(&dir.join("series.pvd"), super::vtu::pvd(&frames).as_bytes())?;
         let open = |p: &Path| OpenOptions::new().append(true).open(p).map(BufWriter::new).map_err(|e| Error::io(p, e));
@@ -101,20 +101,25 @@ fn chart_rows(header: &str, rows: &[Vec<String>]) -> Result<Vec<ChartRow>> {
 }
 
 /// The contact frames of contact.csv rows: (step, t, records), grouped by frame.
-fn contact_frames(crow: &[Vec<String>]) -> Vec<(usize, f64, Vec<NodeRecord>)> {
+fn contact_frames(crow: &[Vec<String>], dim: usize) -> Vec<(usize, f64, Vec<NodeRecord>)> {
     let mut contact_frames: Vec<(usize, f64, Vec<NodeRecord>)> = Vec::new();
+    // 3-D rows carry z after y, and the global components before friction_bound
+    let (o, bound) = if dim == 3 { (1, 19) } else { (0, 12) };
     for r in crow {
         let st: usize = r[0].parse().unwrap_or(0);
-        let status = r.get(11).and_then(|s| NodeStatus::from_name(s)).unwrap_or(NodeStatus::Separated);
+        let status = r.get(11 + o).and_then(|s| NodeStatus::from_name(s)).unwrap_or(NodeStatus::Separated);
+        let vec3 = |c: usize| if dim == 3 { [num(r, c), num(r, c + 1), num(r, c + 2)] } else { [0.0; 3] };
         let rec = NodeRecord {
-            u_n: num(r, 5),
-            u_t: num(r, 6),
-            v_t: num(r, 7),
-            p: num(r, 8),
-            lambda: num(r, 9),
-            friction: num(r, 10),
-            bound: num(r, 12),
+            u_n: num(r, 5 + o),
+            u_t: num(r, 6 + o),
+            v_t: num(r, 7 + o),
+            p: num(r, 8 + o),
+            lambda: num(r, 9 + o),
+            friction: num(r, 10 + o),
+            bound: num(r, bound),
             status,
+            v_t_vec: vec3(13),
+            friction_vec: vec3(16),
         };
         match contact_frames.last_mut() {
             Some(f) if f.0 == st => f.2.push(rec),
