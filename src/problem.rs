@@ -59,10 +59,17 @@ impl Problem {
         };
         if let Some(c) = &contact {
             check_initial_admissible(c, &mesh, &u0)?;
-            if c.dim == 3 && model.solver.inner == crate::model::kinds::InnerSolver::Conic {
+            use crate::model::kinds::InnerSolver;
+            if c.dim == 3 && model.solver.inner == InnerSolver::Conic {
                 return Err(Error::scene(
                     "solver.inner",
                     "\"conic\" in three dimensions (second-order cones) is not implemented yet: use \"newton\"",
+                ));
+            }
+            if c.dim == 3 && c.friction.is_some() && model.solver.inner == InnerSolver::NewtonUnfrozen {
+                return Err(Error::scene(
+                    "solver.inner",
+                    "\"newton-unfrozen\" (N.4, Co.3) with friction in three dimensions is not implemented yet: use \"newton\" (the fixed point F.1)",
                 ));
             }
         }
@@ -224,15 +231,7 @@ fn build_contact(c: &ContactParams, sides: &[String], mesh: &Geometry, dofs: &Do
     // validation, and would be frictionless too
     let zero_bound = c.friction_bound != FrictionBound::Total && p_tau.compliance.is_zero();
     let friction = c.friction.clone().filter(|mu| !(zero_bound || (mu.is_constant() && mu.mu(0.0) == 0.0)));
-    if mesh.dim() == 3 && friction.is_some() {
-        // frictionless contact runs in 3-D; the step problem's friction in the tangent plane
-        // (Coulomb's disk, its Alart–Curnier projection and the conic twin's cones) does not yet
-        return Err(Error::scene(
-            "contact.friction",
-            "friction in three dimensions (the disk in the tangent plane) is not implemented yet: \
-             law = \"none\" runs frictionless contact on a 3-D body",
-        ));
-    }
+
     // contact nodes are off Γ̄1 (side_nodes excludes clamped nodes), so all their DOFs are free
     let d = dofs.dim;
     let mut node_dofs = Vec::with_capacity(d * side.nodes.len());

@@ -258,7 +258,7 @@ impl<'p> Simulation<'p> {
             u,
             v,
             lambda: vec![0.0; nc],
-            t_fric: vec![0.0; nc],
+            t_fric: vec![0.0; nc * problem.contact.as_ref().map_or(1, |c| c.dim - 1)],
             energy,
             energy_scale: energy.scale(),
             active: vec![false; nc],
@@ -433,13 +433,15 @@ impl<'p> Simulation<'p> {
         for i in 0..c.n() {
             let omega = c.omega[i];
             se.d_compliance += omega * (c.normal.energy(d_new[i]) - c.normal.energy(cs.d_n[i]));
-            se.friction += omega * s_bound[i] * c.components(i, du).1.abs();
+            se.friction += omega * s_bound[i] * if c.dim == 2 { c.components(i, du).1.abs() } else { let d = c.tangential(i, du); d[0].hypot(d[1]) };
             if let Some(g) = c.constraint {
                 se.constraint += omega * sol.lambda[i] * (g - cs.d_n[i]);
             }
             rec.normal_force += omega * (sol.q[i] + sol.lambda[i]);
-            // the friction traction −t (one tangential component: friction is 2-D only so far)
-            let friction_vec = c.global(i, &[-sol.t[i], 0.0]);
+            // the friction traction −t, d − 1 components per node
+            let td = c.dim - 1;
+            let t_i: [f64; 2] = std::array::from_fn(|j| if j < td { sol.t[td * i + j] } else { 0.0 });
+            let friction_vec = c.global(i, &[-t_i[0], -t_i[1]]);
             for (f, v) in rec.friction_force.iter_mut().zip(friction_vec) {
                 *f += omega * v;
             }
@@ -455,7 +457,7 @@ impl<'p> Simulation<'p> {
             let k = self.kinematics;
             let v_now = c.tangential(i, &self.state.v);
             let vbar: [f64; 2] = std::array::from_fn(|j| if j + 1 < c.dim { k.a_v * (sol.y[c.dim * i + 1 + j] + k.b_v * v_now[j]) } else { 0.0 });
-            let (v_t, friction) = if c.dim == 2 { (vbar[0], -sol.t[i]) } else { (vbar[0].hypot(vbar[1]), sol.t[i].abs()) };
+            let (v_t, friction) = if c.dim == 2 { (vbar[0], -sol.t[i]) } else { (vbar[0].hypot(vbar[1]), t_i[0].hypot(t_i[1])) };
             rec.nodes.push(NodeRecord {
                 u_n: d_new[i],
                 u_t: c.tangential_size(i, u_new),
@@ -530,7 +532,7 @@ impl<'p> Simulation<'p> {
                 omega: c.omega[i],
                 d_n: d_n[i],
                 d_aff: d_n[i] + k.a_d * k.b_d * vn[c.dim * i],
-                v_aff: k.a_v * k.b_v * vn[c.dim * i + 1],
+                v_aff: std::array::from_fn(|j| if j + 1 < c.dim { k.a_v * k.b_v * vn[c.dim * i + 1 + j] } else { 0.0 }),
                 bound: c.constraint,
             })
             .collect();

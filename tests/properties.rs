@@ -279,7 +279,7 @@ proptest! {
         let law = NormalLaw::compliance(c);
         let g = 0.01;
         let nodes: Vec<NodeData> = (0..n).map(|i| NodeData {
-            omega: 0.1, d_n: d_n[i].min(g), d_aff: d_n[i].min(g) + 0.5 * k * 0.3, v_aff: 0.5 * v_t[i], bound: bound.then_some(g),
+            omega: 0.1, d_n: d_n[i].min(g), d_aff: d_n[i].min(g) + 0.5 * k * 0.3, v_aff: [0.5 * v_t[i], 0.0], bound: bound.then_some(g),
         }).collect();
         let factors = dyncontact::step::delassus::DelassusFactors::default();
         let data = StepData { delassus: &w, y_free: y_free.clone(), nodes, a_d: 0.5 * k, a_v: 0.5, force_rule: NormalForceRule::DiscreteGradient, law: &law, friction: true, dim: 2, factors: &factors };

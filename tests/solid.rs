@@ -98,6 +98,26 @@ proptest! {
         prop_assert!((4.0 * tet::vertex_mass(v.abs(), 1.3) - 1.3 * v.abs()).abs() <= 1e-15 * v.abs());
     }
 
+    /// (N.3) in 3-D, the disk: F_t = 0 at t = S v̂ for any slip v ≠ 0 and at any ‖t‖ ≤ S when
+    /// v = 0, and F_t ≠ 0 when t turns away from v̂ while slipping (round-off: 1e-12 of the
+    /// velocity scale).
+    #[test]
+    fn n3_disk_residual_vanishes_exactly_on_the_friction_law(v in prop::array::uniform2(-1.0..1.0f64), s in 0.1..2.0f64, rho in 0.1..10.0f64, turn in 0.1..3.0f64) {
+        use dyncontact::step::newton::friction_residual_disk;
+        let nv = v[0].hypot(v[1]);
+        prop_assume!(nv > 1e-3);
+        let t = [s * v[0] / nv, s * v[1] / nv];
+        let f = friction_residual_disk(t, v, s, rho, 0.5);
+        prop_assert!(f[0].hypot(f[1]) <= 1e-12 * (1.0 + nv), "slip on the law: {f:?}");
+        let inside = [0.5 * s * v[1] / nv, -0.3 * s * v[0] / nv];
+        let f = friction_residual_disk(inside, [0.0, 0.0], s, rho, 0.5);
+        prop_assert!(f[0].hypot(f[1]) <= 1e-15, "stick inside the disk: {f:?}");
+        let (c, sn) = (turn.cos(), turn.sin());
+        let turned = [c * t[0] - sn * t[1], sn * t[0] + c * t[1]];
+        let f = friction_residual_disk(turned, v, s, rho, 0.5);
+        prop_assert!(f[0].hypot(f[1]) > 1e-6 * s / rho, "a force turned by {turn} from the slip gives no residual");
+    }
+
     /// Contact frames in 3-D: (τ_1, τ_2, ν) orthonormal and right-handed for every unit normal
     /// (1e-14: a few products of unit vectors).
     #[test]

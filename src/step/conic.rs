@@ -318,8 +318,8 @@ fn program(step: &StepData, s: &[f64], pieces: &[Majorized], z_l: &[f64], v: f64
         if step.friction && s[i] > 0.0 {
             let sv = b.var();
             b.q[sv] = nd.omega * s[i] / (step.a_v * v);
-            b.le(vec![(yt, step.a_v), (sv, -1.0)], -nd.v_aff / v);
-            b.le(vec![(yt, -step.a_v), (sv, -1.0)], nd.v_aff / v);
+            b.le(vec![(yt, step.a_v), (sv, -1.0)], -nd.v_aff[0] / v);
+            b.le(vec![(yt, -step.a_v), (sv, -1.0)], nd.v_aff[0] / v);
         }
         // normal force, hinge by hinge. All pieces are written in ξ = z/a_d (velocity units):
         // z = d^{n+1} − s = z0 + a_d y_ν, and (ω/a_d) F(z) becomes ω a_d (·) ξ² + ω (·) ξ.

@@ -115,7 +115,7 @@ pub fn bound_at_iterate(step: &StepData, law: &FrictionBoundLaw, weight: f64, i:
 /// velocities y and N_i the normal part (p_τ at the predictor, at the iterate's midpoint, or
 /// the whole contact force q_i + λ_i).
 pub fn friction_bound(step: &StepData, mu: &FrictionCoefficient, normal: &NormalPart, y: &[f64], lambda: &[f64]) -> Vec<f64> {
-    (0..step.n()).map(|i| mu.mu(step.slip(i, y).abs()) * normal.at(step, i, y, lambda)).collect()
+    (0..step.n()).map(|i| mu.mu(step.slip_norm(i, y)) * normal.at(step, i, y, lambda)).collect()
 }
 
 /// (F.1) Solve one step: fixed point on the frozen friction bound S around the inner solver.

@@ -26,8 +26,8 @@ pub struct NodeData {
     pub d_n: f64,
     /// d^{n+1} = d_aff + a_d y_ν
     pub d_aff: f64,
-    /// v̄ = v_aff + a_v y_τ
-    pub v_aff: f64,
+    /// v̄ = v_aff + a_v y_τ, per tangential component (the second is 0 in 2-D)
+    pub v_aff: [f64; 2],
     /// Some(g): the exact constraint d^{n+1} ≤ g (Problem P)
     pub bound: Option<f64>,
 }
@@ -101,6 +101,7 @@ impl NodeStatus {
 pub struct ContactSolution {
     pub y: Vec<f64>,
     pub lambda: Vec<f64>,
+    /// friction forces, d − 1 components per node (in the node's tangent frame)
     pub t: Vec<f64>,
     /// normal force q_i of the scheme at the solution
     pub q: Vec<f64>,
@@ -127,6 +128,14 @@ impl StepData<'_> {
     pub fn tau(&self, i: usize) -> usize {
         self.dim * i + 1
     }
+    /// Tangential components per node: d − 1 (the length of node i's block in t).
+    pub fn tdim(&self) -> usize {
+        self.dim - 1
+    }
+    /// The index of node i's tangential component j in y (and in r).
+    pub fn tau_j(&self, i: usize, j: usize) -> usize {
+        self.dim * i + 1 + j
+    }
     /// The contact node of component l.
     pub fn node_of(&self, l: usize) -> usize {
         l / self.dim
@@ -135,9 +144,17 @@ impl StepData<'_> {
     pub fn d_end(&self, i: usize, y: &[f64]) -> f64 {
         self.nodes[i].d_aff + self.a_d * y[self.nu(i)]
     }
-    /// v̄_i(y), the slip rate the friction law sees
+    /// v̄_i(y), the slip rate the friction law sees (the component along τ; 2-D)
     pub fn slip(&self, i: usize, y: &[f64]) -> f64 {
-        self.nodes[i].v_aff + self.a_v * y[self.tau(i)]
+        self.nodes[i].v_aff[0] + self.a_v * y[self.tau(i)]
+    }
+    /// v̄_i(y) in the tangent plane: d − 1 components (the rest 0).
+    pub fn slip_vec(&self, i: usize, y: &[f64]) -> [f64; 2] {
+        std::array::from_fn(|j| if j < self.tdim() { self.nodes[i].v_aff[j] + self.a_v * y[self.tau_j(i, j)] } else { 0.0 })
+    }
+    /// ‖v̄_i(y)‖ (|v̄_i| in 2-D).
+    pub fn slip_norm(&self, i: usize, y: &[f64]) -> f64 {
+        if self.dim == 2 { self.slip(i, y).abs() } else { let v = self.slip_vec(i, y); v[0].hypot(v[1]) }
     }
     /// q_i(y)
     pub fn q(&self, i: usize, y: &[f64]) -> f64 {
@@ -152,17 +169,20 @@ impl StepData<'_> {
     pub fn beta(&self, i: usize) -> Option<f64> {
         self.nodes[i].bound.map(|g| (g - self.nodes[i].d_aff) / self.a_d)
     }
-    /// The contact velocity at which v̄_i = 0 (stick).
+    /// The contact velocity at which v̄_i = 0 (stick; the component along τ).
     pub fn y_stick(&self, i: usize) -> f64 {
-        -self.nodes[i].v_aff / self.a_v
+        -self.nodes[i].v_aff[0] / self.a_v
     }
-    /// r = [ω(q + λ), ω t] per node.
+    /// r = [ω(q + λ), ω t] per node; t holds d − 1 components per node.
     pub fn forces(&self, y: &[f64], lambda: &[f64], t: &[f64]) -> Vec<f64> {
         let mut r = vec![0.0; self.m()];
+        let td = self.tdim();
         for i in 0..self.n() {
             let w = self.nodes[i].omega;
             r[self.nu(i)] = w * (self.q(i, y) + lambda[i]);
-            r[self.tau(i)] = w * t[i];
+            for j in 0..td {
+                r[self.tau_j(i, j)] = w * t[td * i + j];
+            }
         }
         r
     }
@@ -186,7 +206,7 @@ impl StepData<'_> {
     pub fn velocity_scale(&self, y: &[f64]) -> f64 {
         let mut s = crate::linalg::norm_inf(&self.y_free).max(crate::linalg::norm_inf(y));
         for nd in &self.nodes {
-            s = s.max((nd.v_aff / self.a_v).abs()).max(((nd.d_aff - nd.d_n) / self.a_d).abs());
+            s = s.max((nd.v_aff[0] / self.a_v).abs()).max((nd.v_aff[1] / self.a_v).abs()).max(((nd.d_aff - nd.d_n) / self.a_d).abs());
         }
         s
     }

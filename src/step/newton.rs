@@ -110,6 +110,21 @@ pub fn friction_residual(t: f64, slip: f64, s: f64, rho_t: f64, a_v: f64) -> f64
     (t - (t + rho_t * slip).clamp(-s, s)) / (rho_t * a_v)
 }
 
+/// (N.3) in 3-D: F_t = (t − Proj_D(S)(t + ρ_τ v̄))/(ρ_τ a_v), Proj_D(S) the projection onto the
+/// disk of radius S in the tangent plane; zero iff ‖t‖ ≤ S and t = S v̄/‖v̄‖ when v̄ ≠ 0.
+pub fn friction_residual_disk(t: [f64; 2], slip: [f64; 2], s: f64, rho_t: f64, a_v: f64) -> [f64; 2] {
+    let z = [t[0] + rho_t * slip[0], t[1] + rho_t * slip[1]];
+    let nz = z[0].hypot(z[1]);
+    let scale = if nz > s { s / nz } else { 1.0 };
+    std::array::from_fn(|j| (t[j] - scale * z[j]) / (rho_t * a_v))
+}
+
+/// Node i's friction forces as a pair (the second 0 in 2-D).
+fn t_of(step: &StepData, t: &[f64], i: usize) -> [f64; 2] {
+    let td = step.tdim();
+    std::array::from_fn(|j| if j < td { t[td * i + j] } else { 0.0 })
+}
+
 fn residual(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> Vec<f64> {
     let n = step.n();
     let mut f = momentum_residual(step, y, lambda, t);
@@ -120,9 +135,20 @@ fn residual(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &
             None => 0.0,
         });
     }
-    for i in 0..n {
-        let vbar = step.slip(i, y);
-        f.push(if step.friction { friction_residual(t[i], vbar, s.at(step, i, y, lambda).s, p.rho_t[i], step.a_v) } else { 0.0 });
+    if step.tdim() == 1 {
+        for i in 0..n {
+            let vbar = step.slip(i, y);
+            f.push(if step.friction { friction_residual(t[i], vbar, s.at(step, i, y, lambda).s, p.rho_t[i], step.a_v) } else { 0.0 });
+        }
+    } else {
+        for i in 0..n {
+            let ft = if step.friction {
+                friction_residual_disk(t_of(step, t, i), step.slip_vec(i, y), s.at(step, i, y, lambda).s, p.rho_t[i], step.a_v)
+            } else {
+                [0.0; 2]
+            };
+            f.extend(ft);
+        }
     }
     f
 }
@@ -135,8 +161,16 @@ fn sets(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &[f64
         .collect();
     let stick = (0..n)
         .map(|i| {
-            let vbar = step.slip(i, y);
-            step.friction && (t[i] + p.rho_t[i] * vbar).abs() <= s.at(step, i, y, lambda).s
+            if !step.friction {
+                return false;
+            }
+            let bound = s.at(step, i, y, lambda).s;
+            if step.tdim() == 1 {
+                (t[i] + p.rho_t[i] * step.slip(i, y)).abs() <= bound
+            } else {
+                let (ti, v) = (t_of(step, t, i), step.slip_vec(i, y));
+                (ti[0] + p.rho_t[i] * v[0]).hypot(ti[1] + p.rho_t[i] * v[1]) <= bound
+            }
         })
         .collect();
     (active, stick)
@@ -247,7 +281,15 @@ impl Params {
         Params {
             rho_n: (0..n).map(|i| set.scale_normal / (step.nodes[i].omega * step.delassus[(step.nu(i), step.nu(i))])).collect(),
             rho_t: (0..n)
-                .map(|i| set.scale_tangent / (step.a_v * step.nodes[i].omega * step.delassus[(step.tau(i), step.tau(i))]))
+                .map(|i| {
+                    // the mean of the node's tangential diagonal entries (one in 2-D)
+                    let w_tt = if step.tdim() == 1 {
+                        step.delassus[(step.tau(i), step.tau(i))]
+                    } else {
+                        (0..step.tdim()).map(|j| step.delassus[(step.tau_j(i, j), step.tau_j(i, j))]).sum::<f64>() / step.tdim() as f64
+                    };
+                    set.scale_tangent / (step.a_v * step.nodes[i].omega * w_tt)
+                })
                 .collect(),
         }
     }
@@ -259,7 +301,19 @@ fn initial_iterate(step: &StepData, s: &FrictionBound, p: &Params, lambda0: &[f6
     let n = step.n();
     let lambda: Vec<f64> = (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda0[i].max(0.0) } else { 0.0 }).collect();
     let s_start = s.values(step, &step.y_free, &lambda);
-    let t: Vec<f64> = (0..n).map(|i| if step.friction { t0[i].clamp(-s_start[i], s_start[i]) } else { 0.0 }).collect();
+    let t: Vec<f64> = if step.tdim() == 1 {
+        (0..n).map(|i| if step.friction { t0[i].clamp(-s_start[i], s_start[i]) } else { 0.0 }).collect()
+    } else {
+        // the warm start projected onto each node's disk
+        (0..n)
+            .flat_map(|i| {
+                let ti = t_of(step, t0, i);
+                let norm = ti[0].hypot(ti[1]);
+                let scale = if !step.friction { 0.0 } else if norm > s_start[i] { s_start[i] / norm } else { 1.0 };
+                [scale * ti[0], scale * ti[1]]
+            })
+            .collect()
+    };
     let y = step.response(&step.forces(&step.y_free, &lambda, &t));
     let f = residual(step, s, p, &y, &lambda, &t);
     Iterate { y, lambda, t, f }
@@ -295,6 +349,8 @@ fn direction(
     let mut g = vec![0.0; m]; // ∂q/∂y on normal components
     // ∂t_i/∂N_i on slipping nodes whose bound follows the normal force (Co.3), else 0
     let mut coupling = vec![0.0; n];
+    // (3-D) the 2 × 2 blocks ∂t_i/∂y_τ,i of slipping nodes on the disk
+    let mut blocks: Vec<(usize, [[f64; 2]; 2])> = Vec::new();
     for i in 0..n {
         let (jn, jt) = (step.nu(i), step.tau(i));
         g[jn] = step.dq(i, y);
@@ -304,7 +360,35 @@ fn direction(
         } else {
             dm[jn] = -lambda[i];
         }
-        if step.friction {
+        if step.friction && step.tdim() == 2 {
+            let td = 2;
+            if stick[i] {
+                for j in 0..td {
+                    prescribed[step.tau_j(i, j)] = true;
+                    dy[step.tau_j(i, j)] = f[m + n + td * i + j]; // F_t = y_stick − y on the stick set
+                }
+            } else {
+                // slip on the disk: with z = t + ρ v̄, ẑ = z/‖z‖, κ = S/‖z‖ < 1 and Π = I − ẑẑᵀ,
+                // the linearized (N.3) gives Δt = (ẑẑᵀ + Π/(1 − κ))(S ẑ − t) + ρ a_v κ/(1 − κ) Π Δy_τ:
+                // a known change plus a 2 × 2 block G on the tangential velocities
+                let (ti, v) = (t_of(step, t, i), step.slip_vec(i, y));
+                let rho = p.rho_t[i];
+                let z = [ti[0] + rho * v[0], ti[1] + rho * v[1]];
+                let nz = z[0].hypot(z[1]);
+                let zh = [z[0] / nz, z[1] / nz];
+                let b = s.at(step, i, y, lambda).s;
+                let kappa = b / nz;
+                let pi = [[1.0 - zh[0] * zh[0], -zh[0] * zh[1]], [-zh[1] * zh[0], 1.0 - zh[1] * zh[1]]];
+                let e = [b * zh[0] - ti[0], b * zh[1] - ti[1]];
+                for j in 0..td {
+                    let along = zh[j] * (zh[0] * e[0] + zh[1] * e[1]);
+                    let across = (pi[j][0] * e[0] + pi[j][1] * e[1]) / (1.0 - kappa);
+                    dm[step.tau_j(i, j)] = along + across;
+                }
+                let gain = rho * step.a_v * kappa / (1.0 - kappa);
+                blocks.push((i, [[gain * pi[0][0], gain * pi[0][1]], [gain * pi[1][0], gain * pi[1][1]]]));
+            }
+        } else if step.friction {
             if stick[i] {
                 prescribed[jt] = true;
                 dy[jt] = f[m + n + i]; // F_t = y_stick − y on the stick set
@@ -320,17 +404,24 @@ fn direction(
             }
         }
     }
-    let symmetric = coupling.iter().all(|&c| c == 0.0) && (0..m).all(|l| prescribed[l] || g[l] >= 0.0);
+    let symmetric = blocks.is_empty() && coupling.iter().all(|&c| c == 0.0) && (0..m).all(|l| prescribed[l] || g[l] >= 0.0);
     let sol = if reduced && symmetric {
         reduced_direction(step, f, &prescribed, &g, &dy, &dm)?
     } else {
-        general_direction(step, f, &prescribed, &g, &coupling, &dy, &dm)?
+        general_direction(step, f, &prescribed, &g, (&coupling, &blocks), &dy, &dm)?
     };
     for l in 0..m {
         if prescribed[l] {
             dm[l] = sol[l];
         } else {
             dy[l] = sol[l];
+        }
+    }
+    // the slipping nodes' friction change on the disk: the known part plus G Δy_τ
+    for (i, gb) in &blocks {
+        let dyt = [dy[step.tau_j(*i, 0)], dy[step.tau_j(*i, 1)]];
+        for j in 0..2 {
+            dm[step.tau_j(*i, j)] += gb[j][0] * dyt[0] + gb[j][1] * dyt[1];
         }
     }
     Some((dy, dm))
@@ -389,7 +480,7 @@ fn general_direction(
     f: &[f64],
     prescribed: &[bool],
     g: &[f64],
-    coupling: &[f64],
+    (coupling, blocks): (&[f64], &[(usize, [[f64; 2]; 2])]),
     dy: &[f64],
     dm: &[f64],
 ) -> Option<Vec<f64>> {
@@ -426,6 +517,22 @@ fn general_direction(
             rhs[j] -= w[(j, jt)] * c * known;
         }
     }
+    // (3-D) a slipping node's friction force follows its tangential velocities through the
+    // 2 × 2 block G: column τ_j gains Σ_k W[:, τ_k] ω G_kj
+    for (i, gb) in blocks {
+        let cols = [step.tau_j(*i, 0), step.tau_j(*i, 1)];
+        let wi = step.nodes[*i].omega;
+        for (jj, &cj) in cols.iter().enumerate() {
+            for (kk, &ck) in cols.iter().enumerate() {
+                let c = wi * gb[kk][jj];
+                if c != 0.0 {
+                    for row in 0..m {
+                        jac[(row, cj)] += w[(row, ck)] * c;
+                    }
+                }
+            }
+        }
+    }
     linalg::dense_solve(&jac, &rhs)
 }
 
@@ -438,7 +545,8 @@ fn line_search(step: &StepData, s: &FrictionBound, p: &Params, x: Iterate, dy: &
         let y: Vec<f64> = (0..m).map(|l| x.y[l] + alpha * dy[l]).collect();
         let lambda: Vec<f64> =
             (0..n).map(|i| if step.nodes[i].bound.is_some() { x.lambda[i] + alpha * dm[step.nu(i)] } else { 0.0 }).collect();
-        let t: Vec<f64> = (0..n).map(|i| if step.friction { x.t[i] + alpha * dm[step.tau(i)] } else { 0.0 }).collect();
+        let td = step.tdim();
+        let t: Vec<f64> = (0..n * td).map(|l| if step.friction { x.t[l] + alpha * dm[step.tau_j(l / td, l % td)] } else { 0.0 }).collect();
         let f = residual(step, s, p, &y, &lambda, &t);
         Iterate { y, lambda, t, f }
     };
