@@ -60,12 +60,6 @@ impl Problem {
         if let Some(c) = &contact {
             check_initial_admissible(c, &mesh, &u0)?;
             use crate::model::kinds::InnerSolver;
-            if c.dim == 3 && model.solver.inner == InnerSolver::Conic {
-                return Err(Error::scene(
-                    "solver.inner",
-                    "\"conic\" in three dimensions (second-order cones) is not implemented yet: use \"newton\"",
-                ));
-            }
             if c.dim == 3 && c.friction.is_some() && model.solver.inner == InnerSolver::NewtonUnfrozen {
                 return Err(Error::scene(
                     "solver.inner",

@@ -5,7 +5,8 @@
 //!   ½ rᵀ W r + Σ_i (ω_i S_i/a_v) |v̄_i(y)| + Σ_i (ω_i/a_d) F_i(d_i^{n+1}(y))
 //!   subject to y + W r = y_free and y_ν,i ≤ β_i (exact constraint),
 //! whose optimality conditions are exactly (N.1)–(N.3) (r = ∇G(y) + multipliers). The friction
-//! term is an epigraph (two inequalities in 2-D), the bound a nonnegative cone. F_i' = q_i is
+//! term is an epigraph (two inequalities in 2-D, a second-order cone per node in 3-D: the
+//! disk's support function S‖v̄‖), the bound a nonnegative cone. F_i' = q_i is
 //! the scheme's normal force, hinge by hinge (c/2)(r − s)_+², with z = d^{n+1} − s, A = d^n − s:
 //!
 //! * trapezoid and backward Euler: F = (cA_+/2) z + (c/4) z_+², resp. (c/2) z_+²: exact;
@@ -30,7 +31,7 @@ use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverSt
 
 use super::{ContactSolution, NodeStatus, StepData};
 use crate::defaults::{
-    CLARABEL_MAX_ITER, CLARABEL_TOL_KTRATIO, CONIC_FAR as FAR, CONIC_MAX_ROUNDS, CONIC_SEPARATION_FLOOR as SEPARATION_FLOOR,
+    CLARABEL_MAX_ITER, CLARABEL_STATIC_REGULARIZATION, CLARABEL_TOL_KTRATIO, CONIC_FAR as FAR, CONIC_MAX_ROUNDS, CONIC_SEPARATION_FLOOR as SEPARATION_FLOOR,
     CONIC_STICK_FLOOR as STICK_FLOOR, NEWTON_TOLERANCE,
 };
 use crate::failure::{ConicFailure, ConicStatus};
@@ -63,6 +64,8 @@ struct Builder {
     q: Vec<f64>,
     zero: Vec<(Vec<(usize, f64)>, f64)>,
     nonneg: Vec<(Vec<(usize, f64)>, f64)>,
+    /// second-order cones: each a list of rows (a, b) with b − a·x in the cone
+    soc: Vec<Vec<(Vec<(usize, f64)>, f64)>>,
 }
 
 impl Builder {
@@ -94,10 +97,16 @@ impl Builder {
         for (a, bi) in &self.nonneg {
             push(a, *bi, &mut trip, &mut b);
         }
+        for cone in &self.soc {
+            for (a, bi) in cone {
+                push(a, *bi, &mut trip, &mut b);
+            }
+        }
         let mut cones = vec![SupportedConeT::ZeroConeT(self.zero.len())];
         if !self.nonneg.is_empty() {
             cones.push(SupportedConeT::NonnegativeConeT(self.nonneg.len()));
         }
+        cones.extend(self.soc.iter().map(|c| SupportedConeT::SecondOrderConeT(c.len())));
         let a = csc(row, n, trip);
         (p, self.q, a, b, cones)
     }
@@ -265,6 +274,7 @@ fn solve_once(
         .tol_feas(set.tolerance)
         .tol_ktratio(CLARABEL_TOL_KTRATIO)
         .max_iter(CLARABEL_MAX_ITER)
+        .static_regularization_constant(CLARABEL_STATIC_REGULARIZATION)
         .build()
         .map_err(|e| ConicFailure { status: ConicStatus::Settings(format!("{e:?}")), iterations: 0, residual: f64::NAN })?;
     let mut solver = DefaultSolver::new(&p, &q, &a, &bb, &cones, settings)
@@ -314,12 +324,22 @@ fn program(step: &StepData, s: &[f64], pieces: &[Majorized], z_l: &[f64], v: f64
         if let Some(beta) = step.beta(i).filter(|_| active.bound[i]) {
             b.le(vec![(yn, 1.0)], beta / v);
         }
-        // friction (ω S/a_v)|v̄|, v̄ = v_aff + a_v y_τ, via s ≥ ±v̄
-        if step.friction && s[i] > 0.0 {
+        // friction (ω S/a_v)‖v̄‖, v̄ = v_aff + a_v y_τ: in 2-D via s ≥ ±v̄, in 3-D via the
+        // second-order cone s ≥ ‖v̄‖ (the disk's support function)
+        if step.friction && s[i] > 0.0 && step.tdim() == 1 {
             let sv = b.var();
             b.q[sv] = nd.omega * s[i] / (step.a_v * v);
             b.le(vec![(yt, step.a_v), (sv, -1.0)], -nd.v_aff[0] / v);
             b.le(vec![(yt, -step.a_v), (sv, -1.0)], nd.v_aff[0] / v);
+        } else if step.friction && s[i] > 0.0 {
+            let sv = b.var();
+            b.q[sv] = nd.omega * s[i] / (step.a_v * v);
+            // (s, v̄/V) ∈ SOC: rows b − a·x = (s, a_v ỹ_τj + v_aff,j/V)
+            let mut cone = vec![(vec![(sv, -1.0)], 0.0)];
+            for j in 0..step.tdim() {
+                cone.push((vec![(y[step.tau_j(i, j)], -step.a_v)], nd.v_aff[j] / v));
+            }
+            b.soc.push(cone);
         }
         // normal force, hinge by hinge. All pieces are written in ξ = z/a_d (velocity units):
         // z = d^{n+1} − s = z0 + a_d y_ν, and (ω/a_d) F(z) becomes ω a_d (·) ξ² + ω (·) ξ.
@@ -371,13 +391,14 @@ fn finish(step: &StepData, s: &[f64], y: Vec<f64>, r: Vec<f64>, iterations: usiz
     let lambda: Vec<f64> = (0..n)
         .map(|i| if step.nodes[i].bound.is_some() { (r[step.nu(i)] / step.nodes[i].omega - q[i]).max(0.0) } else { 0.0 })
         .collect();
-    let t: Vec<f64> = (0..n).map(|i| if step.friction { r[step.tau(i)] / step.nodes[i].omega } else { 0.0 }).collect();
+    let td = step.tdim();
+    let t: Vec<f64> = (0..n * td).map(|l| if step.friction { r[step.tau_j(l / td, l % td)] / step.nodes[l / td].omega } else { 0.0 }).collect();
     // an interior point reaches the active sets only to its tolerance: a node is separated when
     // its force is below SEPARATION_FLOOR of the largest, in stick when |v̄| ≤ STICK_FLOOR a_v V
     let f_max = (0..n).fold(0.0f64, |m, i| m.max(q[i] + lambda[i]));
     let status = (0..n)
         .map(|i| {
-            let stick = step.friction && s[i] > 0.0 && step.slip(i, &y).abs() <= STICK_FLOOR * step.a_v * scale;
+            let stick = step.friction && s[i] > 0.0 && step.slip_norm(i, &y) <= STICK_FLOOR * step.a_v * scale;
             NodeStatus::classify(q[i] + lambda[i], SEPARATION_FLOOR * f_max, stick)
         })
         .collect();
