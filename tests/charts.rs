@@ -203,7 +203,7 @@ fn contact_categories(out: &Path) -> (BTreeSet<usize>, Vec<&'static str>) {
             "slip" => NodeStatus::Slip,
             _ => NodeStatus::Separated,
         };
-        let rec = NodeRecord { u_n: 0.0, u_t: 0.0, v_t: 0.0, p: 0.0, lambda, friction: 0.0, bound: 0.0, status };
+        let rec = NodeRecord { u_n: 0.0, u_t: 0.0, v_t: 0.0, p: 0.0, lambda, friction: 0.0, bound: 0.0, status, v_t_vec: [0.0; 3], friction_vec: [0.0; 3] };
         cats.push(Category::of(&rec).label());
     }
     (steps, cats)
@@ -359,7 +359,7 @@ fn charts_accept_empty_and_non_finite_data() {
         tangential_force: v,
     };
     let along = Along { s: vec![0.0, 0.5, 1.0], order: vec![0, 1, 2], label: "x along Γ3 [m]" };
-    let rec = |p: f64, lambda: f64, status| NodeRecord { u_n: 0.0, u_t: 0.0, v_t: 0.0, p, lambda, friction: 0.0, bound: 0.0, status };
+    let rec = |p: f64, lambda: f64, status| NodeRecord { u_n: 0.0, u_t: 0.0, v_t: 0.0, p, lambda, friction: 0.0, bound: 0.0, status, v_t_vec: [0.0; 3], friction_vec: [0.0; 3] };
     let frames = vec![
         (0, 0.0, vec![rec(nan, 0.0, NodeStatus::Separated), rec(1.0, nan, NodeStatus::Stick), rec(f64::INFINITY, 2.0, NodeStatus::Slip)]),
         // a short frame (fewer records than nodes)

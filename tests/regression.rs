@@ -36,7 +36,9 @@
 //! count), as in (2).
 //! (5) with history.csv's columns friction_force_x, friction_force_y, friction_force_z (the 3-D
 //! contract's global friction force; z = 0 in 2-D) appended: every earlier column identical,
-//! digit for digit; the 3-D fixture cantilever3d added (and its contact.csv header is the 3-D one).
+//! digit for digit; the 3-D fixtures cantilever3d, column_impact3d and sliding_block3d added
+//! (column_impact3d's pins re-recorded once with friction in 3-D: its inner_residual column moved
+//! at round-off (2.2e-16) with ρ_τ from both tangential diagonals, and friction_x reads −0 for 0).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
