@@ -196,33 +196,8 @@ impl Mesh {
     /// Structural checks: triangles counterclockwise with positive area, indices in range,
     /// every node used by a triangle, side edges on the boundary.
     pub fn check(&self) -> Result<()> {
-        let n = self.nodes.len();
-        if self.triangles.is_empty() {
-            return Err(Error::mesh(&self.source, "has no triangles"));
-        }
-        let mut used = vec![false; n];
-        let scale = self.bbox_diameter().powi(2);
-        for (t, tri) in self.triangles.iter().enumerate() {
-            for &v in tri {
-                if v >= n {
-                    return Err(Error::mesh(&self.source, format!("triangle {t} refers to node {v}, but there are {n} nodes")));
-                }
-                used[v] = true;
-            }
-            let a = self.signed_area(t);
-            if !a.is_finite() {
-                return Err(Error::mesh(&self.source, format!("the area of triangle {t} overflows: the coordinates are too large; give them in metres")));
-            }
-            if !(a > 1e-14 * scale) {
-                return Err(Error::mesh(
-                    &self.source,
-                    format!("triangle {t} (nodes {:?}) has {} area {a:.3e}; fix or remove it", tri, if a < 0.0 { "negative (inverted)" } else { "zero" }),
-                ));
-            }
-        }
-        if let Some(v) = used.iter().position(|u| !u) {
-            return Err(Error::mesh(&self.source, format!("node {v} is not a vertex of any triangle; remove unreferenced nodes")));
-        }
+        let names = CellNames { one: "triangle", many: "triangles", measure: "area", zero: "zero" };
+        check_cells(&self.source, self.nodes.len(), &self.triangles, |t| self.signed_area(t), self.bbox_diameter().powi(2), &names)?;
         for s in &self.sides {
             self.edge_geometry(s)?;
         }
@@ -239,6 +214,56 @@ impl Mesh {
         }
         ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2)).sqrt()
     }
+}
+
+/// How the structural checks name a mesh's cells.
+pub(crate) struct CellNames {
+    pub one: &'static str,
+    pub many: &'static str,
+    /// "area" or "volume"
+    pub measure: &'static str,
+    /// the word for a cell of measure 0
+    pub zero: &'static str,
+}
+
+/// The structural checks of either dimension: cells exist, their indices are in range, their
+/// signed measure (area or volume) is finite and above 1e-14 × `scale` (positively oriented,
+/// not degenerate), and every node is a vertex of some cell.
+pub(crate) fn check_cells<const N: usize>(
+    source: &str,
+    n: usize,
+    cells: &[[usize; N]],
+    measure: impl Fn(usize) -> f64,
+    scale: f64,
+    names: &CellNames,
+) -> Result<()> {
+    let CellNames { one, many, measure: what, zero } = names;
+    if cells.is_empty() {
+        return Err(Error::mesh(source, format!("has no {many}")));
+    }
+    let mut used = vec![false; n];
+    for (t, cell) in cells.iter().enumerate() {
+        for &v in cell {
+            if v >= n {
+                return Err(Error::mesh(source, format!("{one} {t} refers to node {v}, but there are {n} nodes")));
+            }
+            used[v] = true;
+        }
+        let a = measure(t);
+        if !a.is_finite() {
+            return Err(Error::mesh(source, format!("the {what} of {one} {t} overflows: the coordinates are too large; give them in metres")));
+        }
+        if !(a > 1e-14 * scale) {
+            return Err(Error::mesh(
+                source,
+                format!("{one} {t} (nodes {cell:?}) has {} {what} {a:.3e}; fix or remove it", if a < 0.0 { "negative (inverted)" } else { zero }),
+            ));
+        }
+    }
+    if let Some(v) = used.iter().position(|u| !u) {
+        return Err(Error::mesh(source, format!("node {v} is not a vertex of any {one}; remove unreferenced nodes")));
+    }
+    Ok(())
 }
 
 /// The body's mesh in either dimension: P1 triangles (d = 2) or P1 tetrahedra (d = 3). The

@@ -260,33 +260,8 @@ impl SolidMesh {
     /// Structural checks: indices in range, every tetrahedron positively oriented with a volume
     /// above round-off, every node used, side faces on the boundary.
     pub fn check(&self) -> Result<()> {
-        let n = self.nodes.len();
-        if self.tets.is_empty() {
-            return Err(Error::mesh(&self.source, "has no tetrahedra"));
-        }
-        let mut used = vec![false; n];
-        let scale = self.bbox_diameter().powi(3);
-        for (t, tet) in self.tets.iter().enumerate() {
-            for &v in tet {
-                if v >= n {
-                    return Err(Error::mesh(&self.source, format!("tetrahedron {t} refers to node {v}, but there are {n} nodes")));
-                }
-                used[v] = true;
-            }
-            let vol = self.signed_volume(t);
-            if !vol.is_finite() {
-                return Err(Error::mesh(&self.source, format!("the volume of tetrahedron {t} overflows: give the coordinates in metres")));
-            }
-            if !(vol > 1e-14 * scale) {
-                return Err(Error::mesh(
-                    &self.source,
-                    format!("tetrahedron {t} (nodes {tet:?}) has {} volume {vol:.3e}; fix or remove it", if vol < 0.0 { "negative (inverted)" } else { "zero (degenerate)" }),
-                ));
-            }
-        }
-        if let Some(v) = used.iter().position(|u| !u) {
-            return Err(Error::mesh(&self.source, format!("node {v} is not a vertex of any tetrahedron; remove unreferenced nodes")));
-        }
+        let names = super::CellNames { one: "tetrahedron", many: "tetrahedra", measure: "volume", zero: "zero (degenerate)" };
+        super::check_cells(&self.source, self.nodes.len(), &self.tets, |t| self.signed_volume(t), self.bbox_diameter().powi(3), &names)?;
         for s in &self.sides {
             self.face_geometry(s)?;
         }

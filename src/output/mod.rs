@@ -245,51 +245,18 @@ impl Writer {
                 let node = c.nodes[i];
                 let x = p.mesh.point(node);
                 contact[node] = (nr.p + nr.lambda, nr.p, nr.lambda, nr.friction, nr.status.code());
-                if c.dim == 3 {
-                    let (v, f) = (nr.v_t_vec, nr.friction_vec);
-                    writeln!(
-                        w,
-                        "{},{},{node},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                        rec.step,
-                        rec.t,
-                        x[0],
-                        x[1],
-                        x[2],
-                        nr.u_n,
-                        nr.u_t,
-                        nr.v_t,
-                        nr.p,
-                        nr.lambda,
-                        nr.friction,
-                        nr.status.as_str(),
-                        v[0],
-                        v[1],
-                        v[2],
-                        f[0],
-                        f[1],
-                        f[2],
-                        nr.bound
-                    )
-                    .map_err(csv_io(&cp))?;
-                    continue;
+                // the columns of contact_columns(d): z after y in 3-D, the global components
+                // of v̄ and of the friction before friction_bound
+                let dim = c.dim;
+                let mut row: Vec<String> = vec![rec.step.to_string(), rec.t.to_string(), node.to_string()];
+                row.extend(x[..dim].iter().map(f64::to_string));
+                row.extend([nr.u_n, nr.u_t, nr.v_t, nr.p, nr.lambda, nr.friction].map(|v| v.to_string()));
+                row.push(nr.status.as_str().to_string());
+                if dim == 3 {
+                    row.extend(nr.v_t_vec.iter().chain(&nr.friction_vec).map(f64::to_string));
                 }
-                writeln!(
-                    w,
-                    "{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                    rec.step,
-                    rec.t,
-                    node,
-                    x[0],
-                    x[1],
-                    nr.u_n,
-                    nr.u_t,
-                    nr.v_t,
-                    nr.p,
-                    nr.lambda,
-                    nr.friction,
-                    nr.status.as_str(),
-                    nr.bound
-                )
+                row.push(nr.bound.to_string());
+                writeln!(w, "{}", row.join(","))
                 .map_err(csv_io(&cp))?;
             }
             w.flush().map_err(csv_io(&cp))?;
