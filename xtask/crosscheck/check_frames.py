@@ -6,7 +6,8 @@ Parses DIR/series.pvd with ElementTree, reads every frame it lists with meshio a
 the PVD lists exactly the files in DIR/frames, timesteps strictly increase from t >= 0, every
 frame has the same points and triangles, point data displacement and velocity (N x 3, z = 0),
 contact_pressure, friction, contact_status (one value per node), cell data stress (one 4-vector
-per triangle), all finite. The first frame is the initial state of the cross-check scene
+per triangle; in 3-D tetrahedra, points off z = 0 and a 6-vector of stress per tetrahedron), all
+finite. The first frame is the initial state of the cross-check scene
 (u0 = 0, so its displacement must be exactly 0) and the last one must have moved (the loads are
 not zero). These are structural checks: no numerical tolerance is involved, since the VTU
 writer prints shortest round-trip floats and meshio reads back the exact f64 values.
@@ -47,14 +48,17 @@ def main():
             check(False, f"{where}: meshio cannot read it: {type(e).__name__}: {e}")
             continue
         n = m.points.shape[0]
-        tri = m.cells_dict.get("triangle")
-        if not check(tri is not None and len(m.cells) == 1, f"{where}: expected one triangle block"):
+        # 2-D frames hold triangles (z = 0), 3-D frames tetrahedra
+        kind = "tetra" if "tetra" in m.cells_dict else "triangle"
+        solid = kind == "tetra"
+        tri = m.cells_dict.get(kind)
+        if not check(tri is not None and len(m.cells) == 1, f"{where}: expected one triangle or tetrahedron block"):
             continue
         nc = tri.shape[0]
         if ref is None:
             ref = (m.points, tri)
         check(np.array_equal(m.points, ref[0]) and np.array_equal(tri, ref[1]), f"{where}: mesh differs from the first frame")
-        check(np.isfinite(m.points).all() and np.allclose(m.points[:, 2], 0.0), f"{where}: bad points")
+        check(np.isfinite(m.points).all() and (solid or np.allclose(m.points[:, 2], 0.0)), f"{where}: bad points")
         pd = m.point_data
         for name, shape in [("displacement", (n, 3)), ("velocity", (n, 3)), ("contact_pressure", (n,)),
                             ("friction", (n,)), ("contact_status", (n,))]:
@@ -65,14 +69,15 @@ def main():
                 a = a[:, 0]  # a scalar field may come back as N x 1
             check(a.shape == shape, f"{where}: {name} shape {pd[name].shape}, expected {shape}")
             check(np.isfinite(a).all(), f"{where}: {name} not finite")
-            if len(shape) == 2 and a.shape == shape:
+            if len(shape) == 2 and a.shape == shape and not solid:
                 check(np.all(a[:, 2] == 0.0), f"{where}: {name} has a non-zero z component")
         if "contact_status" in pd:
             s = pd["contact_status"]
             check(np.issubdtype(s.dtype, np.integer), f"{where}: contact_status dtype {s.dtype} is not integer")
         stress = m.cell_data.get("stress")
         if check(stress is not None and len(stress) == 1, f"{where}: cell_data has no stress block (has {sorted(m.cell_data)})"):
-            check(stress[0].shape == (nc, 4), f"{where}: stress shape {stress[0].shape}, expected ({nc}, 4)")
+            comps = 6 if solid else 4
+            check(stress[0].shape == (nc, comps), f"{where}: stress shape {stress[0].shape}, expected ({nc}, {comps})")
             check(np.isfinite(stress[0]).all(), f"{where}: stress not finite")
         if k == 0 and "displacement" in pd:
             check(np.all(pd["displacement"] == 0.0), f"{where}: initial displacement is not 0 (u0 = 0 in the scene)")

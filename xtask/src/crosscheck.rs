@@ -13,7 +13,7 @@
 //!    `<scene>_f.txt` for Rust tests that run without Python;
 //! 3. `solid_operators.py` assembles M, K, C of a 3-D box of tetrahedra with scikit-fem into
 //!    `fixtures/reference/box3d_*.mtx` (tests/crosscheck.rs compares dyncontact's assembly);
-//! 4. a short `dyncontact run` of [`RUN_SCENE`], whose `series.pvd` and frames
+//! 4. short `dyncontact run`s of [`RUN_SCENES`] (2-D and 3-D), whose `series.pvd` and frames
 //!    `check_frames.py` reads with meshio.
 //!
 //! The solver is the binary `target/debug/dyncontact`, built only if it is missing: `cargo run`
@@ -26,8 +26,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
-/// The scene whose `run` output is read back with meshio (a short run, see the scene file).
-const RUN_SCENE: &str = "crosscheck_strain";
+/// The scenes whose `run` output is read back with meshio (short runs, see the scene files): a
+/// 2-D one and a 3-D one.
+const RUN_SCENES: [&str; 2] = ["crosscheck_strain", "cantilever3d"];
 /// Marker in the venv: hash of the requirements text last installed successfully.
 const MARKER: &str = "requirements.hash";
 
@@ -79,15 +80,17 @@ pub fn run(root: &Path) -> Result<String, String> {
     let _ = writeln!(report, "  3-D box operators with scikit-fem ({:.1} s)", t.elapsed().as_secs_f64());
     record(&mut report, &mut failures, "3-D box operators", result);
 
-    let t = Instant::now();
-    let scene = root.join("fixtures").join("scenes").join(format!("{RUN_SCENE}.toml"));
-    let out = fresh_dir(&out_root.join(format!("run_{RUN_SCENE}")))?;
-    let result = checked(
-        Command::new(&bin).current_dir(root).arg("run").arg(&scene).arg("--out").arg(&out),
-        python_cmd(&python, root).arg(scripts.join("check_frames.py")).arg(&out),
-    );
-    let _ = writeln!(report, "  frames of `dyncontact run {}` ({:.1} s)", rel(root, &scene), t.elapsed().as_secs_f64());
-    record(&mut report, &mut failures, &format!("frames of {RUN_SCENE}"), result);
+    for run_scene in RUN_SCENES {
+        let t = Instant::now();
+        let scene = root.join("fixtures").join("scenes").join(format!("{run_scene}.toml"));
+        let out = fresh_dir(&out_root.join(format!("run_{run_scene}")))?;
+        let result = checked(
+            Command::new(&bin).current_dir(root).arg("run").arg(&scene).arg("--out").arg(&out),
+            python_cmd(&python, root).arg(scripts.join("check_frames.py")).arg(&out),
+        );
+        let _ = writeln!(report, "  frames of `dyncontact run {}` ({:.1} s)", rel(root, &scene), t.elapsed().as_secs_f64());
+        record(&mut report, &mut failures, &format!("frames of {run_scene}"), result);
+    }
 
     for (which, what) in [("bar_impact", "B.1 on the singular mass"), ("bar_friction", "oblique impact, Signorini–Coulomb and compliance + Coulomb")] {
         let t = Instant::now();
