@@ -762,10 +762,23 @@ struct FloorRun {
     stats: RunStats,
 }
 
+const FLOOR_2D: &str = "default scene (academic, 2-D, 32 contact nodes)";
+const FLOOR_3D: &str = "sliding_block3d (3-D, 49 contact nodes, friction on the disk)";
+
 /// Part 2, the floor on the default scene (`academic`, as `cargo run --release -- run` runs it,
 /// without outputs): time per step ÷ the floor of two triangular-solve pairs, `repeats` times.
 fn floor_runs(plan: &Plan) -> Result<Vec<FloorRun>> {
-    let mut scene = Scene::default_scene();
+    floor_runs_of(plan, Scene::default_scene())
+}
+
+/// The 3-D row of part 2: the sliding_block3d fixture (B.3 pulled at 30°, 49 contact nodes,
+/// friction on the disk), as `run` runs it without outputs.
+fn floor_runs_3d(plan: &Plan) -> Result<Vec<FloorRun>> {
+    let scene = Scene::from_toml(include_str!("../../fixtures/scenes/sliding_block3d.toml"), "sliding_block3d.toml")?;
+    floor_runs_of(plan, scene)
+}
+
+fn floor_runs_of(plan: &Plan, mut scene: Scene) -> Result<Vec<FloorRun>> {
     if let Some(end) = plan.floor_end {
         scene.time.end = end;
     }
@@ -780,7 +793,7 @@ fn floor_runs(plan: &Plan) -> Result<Vec<FloorRun>> {
 }
 
 /// floor.csv and the printed lines of the floor part: min and median over the repetitions.
-fn floor_report(runs: &[FloorRun]) -> (String, String) {
+fn floor_report(runs: &[FloorRun], what: &str) -> (String, String) {
     let mut csv = String::from("run,steps,time_per_step_s,floor_s,ratio_to_floor,contact_per_step_s,newton_iterations,fixed_point_iterations,factorizations,factor_reuses\n");
     for (i, r) in runs.iter().enumerate() {
         let st = &r.stats;
@@ -809,7 +822,7 @@ fn floor_report(runs: &[FloorRun]) -> (String, String) {
     let (contact_min, contact_med) = stat(&|r| r.contact_per_step);
     let st = &runs[0].stats;
     let text = format!(
-        "floor: default scene (academic), {} steps, {} runs (min / median): time per step {:.1} / {:.1} µs, floor (two A_k \
+        "floor: {what}, {} steps, {} runs (min / median): time per step {:.1} / {:.1} µs, floor (two A_k \
          solve pairs) {:.1} / {:.1} µs, ratio {:.2} / {:.2} (of the minima: {:.2}, the least noisy estimate); contact solve {:.1} / {:.1} µs per step; {} Newton iterations, \
          {} convex solves, Newton matrices factored {} times and reused {} times\n",
         st.steps,
@@ -848,9 +861,11 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
         return Ok(super::bookkeeping::report(&rows));
     }
     if opts.floor_only {
-        let (floor_csv, floor_text) = floor_report(&floor_runs(&plan)?);
+        let (floor_csv, floor_text) = floor_report(&floor_runs(&plan)?, FLOOR_2D);
         write(out, "floor.csv", &floor_csv)?;
-        return Ok(floor_text);
+        let (csv3, text3) = floor_report(&floor_runs_3d(&plan)?, FLOOR_3D);
+        write(out, "floor3d.csv", &csv3)?;
+        return Ok(floor_text + &text3);
     }
 
     let reference_spec = RunSpec { scheme: SchemeKind::Midpoint, inner: InnerSolver::Newton, mass: MassKind::Lumped, level: plan.reference };
@@ -868,8 +883,12 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     write(out, "work_precision.svg", &work_svg(&rows, &title)?)?;
 
     progress("floor: the default scene");
-    let (floor_csv, floor_text) = floor_report(&floor_runs(&plan)?);
+    let (floor_csv, floor_text) = floor_report(&floor_runs(&plan)?, FLOOR_2D);
     write(out, "floor.csv", &floor_csv)?;
+    progress("floor: the 3-D block");
+    let (csv3, text3) = floor_report(&floor_runs_3d(&plan)?, FLOOR_3D);
+    write(out, "floor3d.csv", &csv3)?;
+    let floor_text = floor_text + &text3;
 
     let scaling_plan = if opts.quick { super::scaling::ScalingPlan::quick() } else { super::scaling::ScalingPlan::full() };
     let scaling_rows = super::scaling::run(&scaling_plan, &progress)?;
