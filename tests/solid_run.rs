@@ -491,3 +491,36 @@ step = 1.0e-4
     assert!((mean / (l.impedance() * l.v0) - 1.0).abs() <= 0.01, "mean reaction {mean}");
     assert!(worst_e1 <= 1e-10, "(E.1) defect {worst_e1:.3e}");
 }
+
+/// The 3-D outputs of a run with contact: contact.csv with SCENES.md's 3-D columns, VTU
+/// tetrahedra, and the charts energy.svg, forces.svg, status_fractions.svg and the Γ3 status
+/// maps at four times (contact_status.svg); no 2-D chart (deformed.svg, normal_stress.svg).
+#[test]
+fn outputs_3d_have_the_contract_columns_and_charts() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes");
+    let mut scene = Scene::from_file(&dir.join("column_impact3d.toml")).expect("fixture");
+    scene.time.end = 0.5;
+    let p = Problem::from_scene(&scene, &dir).expect("problem");
+    let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("outputs_3d");
+    let opts = dyncontact::run::RunOptions { out: out.clone(), progress: false, checkpoint_every: None, resume: false, stop_after: None, interrupt: None };
+    dyncontact::run::run(&p, &opts).expect("run");
+    let contact = std::fs::read_to_string(out.join("contact.csv")).expect("contact.csv");
+    assert_eq!(
+        contact.lines().next(),
+        Some("step,t,node,x,y,z,u_n,u_t,v_t,p,lambda,friction,status,v_tx,v_ty,v_tz,friction_x,friction_y,friction_z,friction_bound")
+    );
+    assert!(contact.lines().skip(1).all(|l| l.split(',').count() == 20), "every row has 20 fields");
+    let history = std::fs::read_to_string(out.join("history.csv")).expect("history.csv");
+    assert!(history.lines().next().is_some_and(|h| h.ends_with("friction_force_x,friction_force_y,friction_force_z")));
+    let vtu = std::fs::read_to_string(out.join("frames/frame_00000.vtu")).expect("frame");
+    assert!(vtu.contains("Name=\"stress\" NumberOfComponents=\"6\""), "6-component stress per tetrahedron");
+    for chart in ["energy.svg", "forces.svg", "status_fractions.svg", "contact_status.svg"] {
+        let svg = std::fs::read_to_string(out.join("plots").join(chart)).unwrap_or_else(|e| panic!("{chart}: {e}"));
+        assert!(svg.starts_with("<svg") && svg.contains("</svg>"), "{chart} is not an SVG document");
+    }
+    let maps = std::fs::read_to_string(out.join("plots/contact_status.svg")).expect("maps");
+    assert_eq!(maps.matches("Γ3 at t = ").count(), 4, "four maps");
+    for absent in ["deformed.svg", "normal_stress.svg"] {
+        assert!(!out.join("plots").join(absent).exists(), "{absent} is a 2-D chart");
+    }
+}

@@ -373,3 +373,78 @@ pub fn deformed(mesh: &Mesh, u: &[[f64; 2]], t: f64) -> Result<String, String> {
     }
     Ok(svg)
 }
+
+/// The share of Γ3's nodes in each status category against t, over the contact frames (any
+/// dimension): the 3-D counterpart of the space–time map, which needs a 1-D Γ3.
+pub fn status_fractions(frames: &[Frame]) -> Result<String, String> {
+    let series: Vec<plots::Series> = Category::ALL
+        .iter()
+        .map(|&cat| plots::Series {
+            name: cat.label().to_string(),
+            points: frames
+                .iter()
+                .filter(|f| !f.2.is_empty())
+                .map(|(_, t, recs)| (*t, recs.iter().filter(|r| Category::of(r) == cat).count() as f64 / recs.len() as f64))
+                .collect(),
+        })
+        .collect();
+    plots::line_chart("Contact status on Γ3: share of the nodes", "t [s]", "share of the contact nodes", &series, &[])
+}
+
+/// Maps of the contact status on a 2-D Γ3 (a surface of a 3-D body) at four frames spread over
+/// the run: each node a square at its in-plane coordinates `xy` (along the tangents of the first
+/// contact node's frame), coloured by its category.
+pub fn status_maps(frames: &[Frame], xy: &[[f64; 2]]) -> Result<String, String> {
+    let with_nodes: Vec<&Frame> = frames.iter().filter(|f| !f.2.is_empty() && f.1.is_finite()).collect();
+    let picks: Vec<&Frame> = match with_nodes.len() {
+        0 => Vec::new(),
+        n => {
+            let mut idx: Vec<usize> = (0..4).map(|k| k * (n - 1) / 3).collect();
+            idx.dedup();
+            idx.into_iter().map(|i| with_nodes[i]).collect()
+        }
+    };
+    let span = |c: usize| {
+        let (lo, hi) = xy.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[c]), b.max(p[c])));
+        if lo < hi { (lo, hi) } else { (lo - 0.5, lo + 0.5) }
+    };
+    let ((x0, x1), (y0, y1)) = (span(0), span(1));
+    // the square of a node: a share of the patch's size per node along each axis
+    let side = (((x1 - x0) * (y1 - y0)) / xy.len().max(1) as f64).sqrt().max(1e-12);
+    let (x0, x1, y0, y1) = (x0 - 0.5 * side, x1 + 0.5 * side, y0 - 0.5 * side, y1 + 0.5 * side);
+    let mut counts = [0usize; 5];
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1100, 820)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let (left, legend) = root.split_horizontally(800);
+        let panels = left.split_evenly((2, 2));
+        for (panel, (_, t, recs)) in panels.iter().zip(&picks) {
+            let mut chart = ChartBuilder::on(panel)
+                .caption(format!("Γ3 at t = {}", plots::tick_label(*t, 0.0, *t)), ("sans-serif", 16))
+                .margin(8)
+                .x_label_area_size(30)
+                .y_label_area_size(50)
+                .build_cartesian_2d(x0..x1, y0..y1)
+                .map_err(|e| e.to_string())?;
+            chart
+                .configure_mesh()
+                .disable_mesh()
+                .x_desc("along τ1")
+                .y_desc("along τ2")
+                .x_label_formatter(&|v| plots::tick_label(*v, x0, x1))
+                .y_label_formatter(&|v| plots::tick_label(*v, y0, y1))
+                .draw()
+                .map_err(|e| e.to_string())?;
+            let squares = recs.iter().zip(xy).map(|(r, p)| {
+                let cat = Category::of(r);
+                counts[cat as usize] += 1;
+                Rectangle::new([(p[0] - 0.45 * side, p[1] - 0.45 * side), (p[0] + 0.45 * side, p[1] + 0.45 * side)], cat.color().filled())
+            });
+            chart.draw_series(squares.collect::<Vec<_>>()).map_err(|e| e.to_string())?;
+        }
+        draw_status_legend(&legend, &counts, xy.len(), picks.len()).map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}

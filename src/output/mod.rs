@@ -325,7 +325,7 @@ impl Writer {
             save("deformed.svg", contact_charts::deformed(mesh, &p.dofs.expand(&state.u), p.time(state.n)))?;
         }
         let Some(c) = &p.contact else {
-            for stale in ["forces.svg", "contact_status.svg", "normal_stress.svg"] {
+            for stale in ["forces.svg", "contact_status.svg", "normal_stress.svg", "status_fractions.svg"] {
                 let _ = std::fs::remove_file(self.dir.join("plots").join(stale));
             }
             return Ok(());
@@ -333,7 +333,21 @@ impl Writer {
         let p_g = contact_charts::p_at_bound(c);
         let gamma3: f64 = c.omega.iter().sum();
         save("forces.svg", contact_charts::forces(&self.rows, p_g.map(|q| q * gamma3)))?;
-        let Some(mesh) = p.mesh.plane() else { return Ok(()) };
+        save("status_fractions.svg", contact_charts::status_fractions(&self.contact_frames))?;
+        let Some(mesh) = p.mesh.plane() else {
+            // 3-D: maps of Γ3 in the tangent plane of its first node
+            let f0 = c.frames.first().copied().unwrap_or(crate::model::contact::Frame::spatial([0.0, 0.0, 1.0]));
+            let xy: Vec<[f64; 2]> = c
+                .nodes
+                .iter()
+                .map(|&v| {
+                    let x = p.mesh.point(v);
+                    let dot = |e: [f64; 3]| x[0] * e[0] + x[1] * e[1] + x[2] * e[2];
+                    [dot(f0.tangents[0]), dot(f0.tangents[1])]
+                })
+                .collect();
+            return save("contact_status.svg", contact_charts::status_maps(&self.contact_frames, &xy));
+        };
         let along = contact_charts::Along::of(mesh, c, &p.model.contact_sides);
         save("contact_status.svg", contact_charts::contact_status(&self.contact_frames, &along))?;
         save("normal_stress.svg", contact_charts::normal_stress(&self.contact_frames, &along, p_g))
