@@ -7,7 +7,8 @@
 //! discrete-gradient force q_i = DP(d_i^n, d_i^{n+1}) (penalty included for P_ε), let
 //!   R(z) = ⟨M(w − v^n)/k + C v̄ + K u^{n+½} + Σ_i ω_i q_i ν_i − f^{n+½}, z⟩.
 //! The margin is R(z) + Σ_i ω_i p_τ(û_i) ψ⁰(v̄_τ,i; z_τ,i), with the Clarke derivative
-//! ψ⁰(ξ; η) = μ(|ξ|) sgn(ξ) η for ξ ≠ 0 and μ(0)|η| for ξ = 0.
+//! ψ⁰(ξ; η) = μ(|ξ|) sgn(ξ) η for ξ ≠ 0 and μ(0)|η| for ξ = 0 (in 3-D, in the tangent plane:
+//! μ(‖ξ‖) ξ·η/‖ξ‖ and μ(0)‖η‖).
 
 use crate::linalg;
 use crate::simulation::Simulation;
@@ -23,6 +24,12 @@ pub struct StepPair<'a> {
 /// (zero to the solver's tolerance: a stuck node's v̄ is ~1e-17, not 0) takes the ξ = 0 branch.
 fn psi0(mu: &crate::model::laws::FrictionCoefficient, xi: f64, eta: f64, zero: f64) -> f64 {
     if xi.abs() > zero { mu.mu(xi.abs()) * xi.signum() * eta } else { mu.mu(0.0) * eta.abs() }
+}
+
+/// ψ⁰(ξ; η) in the tangent plane (3-D): μ(‖ξ‖) ξ·η/‖ξ‖ for ‖ξ‖ > `zero`, μ(0)‖η‖ otherwise.
+fn psi0_plane(mu: &crate::model::laws::FrictionCoefficient, xi: [f64; 2], eta: [f64; 2], zero: f64) -> f64 {
+    let n = xi[0].hypot(xi[1]);
+    if n > zero { mu.mu(n) * (xi[0] * eta[0] + xi[1] * eta[1]) / n } else { mu.mu(0.0) * eta[0].hypot(eta[1]) }
 }
 
 /// The margin R(z) + Σ ω p_τ ψ⁰(v̄; z_τ) and a scale to judge it against
@@ -58,7 +65,12 @@ fn margin(pair: &StepPair, z: &[f64]) -> (f64, f64) {
             if let Some(mu) = &c.friction {
                 let vn0 = c.components(i, v0).0;
                 let p_hat = c.p_tau.p_tau(d0[i] + sim.kinematics.p_d * vn0);
-                let fr = c.omega[i] * p_hat * psi0(mu, c.components(i, &vbar).1, zt, zero);
+                let psi = if c.dim == 2 {
+                    psi0(mu, c.components(i, &vbar).1, zt, zero)
+                } else {
+                    psi0_plane(mu, c.tangential(i, &vbar), c.tangential(i, z), zero)
+                };
+                let fr = c.omega[i] * p_hat * psi;
                 total += fr;
                 scale += fr.abs();
             }
