@@ -33,10 +33,12 @@ const OPERATORS: f64 = 5.0;
 pub struct Estimate {
     pub nodes: usize,
     pub triangles: usize,
-    /// velocity unknowns (2 per node, before the clamped ones are removed)
+    /// velocity unknowns (d per node, before the clamped ones are removed)
     pub unknowns: usize,
     /// contact nodes (at most)
     pub contact_nodes: usize,
+    /// the space dimension d (unknowns per node and per contact node)
+    pub dim: usize,
     pub mesh_bytes: f64,
     pub operator_bytes: f64,
     pub factor_bytes: f64,
@@ -54,7 +56,7 @@ impl Estimate {
     /// factor is reused while the contact sets do not change, and the sparse form costs less).
     pub fn flops_per_step(&self) -> (f64, f64) {
         let factor_entries = self.factor_bytes / SPARSE_ENTRY;
-        let m = 2.0 * self.contact_nodes as f64;
+        let m = (self.dim * self.contact_nodes) as f64;
         (2.0 * 2.0 * 2.0 * factor_entries, m * m * m / 3.0)
     }
 
@@ -74,7 +76,7 @@ impl Estimate {
                 "cost per step  : {:.2e} flop in the free and recovery solves; at most {:.2e} flop per Newton iteration of the contact solve (dense Cholesky on {} unknowns; reused while the contact sets hold, less with the sparse form)",
                 solve,
                 lu,
-                2 * self.contact_nodes
+                self.dim * self.contact_nodes
             ),
         ]
     }
@@ -128,6 +130,7 @@ pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
         triangles,
         unknowns: model.dim * nodes,
         contact_nodes,
+        dim: model.dim,
         // coordinates, triangles, and the state vectors (u, v, loads, work: ~8 per unknown)
         mesh_bytes: 16.0 * nodes as f64 + 24.0 * triangles as f64 + 8.0 * 8.0 * n,
         operator_bytes: OPERATORS * row_entries * n * SPARSE_ENTRY,

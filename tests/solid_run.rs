@@ -524,3 +524,45 @@ fn outputs_3d_have_the_contract_columns_and_charts() {
         assert!(!out.join("plots").join(absent).exists(), "{absent} is a 2-D chart");
     }
 }
+
+/// (B.4) Hertz in 3-D (fixtures/scenes/hertz3d.toml): a rigid sphere (R = 10) pressed into the
+/// block with P = 75. At the end the total contact force equals P (0.1%: equilibrium), the
+/// contact radius is within one cell of a = (3PR/(4E*))^{1/3} = 0.800 (the farthest node in
+/// contact at distance r ≤ a, the next ring beyond: r ≥ a − h), and the nodal pressure q + λ is
+/// within 5% of p0 of p0 sqrt(1 − r²/a²) at every contact node — the 2-D test's bound: the finite
+/// depth (2.5 a) and h = a/4.8 (measured 4.9%, 0.8% at the centre).
+#[test]
+fn b4_3d_hertz_sphere_matches_closed_form() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes");
+    let p = Problem::from_scene(&Scene::from_file(&dir.join("hertz3d.toml")).expect("fixture"), &dir).expect("problem");
+    let c = p.contact.as_ref().expect("contact");
+    let mut sim = Simulation::new(&p).expect("setup");
+    let mut last = None;
+    for rec in sim.steps() {
+        last = Some(rec.expect("step"));
+    }
+    let last = last.expect("records");
+    let (load, radius, h) = (75.0, 10.0, 4.0 / 24.0);
+    let e_star = 1000.0 / (1.0 - 0.3f64 * 0.3);
+    let a = (3.0 * load * radius / (4.0 * e_star)).cbrt();
+    let p0 = 3.0 * load / (2.0 * std::f64::consts::PI * a * a);
+    let (mut worst, mut radius_h): (f64, f64) = (0.0, 0.0);
+    for (i, n) in last.nodes.iter().enumerate() {
+        let x = p.mesh.point(c.nodes[i]);
+        let r = (x[0] - 2.0).hypot(x[1] - 2.0);
+        let exact = p0 * (1.0 - (r / a).powi(2)).max(0.0).sqrt();
+        worst = worst.max((n.p + n.lambda - exact).abs());
+        if n.p + n.lambda > 0.0 {
+            radius_h = radius_h.max(r);
+        }
+    }
+    println!(
+        "B.4 in 3-D: total force {:.5} (P = {load}), contact radius {radius_h:.4} (a = {a:.4}, h = {h:.4}), worst |p_h − p| = {worst:.4} ({:.2}% of p0 = {p0:.3})",
+        last.normal_force,
+        100.0 * worst / p0
+    );
+    dyncontact_measured("b4_3d_hertz_sphere_matches_closed_form", "pressure error / p0", worst / p0, "≤ 5e-2");
+    assert!((last.normal_force / load - 1.0).abs() <= 1e-3, "total force {}", last.normal_force);
+    assert!(radius_h <= a && radius_h >= a - h, "contact radius {radius_h} vs a = {a}");
+    assert!(worst <= 0.05 * p0, "pressure off by {worst:.4} ({:.2}% of p0)", 100.0 * worst / p0);
+}
