@@ -42,8 +42,9 @@ impl Problem {
     }
 
     /// Build from a validated model; `scene_dir` resolves a relative Gmsh path.
-    pub fn new(model: Model, scene_dir: &Path) -> Result<Problem> {
+    pub fn new(mut model: Model, scene_dir: &Path) -> Result<Problem> {
         let mesh = build_mesh(&model.domain, scene_dir)?;
+        match_dimension(&mut model, &mesh)?;
         check_sides(&model, &mesh)?;
         let material = Material::new(&model.material, model.plane);
         let clamped = mesh.nodes_on(&model.dirichlet)?;
@@ -75,6 +76,36 @@ impl Problem {
     pub fn time(&self, n: usize) -> f64 {
         n as f64 * self.k
     }
+}
+
+/// A Gmsh mesh decides the dimension: a scene whose vectors are all zero (or absent) takes the
+/// mesh's, one that gives d-component vectors must match it.
+fn match_dimension(model: &mut Model, mesh: &Geometry) -> Result<()> {
+    let d = mesh.dim();
+    if model.dim == d {
+        return Ok(());
+    }
+    let l = &model.loads;
+    let all_zero = l.body.is_zero()
+        && l.contact_surface.as_ref().is_none_or(VecExpr::is_zero)
+        && l.traction.iter().all(|t| t.value.is_zero())
+        && model.initial.displacement.is_zero()
+        && model.initial.velocity.is_zero();
+    if !all_zero {
+        return Err(Error::scene(
+            "domain.file",
+            format!("the mesh is {d}-D ({} {}) but the scene's vectors (loads, initial data) have {} components", mesh.n_cells(), if d == 3 { "tetrahedra" } else { "triangles" }, model.dim),
+        ));
+    }
+    model.dim = d;
+    model.loads.body = VecExpr::zero(d);
+    model.loads.contact_surface = None;
+    for t in &mut model.loads.traction {
+        t.value = VecExpr::zero(d);
+    }
+    model.initial.displacement = VecExpr::zero(d);
+    model.initial.velocity = VecExpr::zero(d);
+    Ok(())
 }
 
 /// Every side the model names exists on the mesh.
@@ -164,7 +195,7 @@ fn build_mesh(domain: &Domain, scene_dir: &Path) -> Result<Geometry> {
             if !path.exists() {
                 return Err(Error::scene("domain.file", format!("mesh file {:?} does not exist", path.display().to_string())));
             }
-            Geometry::Plane(mesh::gmsh::read(&path)?)
+            mesh::gmsh::read_any(&path)?
         }
     };
     mesh.check()?;

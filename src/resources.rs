@@ -112,9 +112,23 @@ pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
             if !path.exists() {
                 return Err(Error::scene("domain.file", format!("mesh file {:?} does not exist", path.display().to_string())));
             }
-            let mesh = mesh::gmsh::read(&path)?;
-            let on_contact: usize = model.contact_sides.iter().filter_map(|s| mesh.side(s)).map(|s| s.edges.len() + 1).sum();
-            (mesh.nodes.len(), mesh.triangles.len(), on_contact)
+            match mesh::gmsh::read_any(&path)? {
+                mesh::Geometry::Plane(mesh) => {
+                    let on_contact: usize = model.contact_sides.iter().filter_map(|s| mesh.side(s)).map(|s| s.edges.len() + 1).sum();
+                    (mesh.nodes.len(), mesh.triangles.len(), on_contact)
+                }
+                mesh::Geometry::Solid(mesh) => {
+                    // a surface's nodes: at most its faces' vertices (each face adds ≤ 1 node on a
+                    // triangulated surface, plus the boundary)
+                    let on_contact: usize = model
+                        .contact_sides
+                        .iter()
+                        .filter_map(|s| mesh.side(s))
+                        .map(|s| s.faces.iter().flatten().collect::<std::collections::HashSet<_>>().len())
+                        .sum();
+                    (mesh.nodes.len(), mesh.tets.len(), on_contact)
+                }
+            }
         }
     };
     let d = model.dim as f64;

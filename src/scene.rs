@@ -450,11 +450,23 @@ impl Scene {
         w
     }
 
-    /// The space dimension of the domain: 3 for a box, 2 otherwise.
+    /// The space dimension of the domain: 3 for a box, 2 for a rectangle; for a Gmsh mesh (whose
+    /// dimension is the file's) the number of components of the vectors the scene gives, 2 when
+    /// it gives none (`Problem::new` checks it against the mesh).
     pub fn dim(&self) -> usize {
         match self.domain.kind {
             DomainKind::Box => 3,
-            DomainKind::Rectangle | DomainKind::Gmsh => 2,
+            DomainKind::Rectangle => 2,
+            DomainKind::Gmsh => {
+                let (l, i) = (&self.loads, &self.initial);
+                [l.body.as_ref(), l.contact_surface.as_ref(), i.displacement.as_ref(), i.velocity.as_ref()]
+                    .into_iter()
+                    .flatten()
+                    .chain(l.traction.iter().map(|t| &t.value))
+                    .map(|v| v.len())
+                    .next()
+                    .unwrap_or(2)
+            }
         }
     }
 

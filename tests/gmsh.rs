@@ -310,7 +310,8 @@ fn malformed_meshes_are_rejected_with_clear_messages() {
         ("quad element", with_tri(&["9 3 0 1 2 3 4"]), "element 9 is a quadrangle"),
         ("2nd-order triangle", with_tri(&["9 9 0 1 2 3 4 5 1"]), "element 9 is second order (type 9)"),
         ("2nd-order line", with_tri(&["9 8 1 1 1 2 5"]), "Mesh.ElementOrder = 1"),
-        ("3-D element", with_tri(&["9 4 0 1 2 3 5"]), "element 9 is a 3-D element"),
+        ("hexahedron", with_tri(&["9 5 0 1 2 3 4 5 1 2 3"]), "element 9 is a 3-D element of type 5 (hexahedron, prism or pyramid)"),
+        ("a flat tetrahedron among triangles", with_tri(&["9 4 0 1 2 3 5"]), "tetrahedron 0 (nodes [0, 1, 2, 4]) has zero (degenerate) volume"),
         ("unknown element type", with_tri(&["9 16 0 1 2 3 4 1 2 3 4"]), "element 9 has type 16"),
         ("too few nodes", with_tri(&["9 2 0 1 2"]), "element 9 lists 2 nodes, type 2 needs 3"),
         (

@@ -1,21 +1,31 @@
-//! Reader for Gmsh ASCII meshes, format 2.2 and 4.1: 3-node triangles (type 2) make the
-//! domain, 2-node lines (type 1) in physical curves make the named sides, points (type 15)
-//! are ignored. Why hand-written: see the README's design notes (the maintained crate reads
-//! 4.1 only).
+//! Reader for Gmsh ASCII meshes, format 2.2 and 4.1. In 2-D, 3-node triangles (type 2) make
+//! the domain and 2-node lines (type 1) in physical curves make the named sides; in 3-D (a file
+//! with 4-node tetrahedra, type 4) the tetrahedra make the domain and the triangles in physical
+//! surfaces the named sides (lines are then ignored). Points (type 15) are ignored. Why
+//! hand-written: see the README's design notes (the maintained crate reads 4.1 only).
 
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::{Mesh, Side};
+use super::solid::{SolidMesh, Surface};
+use super::{Geometry, Mesh, Side};
 use crate::error::{Error, Result};
 
-/// Read a `.msh` file.
+/// Read a 2-D `.msh` file (triangles); a file with tetrahedra is an error here (see [`read_any`]).
 pub fn read(path: &Path) -> Result<Mesh> {
+    match read_any(path)? {
+        Geometry::Plane(m) => Ok(m),
+        Geometry::Solid(m) => Err(Error::mesh(&m.source, "holds tetrahedra (a 3-D mesh) where a 2-D mesh of triangles is expected")),
+    }
+}
+
+/// Read a `.msh` file of either dimension: tetrahedra make a 3-D mesh, else triangles a 2-D one.
+pub fn read_any(path: &Path) -> Result<Geometry> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     // A binary .msh is not UTF-8; decode lossily so that its ASCII header is still read and
     // the "binary files are not supported" message is given instead of an encoding error.
     let text = String::from_utf8_lossy(&bytes);
-    parse(&text, &path.display().to_string())
+    parse_any(&text, &path.display().to_string())
 }
 
 struct Cursor<'a> {
@@ -68,14 +78,23 @@ struct Raw {
     version: String,
     names: HashMap<(i64, i64), String>,        // (dim, physical tag) -> name
     entity_phys: HashMap<(i64, i64), Vec<i64>>, // (dim, entity tag) -> physical tags (4.1)
-    nodes: HashMap<i64, [f64; 2]>,
+    nodes: HashMap<i64, [f64; 3]>,
     node_order: Vec<i64>,
-    triangles: Vec<(i64, [i64; 3])>,          // element tag, node tags
+    triangles: Vec<(i64, Vec<i64>, [i64; 3])>, // element tag, physical tags, node tags
     lines: Vec<(i64, Vec<i64>, [i64; 2])>,    // element tag, physical tags, node tags
+    tets: Vec<(i64, [i64; 4])>,               // element tag, node tags
 }
 
-/// Parse the text of a `.msh` file; `file` names it in messages.
+/// Parse the text of a 2-D `.msh` file; `file` names it in messages.
 pub fn parse(text: &str, file: &str) -> Result<Mesh> {
+    match parse_any(text, file)? {
+        Geometry::Plane(m) => Ok(m),
+        Geometry::Solid(_) => Err(Error::mesh(file, "holds tetrahedra (a 3-D mesh) where a 2-D mesh of triangles is expected")),
+    }
+}
+
+/// Parse the text of a `.msh` file of either dimension; `file` names it in messages.
+pub fn parse_any(text: &str, file: &str) -> Result<Geometry> {
     let lines: Vec<(usize, &str)> =
         text.lines().enumerate().map(|(i, l)| (i + 1, l)).filter(|(_, l)| !l.trim().is_empty()).collect();
     let mut c = Cursor { lines, pos: 0, file, section: String::new() };
@@ -151,7 +170,7 @@ pub fn parse(text: &str, file: &str) -> Result<Mesh> {
     if raw.version.is_empty() {
         return Err(Error::mesh(file, "no $MeshFormat section: is this a Gmsh .msh file?"));
     }
-    build(raw, file)
+    if raw.tets.is_empty() { build(raw, file).map(Geometry::Plane) } else { build_solid(raw, file).map(Geometry::Solid) }
 }
 
 fn read_entities(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
@@ -186,13 +205,13 @@ fn read_nodes_22(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
         if w.len() < 3 {
             return Err(c.err("a node line needs: tag x y [z]"));
         }
-        insert_node(c, raw, w[0] as i64, [w[1], w[2]])?;
+        insert_node(c, raw, w[0] as i64, [w[1], w[2], w.get(3).copied().unwrap_or(0.0)])?;
     }
     c.expect("$EndNodes")
 }
 
-fn insert_node(c: &Cursor, raw: &mut Raw, tag: i64, x: [f64; 2]) -> Result<()> {
-    if !(x[0].is_finite() && x[1].is_finite()) {
+fn insert_node(c: &Cursor, raw: &mut Raw, tag: i64, x: [f64; 3]) -> Result<()> {
+    if !x.iter().all(|v| v.is_finite()) {
         return Err(c.err(format!("node {tag} has non-finite coordinates")));
     }
     if raw.nodes.insert(tag, x).is_some() {
@@ -239,7 +258,7 @@ fn read_nodes_41(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
             if w.len() < 3 {
                 return Err(c.err(format!("node {tag}: coordinates need x y z")));
             }
-            insert_node(c, raw, tag, [w[0], w[1]])?;
+            insert_node(c, raw, tag, [w[0], w[1], w[2]])?;
         }
     }
     c.expect("$EndNodes")
@@ -251,18 +270,24 @@ fn push_element(c: &Cursor, raw: &mut Raw, tag: i64, etype: i64, phys: Vec<i64>,
     let need = match etype {
         1 => 2,
         2 => 3,
+        4 => 4,
         15 => 1,
         3 => return Err(c.err(format!("element {tag} is a quadrangle; dyncontact needs triangles (P1): mesh with triangles only"))),
-        8 | 9 => return Err(c.err(format!("element {tag} is second order (type {etype}); dyncontact uses P1: set Mesh.ElementOrder = 1"))),
-        4..=7 => return Err(c.err(format!("element {tag} is a 3-D element (type {etype}); dyncontact is 2-D"))),
-        _ => return Err(c.err(format!("element {tag} has type {etype}, which is not supported (only lines 1, triangles 2, points 15)"))),
+        8..=11 => return Err(c.err(format!("element {tag} is second order (type {etype}); dyncontact uses P1: set Mesh.ElementOrder = 1"))),
+        5..=7 => {
+            return Err(c.err(format!(
+                "element {tag} is a 3-D element of type {etype} (hexahedron, prism or pyramid); dyncontact needs tetrahedra (type 4): mesh the volume with tetrahedra only"
+            )))
+        }
+        _ => return Err(c.err(format!("element {tag} has type {etype}, which is not supported (lines 1, triangles 2, tetrahedra 4, points 15)"))),
     };
     if nodes.len() < need {
         return Err(c.err(format!("element {tag} lists {} nodes, type {etype} needs {need}", nodes.len())));
     }
     match etype {
         1 => raw.lines.push((tag, phys, [nodes[0], nodes[1]])),
-        2 => raw.triangles.push((tag, [nodes[0], nodes[1], nodes[2]])),
+        2 => raw.triangles.push((tag, phys, [nodes[0], nodes[1], nodes[2]])),
+        4 => raw.tets.push((tag, [nodes[0], nodes[1], nodes[2], nodes[3]])),
         _ => {}
     }
     Ok(())
@@ -317,14 +342,15 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
     let mut nodes = Vec::with_capacity(raw.node_order.len());
     for tag in &raw.node_order {
         index.insert(*tag, nodes.len());
-        nodes.push(raw.nodes[tag]);
+        let x = raw.nodes[tag];
+        nodes.push([x[0], x[1]]);
     }
     let lookup = |t: i64, what: &str| {
         index.get(&t).copied().ok_or_else(|| Error::mesh(file, format!("{what} refers to node {t}, which is not in $Nodes")))
     };
     let mut triangles = Vec::with_capacity(raw.triangles.len());
     let mut tags = Vec::with_capacity(raw.triangles.len());
-    for (tag, t) in &raw.triangles {
+    for (tag, _, t) in &raw.triangles {
         let what = format!("triangle {tag}");
         triangles.push([lookup(t[0], &what)?, lookup(t[1], &what)?, lookup(t[2], &what)?]);
         tags.push(*tag);
@@ -350,6 +376,48 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
     check_duplicates(&mesh, &raw.node_order, file)?;
     check_unreferenced(&mesh, &raw.node_order, file)?;
     check_side_edges(&mesh, &side_lines, file)?;
+    mesh.check()?;
+    Ok(mesh)
+}
+
+/// The 3-D mesh of a file with tetrahedra: nodes in file order, each tetrahedron oriented
+/// positively (Gmsh's orientation is kept when positive, two vertices swapped otherwise), one
+/// side per physical surface (dim 2; named by $PhysicalNames or by the tag) made of its
+/// triangles. The structural checks are `SolidMesh::check`'s (degenerate tetrahedra, unused
+/// nodes, side faces on the boundary).
+fn build_solid(raw: Raw, file: &str) -> Result<SolidMesh> {
+    let mut index: HashMap<i64, usize> = HashMap::new();
+    let mut nodes = Vec::with_capacity(raw.node_order.len());
+    for tag in &raw.node_order {
+        index.insert(*tag, nodes.len());
+        nodes.push(raw.nodes[tag]);
+    }
+    let lookup = |t: i64, what: &str| {
+        index.get(&t).copied().ok_or_else(|| Error::mesh(file, format!("{what} refers to node {t}, which is not in $Nodes")))
+    };
+    let mut tets = Vec::with_capacity(raw.tets.len());
+    for (tag, t) in &raw.tets {
+        let what = format!("tetrahedron {tag}");
+        tets.push([lookup(t[0], &what)?, lookup(t[1], &what)?, lookup(t[2], &what)?, lookup(t[3], &what)?]);
+    }
+    let mut sides: Vec<Surface> = Vec::new();
+    for (tag, phys, t) in &raw.triangles {
+        let what = format!("triangle {tag}");
+        let face = [lookup(t[0], &what)?, lookup(t[1], &what)?, lookup(t[2], &what)?];
+        for p in phys {
+            let name = raw.names.get(&(2, *p)).cloned().unwrap_or_else(|| p.to_string());
+            match sides.iter_mut().find(|s| s.name == name) {
+                Some(s) => s.faces.push(face),
+                None => sides.push(Surface { name, faces: vec![face] }),
+            }
+        }
+    }
+    let mut mesh = SolidMesh { nodes, tets, sides, source: file.to_string() };
+    for t in 0..mesh.tets.len() {
+        if mesh.signed_volume(t) < 0.0 {
+            mesh.tets[t].swap(2, 3);
+        }
+    }
     mesh.check()?;
     Ok(mesh)
 }

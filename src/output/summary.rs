@@ -140,7 +140,7 @@ impl ModelInfo {
             Some(FrictionCoefficient::Table(pts)) => format!("table with {} points: fixed point on S (F.1)", pts.len()),
         };
         if c.friction.is_some() {
-            self.friction_unknowns = c.n();
+            self.friction_unknowns = c.n() * (c.dim - 1);
             let at = match cs.friction_bound_at {
                 BoundAt::Predictor => "r at the predictor u_ν^n + (k/2) v_ν^n",
                 BoundAt::Midpoint => "r = u_ν^{n+½} of the iterate, updated in the fixed point",

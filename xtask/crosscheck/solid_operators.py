@@ -1,6 +1,6 @@
 """scikit-fem reference operators of a 3-D box for dyncontact's tetrahedra (issue 14).
 
-usage: python solid_operators.py OUT_PREFIX
+usage: python solid_operators.py OUT_PREFIX [MESH.msh]
 
 Builds the box [0, 1] x [0, 0.5] x [0, 0.5] with 4 x 2 x 2 cells, each cut into the six
 tetrahedra sharing its main diagonal (the Kuhn subdivision: one tetrahedron per order of the
@@ -11,7 +11,8 @@ OUT_PREFIX_{consistent,lumped}_M.mtx, OUT_PREFIX_K.mtx, OUT_PREFIX_C.mtx in the 
 order 3*node + component (Matrix Market, shortest round-trip floats). tests/solid.rs compares
 dyncontact's assembly entry by entry (1e-12 relative: every integrand is a polynomial the
 quadrature integrates exactly, so the two differ by a few ulp). The subdivision is written here
-independently of src/mesh/solid.rs: a different set of tetrahedra changes K.
+independently of src/mesh/solid.rs: a different set of tetrahedra changes K. With MESH.msh the
+same operators of that (unstructured) Gmsh mesh, read by meshio in the file's node order.
 """
 import itertools
 import sys
@@ -49,10 +50,19 @@ def kuhn_box(size, cells):
 
 def main():
     prefix = sys.argv[1]
-    p, t = kuhn_box(SIZE, CELLS)
+    if len(sys.argv) > 2:
+        # an unstructured Gmsh mesh, read with meshio in the file's node order (dyncontact's too)
+        import meshio
+        m = meshio.read(sys.argv[2])
+        p, t = m.points.T, m.cells_dict["tetra"].T.astype(np.int64)
+        what = f"Gmsh mesh {Path(sys.argv[2]).name}"
+    else:
+        p, t = kuhn_box(SIZE, CELLS)
+        what = f"box {SIZE} with {CELLS} cells, Kuhn subdivision"
     mesh = MeshTet(np.ascontiguousarray(p), np.ascontiguousarray(t))
     vol = float(np.sum(Basis(mesh, ElementTetP1()).dx))
-    assert abs(vol - np.prod(SIZE)) <= 1e-14, vol
+    if len(sys.argv) <= 2:
+        assert abs(vol - np.prod(SIZE)) <= 1e-14, vol
     n = p.shape[1]
     basis = Basis(mesh, ElementVector(ElementTetP1()), intorder=2)
     perm = np.empty(3 * n, dtype=np.int64)
@@ -75,7 +85,7 @@ def main():
         "C": asm(linear_elasticity(THETA, ZETA), basis),
     }
     header = [f"scikit-fem {skfem.__version__} reference for dyncontact (xtask crosscheck, solid_operators.py)",
-              f"box {SIZE} with {CELLS} cells, Kuhn subdivision; E {YOUNG}, nu {POISSON}, theta {THETA}, zeta {ZETA}, rho {RHO}",
+              f"{what}; E {YOUNG}, nu {POISSON}, theta {THETA}, zeta {ZETA}, rho {RHO}",
               "DOF 3*node + component, all nodes"]
     for name, a in out.items():
         write_mtx(f"{prefix}_{name}.mtx", interleave(a), header)

@@ -11,8 +11,9 @@
 //!    compares entry by entry (relative tolerance 1e-12; the reasoning is in the script). The
 //!    scikit-fem operators are saved under `fixtures/reference/<scene>_{M,K,C}.mtx`,
 //!    `<scene>_f.txt` for Rust tests that run without Python;
-//! 3. `solid_operators.py` assembles M, K, C of a 3-D box of tetrahedra with scikit-fem into
-//!    `fixtures/reference/box3d_*.mtx` (tests/crosscheck.rs compares dyncontact's assembly);
+//! 3. `solid_operators.py` assembles M, K, C of a 3-D box of tetrahedra and of the unstructured
+//!    Gmsh mesh fixtures/meshes/holed_block.msh with scikit-fem into
+//!    `fixtures/reference/{box3d,holed_block}_*.mtx` (tests/crosscheck.rs compares dyncontact's);
 //! 4. short `dyncontact run`s of [`RUN_SCENES`] (2-D and 3-D), whose `series.pvd` and frames
 //!    `check_frames.py` reads with meshio.
 //!
@@ -79,6 +80,11 @@ pub fn run(root: &Path) -> Result<String, String> {
     let result = spawn(python_cmd(&python, root).current_dir(&scripts).arg("solid_operators.py").arg(reference.join("box3d")));
     let _ = writeln!(report, "  3-D box operators with scikit-fem ({:.1} s)", t.elapsed().as_secs_f64());
     record(&mut report, &mut failures, "3-D box operators", result);
+    let t = Instant::now();
+    let msh = root.join("fixtures").join("meshes").join("holed_block.msh");
+    let result = spawn(python_cmd(&python, root).current_dir(&scripts).arg("solid_operators.py").arg(reference.join("holed_block")).arg(&msh));
+    let _ = writeln!(report, "  3-D Gmsh mesh operators with scikit-fem ({:.1} s)", t.elapsed().as_secs_f64());
+    record(&mut report, &mut failures, "3-D Gmsh mesh operators", result);
 
     for run_scene in RUN_SCENES {
         let t = Instant::now();
