@@ -74,17 +74,38 @@ fn p1_p2_p4_operators_match_scikit_fem() {
     }
 }
 
+/// M (consistent and lumped), K and C of a tetrahedral mesh (E = 1000, ν = 0.3, θ = 2, ζ = 1.5,
+/// ρ = 1.3) against scikit-fem's `<prefix>_{consistent_M,lumped_M,K,C}.mtx`, each to 1e-12
+/// relative; `test` names the measurements.
+fn solid_operators_match(mesh: &dyncontact::mesh::solid::SolidMesh, prefix: &str, test: &str) {
+    use dyncontact::fem::assemble::assemble_solid;
+    use dyncontact::model::material::Material;
+    use dyncontact::model::MaterialParams;
+    use dyncontact::scene::{MassKind, Plane};
+    let mat = Material::new(&MaterialParams { density: 1.3, young: 1000.0, poisson: 0.3, theta: 2.0, zeta: 1.5 }, Plane::Strain);
+    let n = 3 * mesh.nodes.len();
+    let mut report = Vec::new();
+    for (mass, label) in [(MassKind::Consistent, "consistent"), (MassKind::Lumped, "lumped")] {
+        let (m, k, c) = assemble_solid(mesh, &mat, mass).expect("assembly");
+        for (name, ours) in [(format!("{label}_M"), &m), ("K".to_string(), &k), ("C".to_string(), &c)] {
+            let (size, theirs) = read_mtx(&format!("{prefix}_{name}.mtx"));
+            assert_eq!(size, n, "{name}: size");
+            let d = rel_diff(ours, &theirs);
+            report.push(format!("{name} {d:.2e}"));
+            common::measured(test, &format!("{name} relative difference"), d, "≤ 1e-12");
+            assert!(d <= 1e-12, "{prefix}: {name} differs from scikit-fem by {d:.3e}");
+        }
+    }
+    println!("{prefix}: {}", report.join(", "));
+}
+
 /// (P.1) (P.2) in three dimensions on an unstructured Gmsh mesh (fixtures/meshes/holed_block.msh:
 /// a block with a cylindrical hole, 329 nodes, 1,016 tetrahedra, read by our reader in 4.1 and
 /// 2.2 — the same mesh both ways): M, K, C equal scikit-fem's (the mesh read by meshio) entry by
 /// entry to 1e-12 relative, as on the box.
 #[test]
 fn p1_p2_gmsh_solid_operators_match_scikit_fem() {
-    use dyncontact::fem::assemble::assemble_solid;
     use dyncontact::mesh::gmsh;
-    use dyncontact::model::material::Material;
-    use dyncontact::model::MaterialParams;
-    use dyncontact::scene::{MassKind, Plane};
     let meshes = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/meshes");
     let read = |f: &str| match gmsh::read_any(&meshes.join(f)).expect("the mesh reads") {
         dyncontact::mesh::Geometry::Solid(m) => m,
@@ -98,21 +119,7 @@ fn p1_p2_gmsh_solid_operators_match_scikit_fem() {
     for side in ["left", "right", "front", "back", "bottom", "top", "hole"] {
         assert!(names.contains(&side), "side {side} missing: {names:?}");
     }
-    let mat = Material::new(&MaterialParams { density: 1.3, young: 1000.0, poisson: 0.3, theta: 2.0, zeta: 1.5 }, Plane::Strain);
-    let n = 3 * mesh.nodes.len();
-    let mut report = Vec::new();
-    for (mass, label) in [(MassKind::Consistent, "consistent"), (MassKind::Lumped, "lumped")] {
-        let (m, k, c) = assemble_solid(&mesh, &mat, mass).expect("assembly");
-        for (name, ours) in [(format!("{label}_M"), &m), ("K".to_string(), &k), ("C".to_string(), &c)] {
-            let (size, theirs) = read_mtx(&format!("holed_block_{name}.mtx"));
-            assert_eq!(size, n, "{name}: size");
-            let d = rel_diff(ours, &theirs);
-            report.push(format!("{name} {d:.2e}"));
-            common::measured("p1_p2_gmsh_solid_operators_match_scikit_fem", &format!("{name} relative difference"), d, "≤ 1e-12");
-            assert!(d <= 1e-12, "{name} differs from scikit-fem by {d:.3e}");
-        }
-    }
-    println!("holed_block: {}", report.join(", "));
+    solid_operators_match(&mesh, "holed_block", "p1_p2_gmsh_solid_operators_match_scikit_fem");
 }
 
 /// (P.1) (P.2) in three dimensions: M (consistent and lumped), K and C of the Kuhn box
@@ -122,25 +129,6 @@ fn p1_p2_gmsh_solid_operators_match_scikit_fem() {
 /// relative: every integrand is integrated exactly, so only round-off separates them.
 #[test]
 fn p1_p2_solid_operators_match_scikit_fem() {
-    use dyncontact::fem::assemble::assemble_solid;
-    use dyncontact::mesh::solid::SolidMesh;
-    use dyncontact::model::material::Material;
-    use dyncontact::model::MaterialParams;
-    use dyncontact::scene::{MassKind, Plane};
-    let mesh = SolidMesh::cuboid([1.0, 0.5, 0.5], [4, 2, 2]);
-    let mat = Material::new(&MaterialParams { density: 1.3, young: 1000.0, poisson: 0.3, theta: 2.0, zeta: 1.5 }, Plane::Strain);
-    let n = 3 * mesh.nodes.len();
-    let mut report = Vec::new();
-    for (mass, label) in [(MassKind::Consistent, "consistent"), (MassKind::Lumped, "lumped")] {
-        let (m, k, c) = assemble_solid(&mesh, &mat, mass).expect("assembly");
-        for (name, ours) in [(format!("{label}_M"), &m), ("K".to_string(), &k), ("C".to_string(), &c)] {
-            let (size, theirs) = read_mtx(&format!("box3d_{name}.mtx"));
-            assert_eq!(size, n, "{name}: size");
-            let d = rel_diff(ours, &theirs);
-            report.push(format!("{name} {d:.2e}"));
-            common::measured("p1_p2_solid_operators_match_scikit_fem", &format!("{name} relative difference"), d, "≤ 1e-12");
-            assert!(d <= 1e-12, "{name} differs from scikit-fem by {d:.3e}");
-        }
-    }
-    println!("box3d: {}", report.join(", "));
+    let mesh = dyncontact::mesh::solid::SolidMesh::cuboid([1.0, 0.5, 0.5], [4, 2, 2]);
+    solid_operators_match(&mesh, "box3d", "p1_p2_solid_operators_match_scikit_fem");
 }

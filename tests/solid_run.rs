@@ -124,6 +124,16 @@ fn orders(e: &[f64]) -> Vec<f64> {
     e.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
 }
 
+/// The observed orders of errors under halving are 2 ± 0.2 (printed and recorded as `what`).
+fn assert_second_order(test: &str, what: &str, errors: &[f64]) {
+    let o = orders(errors);
+    println!("{test}: {what} errors {errors:?}, orders {o:.3?}");
+    for (i, &q) in o.iter().enumerate() {
+        dyncontact_measured(test, &format!("{what} order, level {i}"), q, "2 ± 0.2");
+        assert!((q - 2.0).abs() <= 0.2, "{what} order {q:.3} at level {i} (errors {errors:?})");
+    }
+}
+
 /// (B.5) in 3-D: the L² error at t = 0.5 falls like h² (±0.2) on the Kuhn boxes 4×2×2 → 16×8×8
 /// (k = 1/256: the O(k²) time error stays two decades below the finest space error).
 #[test]
@@ -133,12 +143,7 @@ fn b5_3d_manufactured_l2_order_in_h() {
         let (p, u) = solve(scene(n, 1.0 / 256.0));
         errors.push(l2_error(&p, &u));
     }
-    let o = orders(&errors);
-    println!("3-D manufactured, L² errors {errors:?}, orders {o:.3?}");
-    for (i, &q) in o.iter().enumerate() {
-        dyncontact_measured("b5_3d_manufactured_l2_order_in_h", &format!("L² order, level {i}"), q, "2 ± 0.2");
-        assert!((q - 2.0).abs() <= 0.2, "L² order {q:.3} at level {i} (errors {errors:?})");
-    }
+    assert_second_order("b5_3d_manufactured_l2_order_in_h", "L²", &errors);
 }
 
 /// (S.1)–(S.2) in 3-D: the midpoint rule is second order in k (±0.2) on the 4×2×2 box for
@@ -153,12 +158,7 @@ fn s1_s2_3d_midpoint_second_order_in_k() {
         let d: Vec<f64> = u.iter().zip(&reference).map(|(a, b)| a - b).collect();
         errors.push(linalg::norm_inf(&d));
     }
-    let o = orders(&errors);
-    println!("3-D midpoint, errors {errors:?}, orders {o:.3?}");
-    for (i, &q) in o.iter().enumerate() {
-        dyncontact_measured("s1_s2_3d_midpoint_second_order_in_k", &format!("order in k, level {i}"), q, "2 ± 0.2");
-        assert!((q - 2.0).abs() <= 0.2, "order in k {q:.3} at level {i} (errors {errors:?})");
-    }
+    assert_second_order("s1_s2_3d_midpoint_second_order_in_k", "midpoint in k", &errors);
 }
 
 /// (E.1) in 3-D without contact: on every step of the cantilever3d fixture the defect is
