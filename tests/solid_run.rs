@@ -14,6 +14,8 @@
 //! loads are quadratic, integrated by degree-2 rules: an O(h²) consistency error, the same
 //! order); the midpoint rule is second order in k. Orders are asserted within ±0.2.
 
+mod common;
+
 use std::path::Path;
 
 use dyncontact::fem::assemble::{assemble_solid, restrict};
@@ -129,7 +131,7 @@ fn assert_second_order(test: &str, what: &str, errors: &[f64]) {
     let o = orders(errors);
     println!("{test}: {what} errors {errors:?}, orders {o:.3?}");
     for (i, &q) in o.iter().enumerate() {
-        dyncontact_measured(test, &format!("{what} order, level {i}"), q, "2 ± 0.2");
+        common::measured(test, &format!("{what} order, level {i}"), q, "2 ± 0.2");
         assert!((q - 2.0).abs() <= 0.2, "{what} order {q:.3} at level {i} (errors {errors:?})");
     }
 }
@@ -179,7 +181,7 @@ fn e1_balance_3d_without_contact() {
         last_viscous = rec.energy.viscous_dissipation;
     }
     println!("cantilever3d: worst (E.1) defect {worst:.3e} of the energy scale");
-    dyncontact_measured("e1_balance_3d_without_contact", "worst (E.1) defect / energy scale", worst, "≤ 1e-10");
+    common::measured("e1_balance_3d_without_contact", "worst (E.1) defect / energy scale", worst, "≤ 1e-10");
     assert!(worst <= 1e-10, "(E.1) defect {worst:.3e}");
     // the tip moved down under the top pressure and sideways with the body force
     let u = p.dofs.expand_dim(&sim.state.u);
@@ -211,15 +213,6 @@ fn box_scene_errors_name_the_key() {
     }
 }
 
-fn dyncontact_measured(test: &str, quantity: &str, value: f64, expected: &str) {
-    use std::io::Write;
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).parent().map(|p| p.join("verify")).unwrap_or_default();
-    let _ = std::fs::create_dir_all(&dir);
-    let line = serde_json::json!({"test": test, "quantity": quantity, "value": value, "expected": expected}).to_string();
-    if let Ok(mut f) = std::fs::OpenOptions::new().create(true).append(true).open(dir.join("measurements.jsonl")) {
-        let _ = f.write_all(format!("{line}\n").as_bytes());
-    }
-}
 
 /// (B.1) in 3-D: the column of the column_impact3d fixture (ν = 0, so the 1-D wave solution
 /// holds) presses the wall with the mean force ρ c v0 A = 1e-3 N over [0.1, 1.9] (1%, as for the
@@ -258,8 +251,8 @@ fn b1_3d_column_impact_matches_closed_form() {
         let speed = mean_vx(&sim);
         let deficit = 1.0 - speed / 0.1;
         println!("column impact 3-D {cells}: mean force {mean:.6e} (closed form {expected:e}), release {last_contact}, exit speed {speed:.6}, (E.1) {worst:.2e}");
-        dyncontact_measured("b1_3d_column_impact_matches_closed_form", &format!("{cells}: mean force / ρ c v0 A − 1"), mean / expected - 1.0, "|·| ≤ 1e-2");
-        dyncontact_measured("b1_3d_column_impact_matches_closed_form", &format!("{cells}: exit speed deficit"), deficit, "≤ 2e-2, falling");
+        common::measured("b1_3d_column_impact_matches_closed_form", &format!("{cells}: mean force / ρ c v0 A − 1"), mean / expected - 1.0, "|·| ≤ 1e-2");
+        common::measured("b1_3d_column_impact_matches_closed_form", &format!("{cells}: exit speed deficit"), deficit, "≤ 2e-2, falling");
         assert!((mean / expected - 1.0).abs() <= 1e-2, "mean force {mean:e}");
         let h = 1.0 / if cells.starts_with("[100") { 100.0 } else { 200.0 };
         let kk: f64 = k.parse().expect("k");
@@ -323,8 +316,8 @@ fn b3_3d_block_slides_along_an_oblique_pull() {
     let v = mean_velocity(&sim);
     let (along, across) = (v[0] * e[0] + v[1] * e[1], -v[0] * e[1] + v[1] * e[0]);
     println!("B.3 in 3-D: worst |v_along − v| = {worst:.3e}; at the end along {along:.5}, across {across:.3e}; (E.1) {worst_e1:.2e}");
-    dyncontact_measured("b3_3d_block_slides_along_an_oblique_pull", "sliding velocity error (absolute)", worst, "≤ 4e-3");
-    dyncontact_measured("b3_3d_block_slides_along_an_oblique_pull", "velocity across the pull / speed", across.abs() / along, "≤ 1e-3");
+    common::measured("b3_3d_block_slides_along_an_oblique_pull", "sliding velocity error (absolute)", worst, "≤ 4e-3");
+    common::measured("b3_3d_block_slides_along_an_oblique_pull", "velocity across the pull / speed", across.abs() / along, "≤ 1e-3");
     assert!(worst <= 4e-3, "sliding velocity off the closed form by {worst:.3e}");
     assert!(across.abs() <= 1e-3 * along, "the slip turned away from the pull: across {across:.3e}, along {along:.3e}");
     assert!(worst_e1 <= 1e-10, "(E.1) defect {worst_e1:.3e}");
@@ -427,8 +420,8 @@ fn s6_3d_twins_newton_and_conic_agree() {
         }
         let turn = directions.iter().fold(f64::NEG_INFINITY, |m, d| m.max(*d)) - directions.iter().fold(f64::INFINITY, |m, d| m.min(*d));
         println!("{name}: twins worst velocity {worst_v:.3e}, force {worst_f:.3e}; slip records {slips}, active constraints {actives}, slip direction spans {turn:.2} rad");
-        dyncontact_measured("s6_3d_twins_newton_and_conic_agree", &format!("{name}: velocity difference"), worst_v, "≤ 1e-5");
-        dyncontact_measured("s6_3d_twins_newton_and_conic_agree", &format!("{name}: force difference"), worst_f, "≤ 1e-5");
+        common::measured("s6_3d_twins_newton_and_conic_agree", &format!("{name}: velocity difference"), worst_v, "≤ 1e-5");
+        common::measured("s6_3d_twins_newton_and_conic_agree", &format!("{name}: force difference"), worst_f, "≤ 1e-5");
         assert!(worst_v <= 1e-5 && worst_f <= 1e-5, "{name}: the twins disagree: velocity {worst_v:.3e}, force {worst_f:.3e}");
         match name {
             "turning pull" => assert!(slips > 0 && turn > 1.0, "the pull did not make the slip turn: {slips} slips, span {turn}"),
@@ -486,7 +479,7 @@ step = 1.0e-4
     }
     let mean = sum / count as f64 / area;
     println!("B.2 in 3-D: worst |δ_h − δ| = {worst:.3e} ({:.3}% of g), mean reaction {mean:.5} (ρ c v0 = {:.5}), (E.1) {worst_e1:.2e}", 100.0 * worst / l.g, l.impedance() * l.v0);
-    dyncontact_measured("b2_3d_compliant_layer_penetration_matches_closed_form", "penetration error / g", worst / l.g, "≤ 5e-3");
+    common::measured("b2_3d_compliant_layer_penetration_matches_closed_form", "penetration error / g", worst / l.g, "≤ 5e-3");
     assert!(worst <= 5e-3 * l.g, "penetration off the closed form by {worst:.3e}");
     assert!((mean / (l.impedance() * l.v0) - 1.0).abs() <= 0.01, "mean reaction {mean}");
     assert!(worst_e1 <= 1e-10, "(E.1) defect {worst_e1:.3e}");
@@ -561,7 +554,7 @@ fn b4_3d_hertz_sphere_matches_closed_form() {
         last.normal_force,
         100.0 * worst / p0
     );
-    dyncontact_measured("b4_3d_hertz_sphere_matches_closed_form", "pressure error / p0", worst / p0, "≤ 5e-2");
+    common::measured("b4_3d_hertz_sphere_matches_closed_form", "pressure error / p0", worst / p0, "≤ 5e-2");
     assert!((last.normal_force / load - 1.0).abs() <= 1e-3, "total force {}", last.normal_force);
     assert!(radius_h <= a && radius_h >= a - h, "contact radius {radius_h} vs a = {a}");
     assert!(worst <= 0.05 * p0, "pressure off by {worst:.4} ({:.2}% of p0)", 100.0 * worst / p0);

@@ -5,13 +5,16 @@
 //!   (N.1) F_y = y − y_free + W r(y, λ, t)
 //!   (N.2) F_λ,i = (λ_i − [λ_i + ρ_ν,i (y_ν,i − β_i)]_+) / ρ_ν,i
 //!   (N.3) F_t,i = (t_i − Proj_[−S_i, S_i](t_i + ρ_τ,i v̄_i)) / (ρ_τ,i a_v)
+//!         (in 3-D t_i, v̄_i are tangent-plane vectors and the projection is onto the disk
+//!         ‖t‖ ≤ S_i; ρ_τ,i uses the mean of the node's two tangential diagonal entries of W)
 //! where y_ν ≤ β_i ⟺ d^{n+1} ≤ g, and ρ_ν = r_ν a_d, ρ_τ = r_τ relate to spec/model.md's r_ν, r_τ.
 //! The solution does not depend on ρ (tested); the default ρ_ν,i = 1/(ω_i W_νν,ii) and
 //! ρ_τ,i = 1/(a_v ω_i W_ττ,ii) make the trial values exact for an isolated node.
 //!
 //! The direction: in the symmetric cases (frozen S, monotone normal law) a Cholesky solve on the
 //! force unknowns with the factor reused while the contact sets hold (`reduced_direction`, dense
-//! or sparse as W is); otherwise the full m × m LU (`general_direction`).
+//! or sparse as W is); otherwise the full m × m LU (`general_direction`) — in 3-D whenever a node
+//! slips, since its force then depends on its velocity across the slip (a 2 × 2 block).
 
 use faer::Mat;
 
