@@ -48,6 +48,10 @@ pub struct Checkpoint {
     stick: Vec<bool>,
     energy_scale: u64,
     pub counters: Counters,
+    /// the contact solve's kept factorization (format 3 on): the next Newton systems are solved
+    /// with it, so the resumed run rebuilds it
+    #[serde(default)]
+    pub factor: Option<crate::step::delassus::FactorKey>,
 }
 
 /// FNV-1a 64 of a text, as hex.
@@ -61,10 +65,10 @@ pub fn fingerprint(text: &str) -> String {
 }
 
 impl Checkpoint {
-    pub fn new(scene_hash: String, s: &State, counters: Counters) -> Checkpoint {
+    pub fn new(scene_hash: String, s: &State, counters: Counters, factor: Option<crate::step::delassus::FactorKey>) -> Checkpoint {
         let e = &s.energy;
         Checkpoint {
-            format: 2,
+            format: 3,
             scene_hash,
             step: s.n,
             u: bits(&s.u),
@@ -80,6 +84,7 @@ impl Checkpoint {
             active: s.active.clone(),
             stick: s.stick.clone(),
             counters,
+            factor,
         }
     }
 
@@ -120,7 +125,7 @@ impl Checkpoint {
         let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, e))?;
         let cp: Checkpoint = serde_json::from_str(&text)
             .map_err(|e| Error::Output(format!("{}: not a dyncontact checkpoint ({e})", p.display())))?;
-        if cp.format != 2 {
+        if !(2..=3).contains(&cp.format) {
             return Err(Error::Output(format!("{}: checkpoint format {} is not supported", p.display(), cp.format)));
         }
         Ok(cp)

@@ -60,13 +60,6 @@ impl Problem {
         };
         if let Some(c) = &contact {
             check_initial_admissible(c, &mesh, &u0)?;
-            use crate::model::kinds::InnerSolver;
-            if c.dim == 3 && c.friction.is_some() && model.solver.inner == InnerSolver::NewtonUnfrozen {
-                return Err(Error::scene(
-                    "solver.inner",
-                    "\"newton-unfrozen\" (N.4, Co.3) with friction in three dimensions is not implemented yet: use \"newton\" (the fixed point F.1)",
-                ));
-            }
         }
         let (steps, k) = (model.time.steps, model.time.step);
         Ok(Problem { model, mesh, material, dofs, loads, u0, v0, contact, k, steps })

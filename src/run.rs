@@ -113,6 +113,10 @@ fn new_summary(problem: &Problem, sim: &Simulation, start: Instant) -> Summary {
         contact_solve_sparse: sim.delassus.as_ref().and_then(|w| w.sparse_stats()),
         contact_factorizations: 0,
         contact_factor_reuses: 0,
+        contact_pcg_solves: 0,
+        contact_pcg_iterations: 0,
+        contact_velocity_solves: 0,
+        contact_velocity_iterations: 0,
         newton_iterations_total: 0,
         fixed_point_iterations_total: 0,
         fixed_point_iterations_max: 0,
@@ -145,6 +149,11 @@ fn open_writer(
         )));
     }
     sim.restore(cp.state())?;
+    if let (Some(key), Some(w)) = (&cp.factor, sim.delassus.as_ref()) {
+        sim.delassus_factors.restore(w, key).ok_or_else(|| {
+            Error::Output(format!("{}: the checkpoint's contact factorization does not fit this scene", opts.out.join("checkpoint.json").display()))
+        })?;
+    }
     restore_counters(summary, &cp.counters);
     summary.steps_completed = cp.step;
     summary.final_time = problem.time(cp.step);
@@ -195,14 +204,18 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
             }
         };
         tally(&mut summary, &mut first_cap, &rec);
-        (summary.contact_factorizations, summary.contact_factor_reuses) = steps.simulation().delassus_factors.counts();
+        let counts = steps.simulation().delassus_factors.all_counts();
+        (summary.contact_factorizations, summary.contact_factor_reuses) = (counts.factorizations, counts.reuses);
+        (summary.contact_pcg_solves, summary.contact_pcg_iterations) = (counts.pcg_solves, counts.pcg_iterations);
+        (summary.contact_velocity_solves, summary.contact_velocity_iterations) = (counts.velocity_solves, counts.velocity_iterations);
         let state = &steps.simulation().state;
         let t_out = Instant::now();
         let last = state.n == problem.steps;
         let stopping = !last && stop_now(state.n);
         writer.record(&rec, problem, state, last)?;
         if opts.checkpoint_every.is_some_and(|c| c > 0 && state.n % c == 0) || stopping {
-            Checkpoint::new(scene_hash.clone(), state, counters(&summary, first_cap)).write(&opts.out)?;
+            let factor = steps.simulation().delassus_factors.key();
+            Checkpoint::new(scene_hash.clone(), state, counters(&summary, first_cap), factor).write(&opts.out)?;
         }
         summary.timing.output_s += t_out.elapsed().as_secs_f64();
         if let Some(b) = &bar {

@@ -200,6 +200,8 @@ pub struct Simulation<'p> {
     pub delassus: Option<delassus::Delassus>,
     /// factorizations of the Newton matrices W_UU + D, reused while unchanged
     pub delassus_factors: delassus::DelassusFactors,
+    /// W⁻¹ for Newton directions in velocity form (dense, well-conditioned W), or None
+    pub inverse: Option<delassus::InverseDelassus>,
     /// G = A_k⁻¹ Hᵀ (n × d n_c), kept beside a dense W when small (the recovery reads its
     /// columns instead of solving)
     responses: Option<faer::Mat<f64>>,
@@ -246,6 +248,10 @@ impl<'p> Simulation<'p> {
             }
             None => (None, None),
         };
+        let inverse = match (&delassus, problem.contact.as_ref()) {
+            (Some(w), Some(c)) => delassus::InverseDelassus::new(w, c.dim),
+            _ => None,
+        };
         let t_delassus = clock.elapsed().as_secs_f64();
         let nc = problem.contact.as_ref().map(ContactModel::n).unwrap_or(0);
         let (u, v) = (problem.u0.clone(), problem.v0.clone());
@@ -273,6 +279,7 @@ impl<'p> Simulation<'p> {
             settings,
             delassus,
             delassus_factors: delassus::DelassusFactors::default(),
+            inverse,
             responses,
             products,
             state,
@@ -548,6 +555,7 @@ impl<'p> Simulation<'p> {
             friction: c.friction.is_some(),
             dim: c.dim,
             factors: &self.delassus_factors,
+            inverse: self.inverse.as_ref(),
         };
         Some((data, p_tau_hat))
     }

@@ -185,7 +185,9 @@ fn co2_bound_at_midpoint_and_total_keep_the_energy_balance() {
 /// radius follows the normal force) and the fixed point on S (F.1) give the same solution of
 /// every step of the Signorini–Coulomb scenes, solved from the same state (the F.1 trajectory):
 /// contact velocities and forces agree to 1e-6 of the step's scales (both solve to 1e-10 in
-/// velocity and F.1 stops when S moves by less than 1e-8), and the coupled Newton needs no fallback.
+/// velocity and F.1 stops when S moves by less than 1e-8), and the coupled Newton needs no
+/// fallback. In 3-D (the sliding_block3d fixture as a Signorini–Coulomb block, pulled at 30° to
+/// the mesh axes) ∂t/∂N = μ ẑ couples the normal unknown to both tangential components.
 #[test]
 fn co3_coupled_newton_agrees_with_the_fixed_point() {
     let oblique = {
@@ -203,8 +205,17 @@ fn co3_coupled_newton_agrees_with_the_fixed_point() {
         s.time.end = 0.15;
         s
     };
+    let block3d = {
+        let mut s = fixture("sliding_block3d");
+        s.time.end = 0.2;
+        let c = s.contact.as_mut().expect("contact");
+        c.compliance = 0.0;
+        c.penetration_bound = NumOrStr::Num(0.0);
+        c.friction_bound = FrictionBound::Total;
+        s
+    };
     let set = NewtonSettings::default();
-    for (name, scene) in [("oblique impact", oblique), ("block", block)] {
+    for (name, scene) in [("oblique impact", oblique), ("block", block), ("block 3-D", block3d)] {
         let p = problem(scene);
         let c = p.contact.as_ref().expect("contact");
         let mut sim = Simulation::new(&p).expect("setup");

@@ -39,6 +39,18 @@
 //! digit for digit; the 3-D fixtures cantilever3d, column_impact3d and sliding_block3d added
 //! (column_impact3d's pins re-recorded once with friction in 3-D: its inner_residual column moved
 //! at round-off (2.2e-16) with ρ_τ from both tangential diagonals, and friction_x reads −0 for 0).
+//! (6) with the 3-D contact solve of issue 14 (slipping nodes read in their (ẑ, ẑ^⊥) frames in the
+//! reduced system, conjugate gradients on the kept factor, the velocity form with W⁻¹ for dense
+//! W of ≥ 256 unknowns, a dense W applied by faer's product from 256 unknowns, and F.1's convex
+//! problems solved to 1e-2 of the last change of S but the accepted one): every 2-D pin but
+//! hertz's and sliding_block's is unchanged, digit for digit; hertz and hertz3d move at round-off
+//! (≤ 5.1e-14 of the largest normal force, ≤ 2.0e-14 of the largest energy); sliding_block,
+//! sliding_block3d and gmsh_block3d, where F.1 iterates and now takes another path to its
+//! tolerance 1e-8, by 3.5e-10, 7.3e-10 and 2.5e-8 of their largest forces; no count
+//! changes; academic3d (pinned at 8×4×4 cells) moves by 1.2e-2 of its largest normal force and
+//! 1.5e-2 of its tangential one (154 of 2,001 steps change a slip count) — its stick–slip on the
+//! disk amplifies solver-level differences as the 2-D academic's does: the earlier code itself
+//! moves it by 2.0e-2 / 5.4e-2 (202 steps) between the default tolerances and 100× tighter ones.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -58,8 +70,20 @@ fn first_difference(recorded: &str, now: &str) -> Option<String> {
     (a.len() != b.len()).then(|| format!("{} lines recorded, {} now", a.len(), b.len()))
 }
 
+/// Fixtures pinned at another resolution than they ship with (a text substitution in a copy of
+/// the scene): academic3d, the 3-D default fixture at 24×12×8 cells (45 s in release), is
+/// pinned at 8×4×4 (the same physics on 45 contact nodes; its full run is measured by the bench).
+const PINNED_COARSER: &[(&str, &str, &str)] = &[("academic3d", "cells = [24, 12, 8]", "cells = [8, 4, 4]")];
+
 fn run_scene(name: &str, out: &Path) {
-    let scene = root().join("fixtures/scenes").join(format!("{name}.toml"));
+    let mut scene = root().join("fixtures/scenes").join(format!("{name}.toml"));
+    if let Some((_, from, to)) = PINNED_COARSER.iter().find(|(n, _, _)| *n == name) {
+        let text = std::fs::read_to_string(&scene).expect("the fixture");
+        assert!(text.contains(from), "{name}: the fixture no longer has `{from}`");
+        std::fs::create_dir_all(out).expect("the output folder");
+        scene = out.join(format!("{name}.toml"));
+        std::fs::write(&scene, text.replace(from, to)).expect("the coarser copy");
+    }
     let st = Command::new(env!("CARGO_BIN_EXE_dyncontact"))
         .arg("run")
         .arg(&scene)

@@ -199,13 +199,6 @@ fn box_scene_errors_name_the_key() {
         (base.replace("body = [\"0\", \"0.5*min(t/0.05, 1)\", \"0\"]", "body = [\"0\", \"1\"]"), "loads.body", "has 2 components; the 3-D domain (kind = \"box\") needs 3"),
         (base.replace("size = [1.0, 0.25, 0.25]", "size = [1.0, 0.25]"), "domain.size", "a box needs 3 entries [Lx, Ly, Lz], got 2"),
         (base.replace("cells = [16, 4, 4]", "cells = [16, 0, 4]"), "domain.cells[1]", "must be >= 1"),
-        (
-            base.replace("dirichlet = [\"left\"]", "dirichlet = [\"left\"]\ncontact = [\"bottom\"]").replace("mass = \"lumped\"", "mass = \"lumped\"\ninner = \"newton-unfrozen\"")
-                + "\n[contact]\ncompliance = 10.0\npenetration_bound = 0.1\n[contact.friction]\nlaw = \"constant\"\ncoefficient = 0.3\n",
-            "solver.inner",
-            "\"newton-unfrozen\" (N.4, Co.3) with friction in three dimensions is not implemented yet",
-        ),
-
     ];
     for (text, key, what) in cases {
         let err = Scene::from_toml(&text, "case").and_then(|s| Problem::from_scene(&s, Path::new("."))).err().expect("refused").to_string();

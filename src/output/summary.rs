@@ -289,6 +289,14 @@ pub struct Summary {
     /// Newton matrices W_UU + D factored, and factorizations reused (unchanged sets)
     pub contact_factorizations: usize,
     pub contact_factor_reuses: usize,
+    /// Newton systems solved by conjugate gradients preconditioned with a kept factor of a nearby
+    /// matrix (3-D slip), and their iterations
+    pub contact_pcg_solves: usize,
+    pub contact_pcg_iterations: usize,
+    /// Newton directions in velocity form (W⁻¹ kept, conjugate gradients on the free
+    /// components; dense, well-conditioned W), and their iterations
+    pub contact_velocity_solves: usize,
+    pub contact_velocity_iterations: usize,
     pub newton_iterations_total: usize,
     pub fixed_point_iterations_total: usize,
     pub fixed_point_iterations_max: usize,

@@ -17,7 +17,7 @@ use std::cell::RefCell;
 use std::collections::HashMap;
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::solvers::{Llt, Solve};
+use faer::linalg::solvers::{DenseSolveCore, Llt, Solve};
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Conj, Mat, Par, Side};
@@ -98,8 +98,18 @@ impl Delassus {
             Delassus::Sparse(s) => Some(s.stats),
         }
     }
-    /// out += alpha W r, by columns, skipping zero forces (separated nodes).
+    /// out += alpha W r, by columns, skipping zero forces (separated nodes); a dense W from
+    /// [`GEMV_FROM`](crate::defaults::GEMV_FROM) components on goes through faer's
+    /// matrix–vector product (SIMD of the machine, chosen at run time) over all columns.
     pub fn add_times(&self, r: &[f64], alpha: f64, out: &mut [f64]) {
+        if let Delassus::Dense(w) = self {
+            if w.nrows() >= crate::defaults::GEMV_FROM {
+                let rhs = faer::MatRef::from_column_major_slice(r, r.len(), 1);
+                let dst = faer::MatMut::from_column_major_slice_mut(out, w.nrows(), 1);
+                faer::linalg::matmul::matmul(dst, faer::Accum::Add, w.as_ref(), rhs, alpha, Par::Seq);
+                return;
+            }
+        }
         for (l, &rl) in r.iter().enumerate() {
             if rl == 0.0 {
                 continue;
@@ -363,28 +373,159 @@ pub fn sparse(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], prob
     Some(SparseDelassus { w, rank, stats: SparseStats { truncation, radius, colours, solves: d * (colours + 1) + 1, density, apply_error } })
 }
 
-/// Cholesky factorizations of W_UU + D (a principal submatrix of the Delassus operator plus a
-/// nonnegative diagonal), the Newton matrix of the frozen step problem (see
-/// `newton::reduced_direction`). The last one is kept with its key (U, D): Newton, the F.1
-/// iterations and the next steps reuse it while their active and stick sets, and so the matrix,
-/// are unchanged. A reuse is bit-identical to refactoring: the cache changes the cost, never the
-/// answer.
+/// The tangent frames the Newton matrices read each slipping node in (3-D): node i's tangential
+/// pair (τ_1, τ_2) is taken in the basis (ẑ_i, ẑ_i^⊥), ẑ_i the direction of t_i + ρ v̄_i on the
+/// disk's slip branch and ẑ^⊥ = (−ẑ_2, ẑ_1), where the friction force is known along ẑ and
+/// follows the slip rate across it (see `newton::direction`). W' = Qᵀ W Q with Q the block
+/// rotation; nodes without a frame (all of them in 2-D) keep their own components.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SlipFrames {
+    dim: usize,
+    /// per contact node: ẑ in the node's (τ_1, τ_2) components, or None
+    zhat: Vec<Option<[f64; 2]>>,
+}
+
+impl SlipFrames {
+    /// No node rotated (`dim` components per node, `n` nodes).
+    pub fn identity(dim: usize, n: usize) -> SlipFrames {
+        SlipFrames { dim, zhat: vec![None; if dim == 3 { n } else { 0 }] }
+    }
+    /// Read node i's tangential pair along ẑ (unit) and ẑ^⊥.
+    pub fn rotate(&mut self, i: usize, zhat: [f64; 2]) {
+        self.zhat[i] = Some(zhat);
+    }
+    /// Whether any node is rotated.
+    pub fn any(&self) -> bool {
+        self.zhat.iter().any(Option::is_some)
+    }
+    /// The global components (index, coefficient) that make the local component l: one, or two
+    /// for a rotated tangential component.
+    fn basis(&self, l: usize) -> ([(usize, f64); 2], usize) {
+        let (i, c) = (l / self.dim.max(1), l % self.dim.max(1));
+        match self.zhat.get(i).copied().flatten() {
+            Some(z) if c >= 1 => {
+                let (t1, t2) = (self.dim * i + 1, self.dim * i + 2);
+                // slot 1: ẑ = (z_1, z_2); slot 2: ẑ^⊥ = (−z_2, z_1)
+                if c == 1 { ([(t1, z[0]), (t2, z[1])], 2) } else { ([(t1, -z[1]), (t2, z[0])], 2) }
+            }
+            _ => ([(l, 1.0), (l, 0.0)], 1),
+        }
+    }
+    /// Global components → local ones (x ← Qᵀ x).
+    pub fn to_local(&self, x: &mut [f64]) {
+        for (i, z) in self.zhat.iter().enumerate() {
+            if let Some(z) = z {
+                let (a, b) = (x[self.dim * i + 1], x[self.dim * i + 2]);
+                x[self.dim * i + 1] = z[0] * a + z[1] * b;
+                x[self.dim * i + 2] = -z[1] * a + z[0] * b;
+            }
+        }
+    }
+    /// Local components → global ones (x ← Q x).
+    pub fn to_global(&self, x: &mut [f64]) {
+        for (i, z) in self.zhat.iter().enumerate() {
+            if let Some(z) = z {
+                let (a, b) = (x[self.dim * i + 1], x[self.dim * i + 2]);
+                x[self.dim * i + 1] = z[0] * a - z[1] * b;
+                x[self.dim * i + 2] = z[1] * a + z[0] * b;
+            }
+        }
+    }
+}
+
+impl Delassus {
+    /// W'_{l l'} = (Qᵀ W Q)_{l l'} in the local components of `frames`.
+    pub fn entry_in(&self, frames: &SlipFrames, l: usize, lp: usize) -> f64 {
+        if !frames.any() {
+            return self[(l, lp)];
+        }
+        let ((a, na), (b, nb)) = (frames.basis(l), frames.basis(lp));
+        let mut s = 0.0;
+        for &(i, ci) in &a[..na] {
+            for &(j, cj) in &b[..nb] {
+                s += ci * cj * self[(i, j)];
+            }
+        }
+        s
+    }
+    /// out += alpha W' x in the local components of `frames` (x local, out local).
+    pub fn add_times_in(&self, frames: &SlipFrames, x: &[f64], alpha: f64, out: &mut [f64]) {
+        if !frames.any() {
+            return self.add_times(x, alpha, out);
+        }
+        let mut xg = x.to_vec();
+        frames.to_global(&mut xg);
+        let mut wx = vec![0.0; out.len()];
+        self.add_times(&xg, alpha, &mut wx);
+        frames.to_local(&mut wx);
+        for (o, v) in out.iter_mut().zip(&wx) {
+            *o += v;
+        }
+    }
+}
+
+/// The key of a kept factorization (checkpoints): U, and D and the frames as exact bit patterns.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FactorKey {
+    pub unknown: Vec<usize>,
+    diag: Vec<u64>,
+    frames_dim: usize,
+    frames: Vec<Option<[u64; 2]>>,
+}
+
+/// How the Newton matrices W'_UU + D were solved so far (summary.json, the benchmark).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct FactorCounts {
+    /// Cholesky factorizations computed
+    pub factorizations: usize,
+    /// solves by a kept factorization of the same matrix (bit-identical to refactoring)
+    pub reuses: usize,
+    /// solves by conjugate gradients preconditioned with the kept factorization of a nearby matrix
+    /// (same unknowns, other D or slip frames)
+    pub pcg_solves: usize,
+    /// conjugate-gradient iterations over those solves
+    pub pcg_iterations: usize,
+    /// Newton directions in velocity form (W⁻¹, conjugate gradients on the free components),
+    /// and their iterations
+    pub velocity_solves: usize,
+    pub velocity_iterations: usize,
+}
+
+/// Cholesky factorizations of W'_UU + D (a principal submatrix of the Delassus operator, read
+/// in the slipping nodes' frames, plus a nonnegative diagonal), the Newton matrix of the frozen
+/// step problem (see `newton::reduced_direction`). The last one is kept with its key (U, D,
+/// frames): Newton, the F.1 iterations and the next steps reuse it while their active and stick
+/// sets, and so the matrix, are unchanged — a reuse is bit-identical to refactoring. When only D
+/// or the slip frames moved (3-D slip: the friction force's stiffness across the slip and its
+/// direction change every iteration), the system is solved by conjugate gradients preconditioned
+/// with the kept factor, to [`PCG_TOLERANCE`](crate::defaults::PCG_TOLERANCE) of the right-hand
+/// side, and the factor is only recomputed when that takes more than
+/// [`PCG_MAX_ITERATIONS`](crate::defaults::PCG_MAX_ITERATIONS).
 #[derive(Default)]
 pub struct DelassusFactors {
     last: RefCell<Option<Factor>>,
-    /// factorizations computed and reused (for the benchmark's accounting)
-    counts: RefCell<(usize, usize)>,
+    counts: RefCell<FactorCounts>,
 }
 
 struct Factor {
     unknown: Vec<usize>,
     diag: Vec<f64>,
+    frames: SlipFrames,
     llt: FactorKind,
 }
 
 enum FactorKind {
     Dense(Llt<f64>),
     Sparse(SparseFactor),
+}
+
+impl FactorKind {
+    fn solve_in_place(&self, b: &mut [f64]) {
+        match self {
+            FactorKind::Dense(llt) => llt.solve_in_place(faer::MatMut::from_column_major_slice_mut(b, b.len(), 1)),
+            FactorKind::Sparse(llt) => llt.solve_in_place(b),
+        }
+    }
 }
 
 /// A sparse LLᵀ of W_UU + D in the order W's AMD order induces on U: `order[p]` is the local
@@ -408,37 +549,202 @@ impl SparseFactor {
 }
 
 impl DelassusFactors {
-    /// Solve (W_UU + D) x = b in place, U = `unknown` (indices into W), D = `diag`. None when
-    /// the matrix is not numerically positive definite.
-    pub fn solve(&self, w: &Delassus, unknown: &[usize], diag: &[f64], b: &mut [f64]) -> Option<()> {
+    /// Solve (W'_UU + D) x = b in place, U = `unknown` (indices of local components), D = `diag`,
+    /// W' = W read in `frames`. None when the matrix is not numerically positive definite.
+    pub fn solve(&self, w: &Delassus, frames: &SlipFrames, unknown: &[usize], diag: &[f64], b: &mut [f64]) -> Option<()> {
+        self.solve_to(w, frames, unknown, diag, crate::defaults::PCG_TOLERANCE, b)
+    }
+
+    /// [`solve`](Self::solve), where conjugate gradients may stop at the relative residual
+    /// `forcing` (≥ [`PCG_TOLERANCE`](crate::defaults::PCG_TOLERANCE)): Newton's inexact
+    /// directions far from its solution (Eisenstat–Walker forcing).
+    pub fn solve_to(&self, w: &Delassus, frames: &SlipFrames, unknown: &[usize], diag: &[f64], forcing: f64, b: &mut [f64]) -> Option<()> {
         let mut last = self.last.borrow_mut();
-        let hit = last.as_ref().is_some_and(|f| f.unknown == unknown && f.diag == diag);
+        let hit = last.as_ref().is_some_and(|f| f.unknown == unknown && f.diag == diag && f.frames == *frames);
         if hit {
-            self.counts.borrow_mut().1 += 1;
-        } else {
-            *last = Some(Factor { unknown: unknown.to_vec(), diag: diag.to_vec(), llt: factor(w, unknown, diag)? });
-            self.counts.borrow_mut().0 += 1;
+            self.counts.borrow_mut().reuses += 1;
+            last.as_ref()?.llt.solve_in_place(b);
+            return b.iter().all(|v| v.is_finite()).then_some(());
         }
-        let f = last.as_ref()?;
-        match &f.llt {
-            FactorKind::Dense(llt) => llt.solve_in_place(faer::MatMut::from_column_major_slice_mut(b, unknown.len(), 1)),
-            FactorKind::Sparse(llt) => llt.solve_in_place(b),
+        // a nearby matrix: conjugate gradients preconditioned by the kept factor, on the
+        // unknowns the two share (the others by their diagonal)
+        let large = unknown.len() >= crate::defaults::PCG_FROM;
+        if let Some(f) = last.as_ref().filter(|f| f.unknown == unknown && (large || frames.any()) || large && Preconditioner::close(f, unknown)) {
+            let prec = Preconditioner::new(f, w, frames, unknown, diag);
+            if let Some(iterations) = pcg(w, frames, unknown, diag, &prec, forcing.max(crate::defaults::PCG_TOLERANCE), b) {
+                let mut c = self.counts.borrow_mut();
+                c.pcg_solves += 1;
+                c.pcg_iterations += iterations;
+                return b.iter().all(|v| v.is_finite()).then_some(());
+            }
         }
+        *last = Some(Factor { unknown: unknown.to_vec(), diag: diag.to_vec(), frames: frames.clone(), llt: factor(w, frames, unknown, diag)? });
+        self.counts.borrow_mut().factorizations += 1;
+        last.as_ref()?.llt.solve_in_place(b);
         b.iter().all(|v| v.is_finite()).then_some(())
+    }
+
+    /// What identifies the kept factorization (U, D, frames), for a checkpoint: the factor is a
+    /// function of it and W, and the next Newton systems are preconditioned by it, so a resumed
+    /// run rebuilds it to stay bit-identical with an uninterrupted one.
+    pub fn key(&self) -> Option<FactorKey> {
+        self.last.borrow().as_ref().map(|f| FactorKey {
+            unknown: f.unknown.clone(),
+            diag: f.diag.iter().map(|v| v.to_bits()).collect(),
+            frames_dim: f.frames.dim,
+            frames: f.frames.zhat.iter().map(|z| z.map(|z| z.map(f64::to_bits))).collect(),
+        })
+    }
+
+    /// Rebuild the kept factorization of a checkpoint's key (None: a key that does not fit W
+    /// or a matrix that is not positive definite).
+    pub fn restore(&self, w: &Delassus, key: &FactorKey) -> Option<()> {
+        let m = w.dim();
+        if key.unknown.iter().any(|&l| l >= m) || key.diag.len() != key.unknown.len() {
+            return None;
+        }
+        let frames = SlipFrames { dim: key.frames_dim, zhat: key.frames.iter().map(|z| z.map(|z| z.map(f64::from_bits))).collect() };
+        if frames.zhat.len() * frames.dim.max(1) > m {
+            return None;
+        }
+        let diag: Vec<f64> = key.diag.iter().map(|b| f64::from_bits(*b)).collect();
+        let llt = factor(w, &frames, &key.unknown, &diag)?;
+        *self.last.borrow_mut() = Some(Factor { unknown: key.unknown.clone(), diag, frames, llt });
+        Some(())
     }
 
     /// (factorizations computed, factorizations reused) so far.
     pub fn counts(&self) -> (usize, usize) {
+        let c = *self.counts.borrow();
+        (c.factorizations, c.reuses)
+    }
+
+    /// Count a Newton direction solved in velocity form (`InverseDelassus`).
+    pub fn record_velocity_solve(&self, iterations: usize) {
+        let mut c = self.counts.borrow_mut();
+        c.velocity_solves += 1;
+        c.velocity_iterations += iterations;
+    }
+
+    /// Every count so far.
+    pub fn all_counts(&self) -> FactorCounts {
         *self.counts.borrow()
     }
 }
 
-/// The Cholesky factor of W_UU + D in W's own form (dense LLᵀ, or sparse with AMD ordering).
-fn factor(w: &Delassus, unknown: &[usize], diag: &[f64]) -> Option<FactorKind> {
+/// The kept factor of a nearby Newton matrix as a preconditioner for W'_UU + D: the unknowns
+/// both matrices have go through the factor (the kept matrix's other unknowns held at zero), the
+/// new ones are scaled by their diagonal entry. Symmetric positive definite whatever the change,
+/// so conjugate gradients converge; fast when little changed.
+struct Preconditioner<'f> {
+    factor: &'f FactorKind,
+    /// the kept factor's size and, per unknown of U, its position there (None: a new unknown)
+    kept: usize,
+    position: Vec<Option<usize>>,
+    /// 1/(W'_UU + D)_pp for the new unknowns
+    inv_diag: Vec<f64>,
+}
+
+impl<'f> Preconditioner<'f> {
+    /// Whether the kept factor is worth trying for U: at most
+    /// [`PCG_NEW_SHARE`](crate::defaults::PCG_NEW_SHARE) of U is new to it.
+    fn close(f: &Factor, unknown: &[usize]) -> bool {
+        let new = unknown.iter().filter(|l| f.unknown.binary_search(l).is_err()).count();
+        !unknown.is_empty() && (new as f64) <= crate::defaults::PCG_NEW_SHARE * unknown.len() as f64
+    }
+    fn new(f: &'f Factor, w: &Delassus, frames: &SlipFrames, unknown: &[usize], diag: &[f64]) -> Preconditioner<'f> {
+        let position: Vec<Option<usize>> = unknown.iter().map(|l| f.unknown.binary_search(l).ok()).collect();
+        let inv_diag = unknown
+            .iter()
+            .zip(&position)
+            .zip(diag)
+            .map(|((&l, q), d)| if q.is_some() { 0.0 } else { 1.0 / (w.entry_in(frames, l, l) + d) })
+            .collect();
+        Preconditioner { factor: &f.llt, kept: f.unknown.len(), position, inv_diag }
+    }
+    /// z ← P⁻¹ z.
+    fn apply(&self, z: &mut [f64]) {
+        let mut x = vec![0.0; self.kept];
+        for (p, q) in self.position.iter().enumerate() {
+            if let Some(q) = q {
+                x[*q] = z[p];
+            }
+        }
+        self.factor.solve_in_place(&mut x);
+        for (p, q) in self.position.iter().enumerate() {
+            z[p] = match q {
+                Some(q) => x[*q],
+                None => z[p] * self.inv_diag[p],
+            };
+        }
+    }
+}
+
+/// Conjugate gradients on (W'_UU + D) x = b preconditioned by `prec`, started from the
+/// preconditioned right-hand side; x in place of b. The number of iterations, or None (b
+/// untouched) when the relative residual did not reach
+/// [`PCG_TOLERANCE`](crate::defaults::PCG_TOLERANCE) within
+/// [`PCG_MAX_ITERATIONS`](crate::defaults::PCG_MAX_ITERATIONS).
+fn pcg(w: &Delassus, frames: &SlipFrames, unknown: &[usize], diag: &[f64], prec: &Preconditioner, tolerance: f64, b: &mut [f64]) -> Option<usize> {
+    let (k, m) = (unknown.len(), w.dim());
+    let apply = |x: &[f64]| -> Vec<f64> {
+        let mut full = vec![0.0; m];
+        for (&l, &v) in unknown.iter().zip(x) {
+            full[l] = v;
+        }
+        let mut wx = vec![0.0; m];
+        w.add_times_in(frames, &full, 1.0, &mut wx);
+        (0..k).map(|p| wx[unknown[p]] + diag[p] * x[p]).collect()
+    };
+    let b_norm = crate::linalg::dot(b, b).sqrt();
+    if b_norm == 0.0 {
+        return Some(0);
+    }
+    let mut x = b.to_vec();
+    prec.apply(&mut x);
+    let ax = apply(&x);
+    let mut r: Vec<f64> = b.iter().zip(&ax).map(|(bi, ai)| bi - ai).collect();
+    let tol = tolerance * b_norm;
+    let mut z = r.clone();
+    prec.apply(&mut z);
+    let mut p = z.clone();
+    let mut rz = crate::linalg::dot(&r, &z);
+    for it in 0..=crate::defaults::PCG_MAX_ITERATIONS {
+        if crate::linalg::dot(&r, &r).sqrt() <= tol {
+            b.copy_from_slice(&x);
+            return Some(it);
+        }
+        if it == crate::defaults::PCG_MAX_ITERATIONS {
+            break;
+        }
+        let ap = apply(&p);
+        let pap = crate::linalg::dot(&p, &ap);
+        if !(pap > 0.0) {
+            return None;
+        }
+        let alpha = rz / pap;
+        for q in 0..k {
+            x[q] += alpha * p[q];
+            r[q] -= alpha * ap[q];
+        }
+        z.copy_from_slice(&r);
+        prec.apply(&mut z);
+        let rz_new = crate::linalg::dot(&r, &z);
+        let beta = rz_new / rz;
+        rz = rz_new;
+        for q in 0..k {
+            p[q] = z[q] + beta * p[q];
+        }
+    }
+    None
+}
+
+/// The Cholesky factor of W'_UU + D in W's own form (dense LLᵀ, or sparse with AMD ordering).
+fn factor(w: &Delassus, frames: &SlipFrames, unknown: &[usize], diag: &[f64]) -> Option<FactorKind> {
     let k = unknown.len();
     match w {
-        Delassus::Dense(w) => {
-            let a = Mat::<f64>::from_fn(k, k, |i, j| w[(unknown[i], unknown[j])] + if i == j { diag[i] } else { 0.0 });
+        Delassus::Dense(_) => {
+            let a = Mat::<f64>::from_fn(k, k, |i, j| w.entry_in(frames, unknown[i], unknown[j]) + if i == j { diag[i] } else { 0.0 });
             a.llt(Side::Lower).ok().map(FactorKind::Dense)
         }
         Delassus::Sparse(s) => {
@@ -453,11 +759,14 @@ fn factor(w: &Delassus, unknown: &[usize], diag: &[f64]) -> Option<FactorKind> {
             for (p, &lp) in order.iter().enumerate() {
                 trip.push(Triplet::new(p, p, diag[lp]));
                 let j = unknown[lp];
+                // W' shares W's pattern: a rotation mixes the two tangential components of one
+                // node, and W keeps whole node blocks
                 for (&i, &v) in s.w.symbolic().row_idx_of_col_raw(j).iter().zip(s.w.val_of_col(j)) {
                     // the upper triangle, with Side::Upper: faer 0.24's low-level analysis in a
                     // given order reads the upper triangle (the lower one with Side::Lower gave a
                     // wrong factor: measured residual 5e-2)
                     if position[i] != usize::MAX && position[i] <= p {
+                        let v = if frames.any() { w.entry_in(frames, i, j) } else { v };
                         trip.push(Triplet::new(position[i], p, v));
                     }
                 }
@@ -471,5 +780,169 @@ fn factor(w: &Delassus, unknown: &[usize], diag: &[f64]) -> Option<FactorKind> {
                 .ok()?;
             Some(FactorKind::Sparse(SparseFactor { order, symbolic, values }))
         }
+    }
+}
+
+/// W⁻¹ of a dense Delassus operator, for Newton directions in velocity form (see
+/// `newton::velocity_direction`): with the prescribed components' velocities known, the
+/// linearized step is the symmetric system [(W⁻¹)_FF + ω Ĝ_F] Δy_F = b on the free components F,
+/// positive definite whenever the step problem is convex (the frozen bound of F.1 always; the
+/// unfrozen one of N.4 under (C.k)), solved by conjugate gradients preconditioned with its node
+/// blocks — matrix–vector products only, no factorization per Newton iteration, and no slip
+/// frames (a slipping node's 2 × 2 block is just added). Kept when W is dense, has at least
+/// [`GEMV_FROM`](crate::defaults::GEMV_FROM) components and is well conditioned for that
+/// iteration: a trial solve at setup reaches 1e-10 within
+/// [`VELOCITY_FORM_TRIAL`](crate::defaults::VELOCITY_FORM_TRIAL) iterations.
+pub struct InverseDelassus {
+    pub winv: Mat<f64>,
+    /// components per node
+    pub dim: usize,
+    /// iterations of the trial solve at setup
+    pub trial_iterations: usize,
+}
+
+impl InverseDelassus {
+    /// W⁻¹ of a dense W when the velocity form suits it (see the type's doc), else None.
+    pub fn new(w: &Delassus, dim: usize) -> Option<InverseDelassus> {
+        let Delassus::Dense(w) = w else { return None };
+        let m = w.nrows();
+        if m < crate::defaults::GEMV_FROM {
+            return None;
+        }
+        let winv = w.llt(Side::Lower).ok()?.inverse();
+        let mut inv = InverseDelassus { winv, dim, trial_iterations: 0 };
+        // the trial: every component free, no stiffness, a pseudo-random right-hand side
+        let b: Vec<f64> = (0..m).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
+        let free: Vec<usize> = (0..m).collect();
+        let blocks = vec![None; m / dim];
+        let mut x = vec![0.0; m];
+        inv.trial_iterations = inv.solve(&free, &vec![0.0; m], &blocks, &b, 1e-10, crate::defaults::VELOCITY_FORM_TRIAL, &mut x)?;
+        Some(inv)
+    }
+
+    /// out = W⁻¹ x (all components).
+    pub fn apply(&self, x: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; x.len()];
+        let rhs = faer::MatRef::from_column_major_slice(x, x.len(), 1);
+        let dst = faer::MatMut::from_column_major_slice_mut(&mut out, x.len(), 1);
+        faer::linalg::matmul::matmul(dst, faer::Accum::Replace, self.winv.as_ref(), rhs, 1.0, Par::Seq);
+        out
+    }
+
+    /// Solve [(W⁻¹)_FF + Ĝ_F] x_F = b_F by conjugate gradients preconditioned with the node
+    /// blocks, to the relative residual `tolerance` within `max_iterations`. F: the free
+    /// components (`free[l]` true; x and b are full-length, zero off F); Ĝ: `diag` per component
+    /// plus, per node, an optional 2 × 2 block on its tangential pair (3-D slip; it replaces the
+    /// diagonal there). The iterations, or None when the matrix showed a non-positive curvature
+    /// (not positive definite: N.4 beyond (C.k)) or the tolerance was not reached.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve(
+        &self,
+        free_list: &[usize],
+        diag: &[f64],
+        blocks: &[Option<[[f64; 2]; 2]>],
+        b: &[f64],
+        tolerance: f64,
+        max_iterations: usize,
+        x: &mut [f64],
+    ) -> Option<usize> {
+        let (m, d) = (b.len(), self.dim);
+        let mut is_free = vec![false; m];
+        for &l in free_list {
+            is_free[l] = true;
+        }
+        // Ĝ x on F
+        let g_times = |v: &[f64], out: &mut [f64]| {
+            for &l in free_list {
+                out[l] += diag[l] * v[l];
+            }
+            for (i, blk) in blocks.iter().enumerate() {
+                if let Some(g) = blk {
+                    let (a, c) = (d * i + 1, d * i + 2);
+                    if is_free[a] && is_free[c] {
+                        out[a] += g[0][0] * v[a] + g[0][1] * v[c];
+                        out[c] += g[1][0] * v[a] + g[1][1] * v[c];
+                    }
+                }
+            }
+        };
+        let op = |v: &[f64]| -> Vec<f64> {
+            let mut out = self.apply(v);
+            for l in 0..m {
+                if !is_free[l] {
+                    out[l] = 0.0;
+                }
+            }
+            g_times(v, &mut out);
+            out
+        };
+        // node-block preconditioner: each node's free components, its block of the matrix
+        let mut prec: Vec<(Vec<usize>, nalgebra::DMatrix<f64>)> = Vec::new();
+        for i in 0..m / d {
+            let comps: Vec<usize> = (d * i..d * i + d).filter(|&l| is_free[l]).collect();
+            if comps.is_empty() {
+                continue;
+            }
+            let mut blk = nalgebra::DMatrix::<f64>::from_fn(comps.len(), comps.len(), |p, q| {
+                self.winv[(comps[p], comps[q])] + if p == q { diag[comps[p]] } else { 0.0 }
+            });
+            if let Some(g) = blocks[i] {
+                for (p, &lp) in comps.iter().enumerate() {
+                    for (q, &lq) in comps.iter().enumerate() {
+                        if lp > d * i && lq > d * i {
+                            // the block replaces the diagonal on the tangential pair
+                            blk[(p, q)] += g[lp - d * i - 1][lq - d * i - 1] - if p == q { diag[lp] } else { 0.0 };
+                        }
+                    }
+                }
+            }
+            let inv = blk.cholesky()?.inverse();
+            prec.push((comps, inv));
+        }
+        let precondition = |r: &[f64]| -> Vec<f64> {
+            let mut z = vec![0.0; m];
+            for (comps, inv) in &prec {
+                for (p, &lp) in comps.iter().enumerate() {
+                    z[lp] = comps.iter().enumerate().map(|(q, &lq)| inv[(p, q)] * r[lq]).sum();
+                }
+            }
+            z
+        };
+        let dot = crate::linalg::dot;
+        let b_norm = dot(b, b).sqrt();
+        x.iter_mut().for_each(|v| *v = 0.0);
+        if b_norm == 0.0 {
+            return Some(0);
+        }
+        let mut r = b.to_vec();
+        let mut z = precondition(&r);
+        let mut p = z.clone();
+        let mut rz = dot(&r, &z);
+        for it in 0..=max_iterations {
+            if dot(&r, &r).sqrt() <= tolerance * b_norm {
+                return Some(it);
+            }
+            if it == max_iterations {
+                break;
+            }
+            let ap = op(&p);
+            let pap = dot(&p, &ap);
+            if !(pap > 0.0) {
+                return None;
+            }
+            let alpha = rz / pap;
+            for l in 0..m {
+                x[l] += alpha * p[l];
+                r[l] -= alpha * ap[l];
+            }
+            z = precondition(&r);
+            let rz_new = dot(&r, &z);
+            let beta = rz_new / rz;
+            rz = rz_new;
+            for l in 0..m {
+                p[l] = z[l] + beta * p[l];
+            }
+        }
+        None
     }
 }

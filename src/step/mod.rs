@@ -48,6 +48,8 @@ pub struct StepData<'a> {
     pub dim: usize,
     /// the Newton matrices' factorizations, reused while the matrix is unchanged
     pub factors: &'a delassus::DelassusFactors,
+    /// W⁻¹ for Newton directions in velocity form (a dense, well-conditioned W), or None
+    pub inverse: Option<&'a delassus::InverseDelassus>,
 }
 
 /// Contact status of a node after a step (contact.csv `status`).

@@ -11,13 +11,25 @@
 //! The solution does not depend on ρ (tested); the default ρ_ν,i = 1/(ω_i W_νν,ii) and
 //! ρ_τ,i = 1/(a_v ω_i W_ττ,ii) make the trial values exact for an isolated node.
 //!
-//! The direction: in the symmetric cases (frozen S, monotone normal law) a Cholesky solve on the
-//! force unknowns with the factor reused while the contact sets hold (`reduced_direction`, dense
-//! or sparse as W is); otherwise the full m × m LU (`general_direction`) — in 3-D whenever a node
-//! slips, since its force then depends on its velocity across the slip (a 2 × 2 block).
+//! The direction, by the first form that applies:
+//! - **velocity form** (`velocity_direction`; a dense, well-conditioned W of ≥ 256 unknowns with
+//!   W⁻¹ kept, and no Co.3 coupling): conjugate gradients on [(W⁻¹)_FF + ω Ĝ_F] Δy_F = b over the
+//!   free components, node-block preconditioned — matrix–vector products only. It takes the 3-D
+//!   slip blocks as they are and the unfrozen bound of N.4 (symmetrized: v̂ = ẑ), positive
+//!   definite wherever the step problem is convex;
+//! - **force form** (`reduced_direction`; frozen S, monotone normal law): Cholesky on the force
+//!   unknowns, each slipping 3-D node read in its (ẑ, ẑ^⊥) frame (its force is known along ẑ and
+//!   follows the slip rate across it), the factor reused exactly while U, D and the frames hold
+//!   and as the preconditioner of conjugate gradients while U holds (`DelassusFactors`);
+//! - **general** (`general_direction`): the full m × m LU — Co.3's coupling of the friction force
+//!   to the normal force, N.4 where no velocity form is kept, and the reference the others are
+//!   tested against.
+//! Conjugate gradients stop at the Eisenstat–Walker forcing min(1e-3, 0.1 ‖F‖/scale), which keeps
+//! Newton's quadratic convergence.
 
 use faer::Mat;
 
+use super::delassus::SlipFrames;
 use super::{ContactSolution, NodeStatus, StepData};
 use crate::defaults::{ARMIJO, LINE_SEARCH_HALVINGS, MAX_ITERATIONS, NEWTON_TOLERANCE};
 use crate::failure::{NewtonFailure, NewtonStatus};
@@ -37,7 +49,9 @@ pub enum FrictionBound<'a> {
 }
 
 /// The friction bound at node i and its derivatives: with respect to the slip rate v̄_i and
-/// to the normal force N_i = q_i + λ_i.
+/// to the normal force N_i = q_i + λ_i. In 2-D v̄_i is the signed slip rate along τ; in 3-D
+/// `ds_dv` is the derivative with respect to the slip speed ‖v̄_i‖ (S depends on v̄ only
+/// through it).
 #[derive(Debug, Clone, Copy)]
 struct BoundAt {
     s: f64,
@@ -48,15 +62,25 @@ struct BoundAt {
 impl FrictionBound<'_> {
     /// S_i and its derivatives at the iterate (y, λ).
     fn at(&self, step: &StepData, i: usize, y: &[f64], lambda: &[f64]) -> BoundAt {
-        let vbar = step.slip(i, y);
+        // μ(|v̄|) and dμ/dv̄ (2-D, signed) or dμ/d‖v̄‖ (3-D)
+        let mu_at = |mu: &FrictionCoefficient| {
+            if step.tdim() == 1 {
+                let vbar = step.slip(i, y);
+                (mu.mu(vbar.abs()), mu.dmu(vbar.abs()) * vbar.signum())
+            } else {
+                let speed = step.slip_norm(i, y);
+                (mu.mu(speed), mu.dmu(speed))
+            }
+        };
         match self {
             FrictionBound::Frozen(s) => BoundAt { s: s[i], ds_dv: 0.0, ds_dn: 0.0 },
             FrictionBound::Law { mu, p_hat } => {
-                BoundAt { s: mu.mu(vbar.abs()) * p_hat[i], ds_dv: mu.dmu(vbar.abs()) * vbar.signum() * p_hat[i], ds_dn: 0.0 }
+                let (m, dm) = mu_at(mu);
+                BoundAt { s: m * p_hat[i], ds_dv: dm * p_hat[i], ds_dn: 0.0 }
             }
             FrictionBound::Coulomb { mu } => {
                 let n = step.q(i, y) + lambda[i];
-                let (m, dm) = (mu.mu(vbar.abs()), mu.dmu(vbar.abs()) * vbar.signum());
+                let (m, dm) = mu_at(mu);
                 if n > 0.0 { BoundAt { s: m * n, ds_dv: dm * n, ds_dn: m } } else { BoundAt { s: 0.0, ds_dv: 0.0, ds_dn: 0.0 } }
             }
         }
@@ -331,6 +355,72 @@ fn solution(step: &StepData, x: Iterate, stick: &[bool], iterations: usize, resi
     ContactSolution { y: x.y, lambda: x.lambda, t: x.t, q, status, iterations, residual }
 }
 
+/// A slipping node on the disk (3-D) linearized: with z = t + ρ v̄, ẑ = z/‖z‖, κ = S/‖z‖ < 1
+/// and Π = I − ẑẑᵀ, (N.3) gives
+///   Δt = (ẑẑᵀ + Π/(1 − κ))(S ẑ − t) + ρ a_v κ/(1 − κ) Π Δy_τ + ẑ (a_v ∂S/∂‖v̄‖ v̂ᵀ Δy_τ + ∂S/∂N ΔN),
+/// the last term only for a bound that follows the unknowns (N.4: μ′ along v̂ = v̄/‖v̄‖; Co.3:
+/// μ ΔN). Along ẑ the change is known (but for that term); across it (ẑ^⊥ = (−ẑ_2, ẑ_1)) the
+/// force follows the slip rate with the stiffness `gain` = ρ a_v κ/(1 − κ) ≥ 0.
+#[derive(Debug, Clone, Copy)]
+struct DiskSlip {
+    i: usize,
+    zhat: [f64; 2],
+    /// the known change of t along ẑ and across it
+    along: f64,
+    across: f64,
+    gain: f64,
+    /// a_v ∂S/∂‖v̄‖ v̂ (N.4, Co.3; 0 for a frozen bound): the row of ∂t·ẑ/∂y_τ beyond the gain
+    ds_dy: [f64; 2],
+    /// a_v ∂S/∂‖v̄‖ (its size; v̂ = ẑ at the solution)
+    ds_dspeed: f64,
+    /// ∂S/∂N (Co.3; 0 otherwise)
+    ds_dn: f64,
+}
+
+impl DiskSlip {
+    fn new(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, i: usize) -> DiskSlip {
+        let (ti, v) = (t_of(step, &x.t, i), step.slip_vec(i, &x.y));
+        let rho = p.rho_t[i];
+        let z = [ti[0] + rho * v[0], ti[1] + rho * v[1]];
+        let nz = z[0].hypot(z[1]);
+        let zhat = [z[0] / nz, z[1] / nz];
+        let b = s.at(step, i, &x.y, &x.lambda);
+        let kappa = b.s / nz;
+        let e = [b.s * zhat[0] - ti[0], b.s * zhat[1] - ti[1]];
+        let perp = [-zhat[1], zhat[0]];
+        let speed = v[0].hypot(v[1]);
+        let vhat = if speed > 0.0 { [v[0] / speed, v[1] / speed] } else { zhat };
+        DiskSlip {
+            i,
+            zhat,
+            along: zhat[0] * e[0] + zhat[1] * e[1],
+            across: (perp[0] * e[0] + perp[1] * e[1]) / (1.0 - kappa),
+            gain: rho * step.a_v * kappa / (1.0 - kappa),
+            ds_dy: [step.a_v * b.ds_dv * vhat[0], step.a_v * b.ds_dv * vhat[1]],
+            ds_dspeed: step.a_v * b.ds_dv,
+            ds_dn: b.ds_dn,
+        }
+    }
+    fn frozen(&self) -> bool {
+        self.ds_dy == [0.0; 2] && self.ds_dn == 0.0
+    }
+    /// The known change of t in the node's (τ_1, τ_2) components.
+    fn known(&self) -> [f64; 2] {
+        let perp = [-self.zhat[1], self.zhat[0]];
+        [self.along * self.zhat[0] + self.across * perp[0], self.along * self.zhat[1] + self.across * perp[1]]
+    }
+    /// gain Π + a_v ∂S/∂‖v̄‖ ẑẑᵀ: ∂t/∂y_τ with v̂ taken as ẑ (equal at the solution), symmetric.
+    fn symmetric_block(&self) -> [[f64; 2]; 2] {
+        let z = self.zhat;
+        std::array::from_fn(|j| std::array::from_fn(|k| self.gain * (f64::from(u8::from(j == k)) - z[j] * z[k]) + self.ds_dspeed * z[j] * z[k]))
+    }
+    /// ∂t/∂y_τ = gain Π + ẑ ds_dyᵀ (a 2 × 2 block; symmetric when frozen).
+    fn block(&self) -> [[f64; 2]; 2] {
+        let z = self.zhat;
+        std::array::from_fn(|j| std::array::from_fn(|k| self.gain * (f64::from(u8::from(j == k)) - z[j] * z[k]) + z[j] * self.ds_dy[k]))
+    }
+}
+
 /// The Newton direction (Δy, Δm) on the reduced system, one unknown per contact component:
 /// prescribed-velocity components (active normal, stick) carry a force unknown Δm (Δλ_i at 2i,
 /// Δt_i at 2i+1); the others carry a velocity unknown Δy with the force change known.
@@ -350,10 +440,11 @@ fn direction(
     let mut dm = vec![0.0; m];
     let mut prescribed = vec![false; m];
     let mut g = vec![0.0; m]; // ∂q/∂y on normal components
-    // ∂t_i/∂N_i on slipping nodes whose bound follows the normal force (Co.3), else 0
-    let mut coupling = vec![0.0; n];
-    // (3-D) the 2 × 2 blocks ∂t_i/∂y_τ,i of slipping nodes on the disk
-    let mut blocks: Vec<(usize, [[f64; 2]; 2])> = Vec::new();
+    // ∂t_i/∂N_i on slipping nodes whose bound follows the normal force (Co.3), per tangential
+    // component (d − 1 of them), else 0
+    let mut coupling = vec![[0.0; 2]; n];
+    // (3-D) slipping nodes on the disk
+    let mut slips: Vec<DiskSlip> = Vec::new();
     for i in 0..n {
         let (jn, jt) = (step.nu(i), step.tau(i));
         g[jn] = step.dq(i, y);
@@ -364,32 +455,13 @@ fn direction(
             dm[jn] = -lambda[i];
         }
         if step.friction && step.tdim() == 2 {
-            let td = 2;
             if stick[i] {
-                for j in 0..td {
+                for j in 0..2 {
                     prescribed[step.tau_j(i, j)] = true;
-                    dy[step.tau_j(i, j)] = f[m + n + td * i + j]; // F_t = y_stick − y on the stick set
+                    dy[step.tau_j(i, j)] = f[m + n + 2 * i + j]; // F_t = y_stick − y on the stick set
                 }
             } else {
-                // slip on the disk: with z = t + ρ v̄, ẑ = z/‖z‖, κ = S/‖z‖ < 1 and Π = I − ẑẑᵀ,
-                // the linearized (N.3) gives Δt = (ẑẑᵀ + Π/(1 − κ))(S ẑ − t) + ρ a_v κ/(1 − κ) Π Δy_τ:
-                // a known change plus a 2 × 2 block G on the tangential velocities
-                let (ti, v) = (t_of(step, t, i), step.slip_vec(i, y));
-                let rho = p.rho_t[i];
-                let z = [ti[0] + rho * v[0], ti[1] + rho * v[1]];
-                let nz = z[0].hypot(z[1]);
-                let zh = [z[0] / nz, z[1] / nz];
-                let b = s.at(step, i, y, lambda).s;
-                let kappa = b / nz;
-                let pi = [[1.0 - zh[0] * zh[0], -zh[0] * zh[1]], [-zh[1] * zh[0], 1.0 - zh[1] * zh[1]]];
-                let e = [b * zh[0] - ti[0], b * zh[1] - ti[1]];
-                for j in 0..td {
-                    let along = zh[j] * (zh[0] * e[0] + zh[1] * e[1]);
-                    let across = (pi[j][0] * e[0] + pi[j][1] * e[1]) / (1.0 - kappa);
-                    dm[step.tau_j(i, j)] = along + across;
-                }
-                let gain = rho * step.a_v * kappa / (1.0 - kappa);
-                blocks.push((i, [[gain * pi[0][0], gain * pi[0][1]], [gain * pi[1][0], gain * pi[1][1]]]));
+                slips.push(DiskSlip::new(step, s, p, x, i));
             }
         } else if step.friction {
             if stick[i] {
@@ -403,16 +475,60 @@ fn direction(
                 let b = s.at(step, i, y, lambda);
                 dm[jt] = b.s * sigma - t[i];
                 g[jt] = sigma * b.ds_dv * step.a_v;
-                coupling[i] = sigma * b.ds_dn;
+                coupling[i][0] = sigma * b.ds_dn;
             }
         }
     }
-    let symmetric = blocks.is_empty() && coupling.iter().all(|&c| c == 0.0) && (0..m).all(|l| prescribed[l] || g[l] >= 0.0);
-    let sol = if reduced && symmetric {
-        reduced_direction(step, f, &prescribed, &g, &dy, &dm)?
-    } else {
-        general_direction(step, f, &prescribed, &g, (&coupling, &blocks), &dy, &dm)?
-    };
+    // Eisenstat–Walker: a direction by conjugate gradients only as exact as the residual is small
+    let scale = step.velocity_scale(y);
+    let forcing = if scale > 0.0 { (crate::defaults::PCG_FORCING * linalg::norm_inf(&f[..m]).max(linalg::norm_inf(f)) / scale).min(crate::defaults::PCG_FORCING_MAX) } else { 0.0 };
+    let coupled = coupling.iter().any(|c| *c != [0.0; 2]) || slips.iter().any(|d| d.ds_dn != 0.0);
+    if let (true, false, Some(inverse)) = (reduced, coupled, step.inverse) {
+        if let Some(d) = velocity_direction(step, inverse, f, &prescribed, &g, &slips, &dy, &dm, forcing) {
+            return Some(d);
+        }
+    }
+    let symmetric = slips.iter().all(DiskSlip::frozen)
+        && coupling.iter().all(|c| *c == [0.0; 2])
+        && (0..m).all(|l| prescribed[l] || g[l] >= 0.0);
+    if reduced && symmetric {
+        // each slipping node read along (ẑ, ẑ^⊥): a free component with a known force change
+        // and one whose force follows the slip rate with the stiffness `gain` (joins U)
+        let mut frames = SlipFrames::identity(step.dim, n);
+        for d in &slips {
+            frames.rotate(d.i, d.zhat);
+            (dm[step.tau_j(d.i, 0)], dm[step.tau_j(d.i, 1)]) = (d.along, d.across);
+            g[step.tau_j(d.i, 1)] = d.gain;
+        }
+        let mut f_local = f[..m].to_vec();
+        frames.to_local(&mut f_local);
+        let sol = reduced_direction(step, &frames, &f_local, &prescribed, &g, &dy, &dm, forcing)?;
+        for l in 0..m {
+            if prescribed[l] {
+                dm[l] = sol[l];
+            } else {
+                dy[l] = sol[l];
+            }
+        }
+        for d in &slips {
+            dm[step.tau_j(d.i, 1)] += d.gain * dy[step.tau_j(d.i, 1)];
+        }
+        frames.to_global(&mut dy);
+        frames.to_global(&mut dm);
+        return Some((dy, dm));
+    }
+    // the general system in the nodes' own components: a slipping node's friction change is its
+    // known part plus the 2 × 2 block G Δy_τ (and, for Co.3, ẑ ∂S/∂N ΔN)
+    let mut blocks: Vec<(usize, [[f64; 2]; 2])> = Vec::new();
+    for d in &slips {
+        let known = d.known();
+        for (j, kj) in known.iter().enumerate() {
+            dm[step.tau_j(d.i, j)] = *kj;
+        }
+        blocks.push((d.i, d.block()));
+        coupling[d.i] = [d.zhat[0] * d.ds_dn, d.zhat[1] * d.ds_dn];
+    }
+    let sol = general_direction(step, f, &prescribed, &g, (&coupling, &blocks), &dy, &dm)?;
     for l in 0..m {
         if prescribed[l] {
             dm[l] = sol[l];
@@ -420,47 +536,149 @@ fn direction(
             dy[l] = sol[l];
         }
     }
-    // the slipping nodes' friction change on the disk: the known part plus G Δy_τ
+    // (2-D) a slipping node's friction change beyond its known part: ∂t/∂y_τ Δy_τ (N.4) and
+    // ∂t/∂N ΔN (Co.3), as the linear system assumed
+    if step.tdim() == 1 {
+        for i in 0..n {
+            let jt = step.tau(i);
+            if !prescribed[jt] && (g[jt] != 0.0 || coupling[i][0] != 0.0) {
+                let jn = step.nu(i);
+                // ΔN = Δλ + ∂q/∂y Δy_ν (one of the two is the solved unknown)
+                let delta_n = dm[jn] + g[jn] * dy[jn];
+                dm[jt] += g[jt] * dy[jt] + coupling[i][0] * delta_n;
+            }
+        }
+    }
     for (i, gb) in &blocks {
         let dyt = [dy[step.tau_j(*i, 0)], dy[step.tau_j(*i, 1)]];
+        let dn = coupling[*i];
+        // ΔN = Δλ + ∂q/∂y Δy_ν (Co.3)
+        let delta_n = if dn == [0.0; 2] { 0.0 } else { dm[step.nu(*i)] + g[step.nu(*i)] * dy[step.nu(*i)] };
         for j in 0..2 {
-            dm[step.tau_j(*i, j)] += gb[j][0] * dyt[0] + gb[j][1] * dyt[1];
+            dm[step.tau_j(*i, j)] += gb[j][0] * dyt[0] + gb[j][1] * dyt[1] + dn[j] * delta_n;
         }
     }
     Some((dy, dm))
 }
 
+/// The Newton direction in velocity form, with W⁻¹ (`InverseDelassus`): the prescribed
+/// components' velocities Δy_P are known, the free ones' forces change by
+/// Δr_F = ω (dm_F + Ĝ Δy_F) (Ĝ: ∂q/∂y on normals, the slip branch's ∂t/∂y on tangents — a 2 × 2
+/// block per slipping 3-D node, symmetrized with v̂ = ẑ), and W⁻¹ applied to the linearized
+/// (N.1) rows Δy + W Δr = −F_y gives
+///   [(W⁻¹)_FF + ω Ĝ_F] Δy_F = −(W⁻¹ (F_y + Δy_P))_F − r_k,F,   ω Δm_P = −(W⁻¹ (F_y + Δy))_P − r_k,P,
+/// r_k the known force change (ω dm on F, the compliance part ω g Δy on P). The matrix is
+/// symmetric and, when the step problem is convex, positive definite: conjugate gradients with
+/// node blocks, to the relative residual `forcing`. None (another form is used) when they do
+/// not converge or meet a non-positive curvature.
+#[allow(clippy::too_many_arguments)]
+fn velocity_direction(
+    step: &StepData,
+    inverse: &super::delassus::InverseDelassus,
+    f: &[f64],
+    prescribed: &[bool],
+    g: &[f64],
+    slips: &[DiskSlip],
+    dy: &[f64],
+    dm: &[f64],
+    forcing: f64,
+) -> Option<(Vec<f64>, Vec<f64>)> {
+    let (n, m) = (step.n(), step.m());
+    let omega = |l: usize| step.nodes[step.node_of(l)].omega;
+    let mut dm = dm.to_vec();
+    let mut dy = dy.to_vec();
+    // Ĝ (times ω): the diagonal, and the slipping nodes' blocks with their known change
+    let diag: Vec<f64> = (0..m).map(|l| if prescribed[l] { 0.0 } else { omega(l) * g[l] }).collect();
+    let mut blocks: Vec<Option<[[f64; 2]; 2]>> = vec![None; n];
+    let mut slip_block: Vec<Option<[[f64; 2]; 2]>> = vec![None; n];
+    for d in slips {
+        let known = d.known();
+        dm[step.tau_j(d.i, 0)] = known[0];
+        dm[step.tau_j(d.i, 1)] = known[1];
+        let gb = d.symmetric_block();
+        let w = step.nodes[d.i].omega;
+        blocks[d.i] = Some(gb.map(|row| row.map(|v| w * v)));
+        slip_block[d.i] = Some(gb);
+    }
+    let r_k: Vec<f64> = (0..m).map(|l| omega(l) * if prescribed[l] { g[l] * dy[l] } else { dm[l] }).collect();
+    // W⁻¹ (F_y + Δy_P)
+    let mut fy_p: Vec<f64> = f[..m].to_vec();
+    for l in (0..m).filter(|&l| prescribed[l]) {
+        fy_p[l] += dy[l];
+    }
+    let u0 = inverse.apply(&fy_p);
+    let free: Vec<usize> = (0..m).filter(|&l| !prescribed[l]).collect();
+    let mut b = vec![0.0; m];
+    for &l in &free {
+        b[l] = -u0[l] - r_k[l];
+    }
+    let mut x = vec![0.0; m];
+    let iterations = inverse.solve(&free, &diag, &blocks, &b, forcing.max(crate::defaults::PCG_TOLERANCE), crate::defaults::VELOCITY_FORM_MAX_ITERATIONS, &mut x)?;
+    step.factors.record_velocity_solve(iterations);
+    for &l in &free {
+        dy[l] = x[l];
+    }
+    // the prescribed components' force changes
+    let u1 = inverse.apply(&x);
+    for l in (0..m).filter(|&l| prescribed[l]) {
+        dm[l] = (-(u0[l] + u1[l]) - r_k[l]) / omega(l);
+    }
+    // the free tangential components' force changes beyond the known part: Ĝ Δy (normals keep
+    // Δλ; their compliance force follows y through q)
+    for i in 0..n {
+        if let Some(gb) = slip_block[i] {
+            let (a, c) = (step.tau_j(i, 0), step.tau_j(i, 1));
+            let (ya, yc) = (dy[a], dy[c]);
+            dm[a] += gb[0][0] * ya + gb[0][1] * yc;
+            dm[c] += gb[1][0] * ya + gb[1][1] * yc;
+        } else if step.friction && step.tdim() == 1 {
+            let jt = step.tau(i);
+            if !prescribed[jt] {
+                dm[jt] += g[jt] * dy[jt];
+            }
+        }
+    }
+    (dy.iter().chain(&dm).all(|v| v.is_finite())).then_some((dy, dm))
+}
+
 /// The Newton direction as a symmetric positive definite system in the force increments (the
-/// frozen bound of F.1 with a monotone normal law: no Co.3 coupling, ∂q/∂y ≥ 0). With
+/// frozen bound of F.1 with a monotone normal law: no Co.3 coupling, ∂q/∂y ≥ 0), in the local
+/// components of `frames` (slipping 3-D nodes along (ẑ, ẑ^⊥); `f`, `dy`, `dm` local too). With
 /// z_l = ω_l Δm_l on prescribed components (P) and z_l = ω_l g_l Δy_l on free components whose
-/// force follows y (F_g: g_l > 0), and the known force change r_k,l = ω_l Δm_l on the free ones
-/// (ω_l g_l Δy_l on P: the compliance part of an active node's force),
-/// the linearized (N.1) rows Δy + W Δr = −F_y read
-///   (W_UU + D) z_U = −F_U − Δy_P − (W r_k)_U,   U = P ∪ F_g,   D = diag(0 on P, 1/(ω g) on F_g),
-/// and the remaining free rows give Δy_l = −F_l − (W (z + r_k))_l. W_UU + D is a principal
-/// submatrix of the Delassus operator plus a nonnegative diagonal: Cholesky, not LU. Its
-/// factorization depends only on U and D, so it is reused from `step.factors` while they do not
-/// change (bit-identical to refactoring). Returns the unknown of each component (Δm on P, Δy
-/// elsewhere), None when W_UU + D is not numerically positive definite.
-fn reduced_direction(step: &StepData, f: &[f64], prescribed: &[bool], g: &[f64], dy: &[f64], dm: &[f64]) -> Option<Vec<f64>> {
+/// force follows y (F_g: g_l > 0 — compliant normals, and across a 3-D slip), and the known
+/// force change r_k,l = ω_l Δm_l on the free ones (ω_l g_l Δy_l on P: the compliance part of an
+/// active node's force), the linearized (N.1) rows Δy + W' Δr = −F_y read
+///   (W'_UU + D) z_U = −F_U − Δy_P − (W' r_k)_U,   U = P ∪ F_g,   D = diag(0 on P, 1/(ω g) on F_g),
+/// and the remaining free rows give Δy_l = −F_l − (W' (z + r_k))_l. W'_UU + D is a principal
+/// submatrix of the (rotated) Delassus operator plus a nonnegative diagonal: Cholesky, not LU,
+/// kept and reused by `step.factors` (exactly while U, D and the frames hold; as the
+/// preconditioner of conjugate gradients while U holds). Returns the unknown of each component
+/// (Δm on P, Δy elsewhere), None when W'_UU + D is not numerically positive definite.
+fn reduced_direction(step: &StepData, frames: &SlipFrames, f: &[f64], prescribed: &[bool], g: &[f64], dy: &[f64], dm: &[f64], forcing: f64) -> Option<Vec<f64>> {
     let m = step.m();
     let w = step.delassus;
     let omega = |l: usize| step.nodes[step.node_of(l)].omega;
     let unknown: Vec<usize> = (0..m).filter(|&l| prescribed[l] || g[l] > 0.0).collect();
     let diag: Vec<f64> = unknown.iter().map(|&l| if prescribed[l] { 0.0 } else { 1.0 / (omega(l) * g[l]) }).collect();
-    // the known force change and its response W r_k
+    // the known force change and its response W' r_k
     let r_k: Vec<f64> = (0..m).map(|l| omega(l) * if prescribed[l] { g[l] * dy[l] } else { dm[l] }).collect();
-    let w_rk = step.apply_delassus(&r_k);
+    let mut w_rk = vec![0.0; m];
+    w.add_times_in(frames, &r_k, 1.0, &mut w_rk);
     let mut b: Vec<f64> = unknown.iter().map(|&j| -f[j] - w_rk[j] - if prescribed[j] { dy[j] } else { 0.0 }).collect();
     if !unknown.is_empty() {
-        step.factors.solve(w, &unknown, &diag, &mut b)?;
+        step.factors.solve_to(w, frames, &unknown, &diag, forcing, &mut b)?;
     }
     let mut z = vec![0.0; m];
     for (&l, &zl) in unknown.iter().zip(&b) {
         z[l] = zl;
     }
-    // W z is needed only on the free components whose force is known (g = 0): slipping
+    // W' z is needed only on the free components whose force is known (g = 0): slipping
     // tangents and separated normals — none while every node sticks on the foundation
+    let w_z = frames.any().then(|| {
+        let mut out = vec![0.0; m];
+        w.add_times_in(frames, &z, 1.0, &mut out);
+        out
+    });
     let out: Vec<f64> = (0..m)
         .map(|l| {
             if prescribed[l] {
@@ -468,7 +686,7 @@ fn reduced_direction(step: &StepData, f: &[f64], prescribed: &[bool], g: &[f64],
             } else if g[l] > 0.0 {
                 z[l] / (omega(l) * g[l])
             } else {
-                -f[l] - step.delassus.row_times(l, &z) - w_rk[l]
+                -f[l] - w_z.as_ref().map_or_else(|| w.row_times(l, &z), |wz| wz[l]) - w_rk[l]
             }
         })
         .collect();
@@ -483,7 +701,7 @@ fn general_direction(
     f: &[f64],
     prescribed: &[bool],
     g: &[f64],
-    (coupling, blocks): (&[f64], &[(usize, [[f64; 2]; 2])]),
+    (coupling, blocks): (&[[f64; 2]], &[(usize, [[f64; 2]; 2])]),
     dy: &[f64],
     dm: &[f64],
 ) -> Option<Vec<f64>> {
@@ -509,15 +727,18 @@ fn general_direction(
         }
     }
     // (Co.3) the friction force of a slipping node follows its normal force N = q + λ: the
-    // normal unknown's column also acts through the tangential component
-    for i in (0..n).filter(|&i| coupling[i] != 0.0) {
-        let (jn, jt) = (step.nu(i), step.tau(i));
-        let c = coupling[i] * omega(jt);
+    // normal unknown's column also acts through the tangential components
+    for i in (0..n).filter(|&i| coupling[i] != [0.0; 2]) {
+        let jn = step.nu(i);
         // ΔN = Δλ + g Δy_ν (normal prescribed: Δλ unknown, Δy_ν known) or g Δy_ν + Δλ_known (free)
         let (col_factor, known) = if prescribed[jn] { (1.0, g[jn] * dy[jn]) } else { (g[jn], dm[jn]) };
-        for j in 0..m {
-            jac[(j, jn)] += w[(j, jt)] * c * col_factor;
-            rhs[j] -= w[(j, jt)] * c * known;
+        for (k, &ck) in coupling[i][..step.tdim()].iter().enumerate() {
+            let jt = step.tau_j(i, k);
+            let c = ck * omega(jt);
+            for j in 0..m {
+                jac[(j, jn)] += w[(j, jt)] * c * col_factor;
+                rhs[j] -= w[(j, jt)] * c * known;
+            }
         }
     }
     // (3-D) a slipping node's friction force follows its tangential velocities through the
