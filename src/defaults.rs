@@ -113,3 +113,8 @@ pub const PCG_FROM: usize = 300;
 pub const VELOCITY_FORM_TRIAL: usize = 40;
 /// … and a direction falls back to the force form when its solve needs more than this many.
 pub const VELOCITY_FORM_MAX_ITERATIONS: usize = 60;
+
+/// (R.1) A contact node's mass is not moved onto a neighbour in a way that leaves the neighbour
+/// with less than this share of its own lumped mass: that neighbour is left out of the
+/// redistribution and the weights are solved again.
+pub const MODIFIED_MASS_FLOOR: f64 = 0.01;

@@ -212,12 +212,8 @@ impl Operators {
 /// The diagonal (lumped or modified) nodal mass per free DOF, the m_i of (C.k).
 pub fn nodal_masses(mesh: &Geometry, mat: &Material, mass: MassKind, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Vec<f64>> {
     match (mesh, mass) {
-        (Geometry::Plane(m), MassKind::Modified) => Ok(per_dof(&modified_masses(m, mat, dofs, contact_nodes)?, dofs)),
+        (_, MassKind::Modified) => Ok(per_dof(&modified_masses(mesh, mat, dofs, contact_nodes)?, dofs)),
         (Geometry::Plane(m), _) => Ok(lumped_masses(m, mat, dofs)),
-        (Geometry::Solid(_), MassKind::Modified) => Err(Error::scene(
-            "solver.mass",
-            "\"modified\" (R.1) is implemented for 2-D meshes only; use mass = \"lumped\" or \"consistent\" in 3-D",
-        )),
         (Geometry::Solid(m), _) => Ok(per_dof(&solid_vertex_masses(m, mat), dofs)),
     }
 }
@@ -240,69 +236,166 @@ pub fn solid_vertex_masses(mesh: &SolidMesh, mat: &Material) -> Vec<f64> {
 /// that Σ w_j = 1 and Σ w_j x_j = x_i: the total mass and the centre of mass are kept exactly.
 /// The boundary node lies outside its neighbours' hull, so some weights are negative (mass is
 /// moved in by extrapolation, e.g. +2 m_i to the first layer, −m_i from the second on a
-/// structured mesh); every resulting mass must stay positive, or this is an error.
-pub fn modified_masses(mesh: &Mesh, mat: &Material, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Vec<f64>> {
-    let n = mesh.nodes.len();
-    let mut mass = vertex_masses(mesh, mat);
+/// structured mesh); every resulting mass must stay positive, or this is an error. The same in
+/// 2-D (triangles; 3 conditions) and 3-D (tetrahedra; 4 conditions).
+pub fn modified_masses(mesh: &Geometry, mat: &Material, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Vec<f64>> {
+    let dim = mesh.dim();
+    let n = mesh.n_nodes();
+    let (mut mass, cells): (Vec<f64>, Vec<Vec<usize>>) = match mesh {
+        Geometry::Plane(m) => (vertex_masses(m, mat), m.triangles.iter().map(|t| t.to_vec()).collect()),
+        Geometry::Solid(m) => (solid_vertex_masses(m, mat), m.tets.iter().map(|t| t.to_vec()).collect()),
+    };
     let original = mass.clone();
     let mut adj = vec![Vec::new(); n];
-    for tri in &mesh.triangles {
-        for a in 0..3 {
-            for b in 0..3 {
-                if a != b && !adj[tri[a]].contains(&tri[b]) {
-                    adj[tri[a]].push(tri[b]);
+    for cell in &cells {
+        for &a in cell {
+            for &b in cell {
+                if a != b && !adj[a].contains(&b) {
+                    adj[a].push(b);
                 }
             }
         }
     }
     let mut is_contact = vec![false; n];
     contact_nodes.iter().for_each(|&i| is_contact[i] = true);
-    let free = |j: usize| dofs.map[2 * j].is_some();
+    let free = |j: usize| dofs.map[dim * j].is_some();
+    let at = |i: usize| {
+        let x = mesh.point(i);
+        if dim == 3 { format!("({}, {}, {})", x[0], x[1], x[2]) } else { format!("({}, {})", x[0], x[1]) }
+    };
+    let distance = |a: usize, b: usize| {
+        let (x, y) = (mesh.point(a), mesh.point(b));
+        ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt()
+    };
     for &i in contact_nodes {
         let mut cand: Vec<usize> = Vec::new();
-        for &j in &adj[i] {
-            for &l in std::iter::once(&j).chain(adj[j].iter()) {
-                if !is_contact[l] && free(l) && !cand.contains(&l) {
-                    cand.push(l);
+        if dim == 2 {
+            // the nodes within two edges
+            for &j in &adj[i] {
+                for &l in std::iter::once(&j).chain(adj[j].iter()) {
+                    if !is_contact[l] && free(l) && !cand.contains(&l) {
+                        cand.push(l);
+                    }
                 }
             }
+        } else {
+            // the nodes within three edges and twice the longest edge at i: a cloud that a
+            // structured tetrahedral mesh (whose edges run along one diagonal) keeps symmetric,
+            // so the tangential conditions need no extrapolation
+            let reach = 2.0 * adj[i].iter().map(|&j| distance(i, j)).fold(0.0, f64::max);
+            let mut seen = vec![i];
+            let mut front = vec![i];
+            for _ in 0..3 {
+                let mut next = Vec::new();
+                for &a in &front {
+                    for &b in &adj[a] {
+                        if !seen.contains(&b) {
+                            seen.push(b);
+                            next.push(b);
+                        }
+                    }
+                }
+                front = next;
+            }
+            cand.extend(seen.into_iter().filter(|&l| l != i && !is_contact[l] && free(l) && distance(i, l) <= reach * (1.0 + 1e-12)));
         }
-        let xi = mesh.nodes[i];
-        // least Σ w²/m subject to A w = b: w = D Aᵀ (A D Aᵀ)⁻¹ b, A = [1; x − x_i; y − y_i]
-        let rows: Vec<[f64; 3]> = cand.iter().map(|&j| [1.0, mesh.nodes[j][0] - xi[0], mesh.nodes[j][1] - xi[1]]).collect();
-        let mut g = nalgebra::Matrix3::<f64>::zeros();
-        for (r, &j) in rows.iter().zip(&cand) {
-            let a = nalgebra::Vector3::from(*r);
-            g += original[j] * a * a.transpose();
-        }
-        let lam = g.try_inverse().map(|gi| gi * nalgebra::Vector3::new(1.0, 0.0, 0.0)).ok_or_else(|| {
-            Error::scene(
-                "solver.mass",
-                format!(
-                    "\"modified\": contact node {i} at ({}, {}) has too few free neighbours within two edges to move its mass \
-                     while keeping the centre of mass; refine the mesh near the contact side or use mass = \"lumped\"",
-                    xi[0], xi[1]
-                ),
-            )
-        })?;
-        for (r, &j) in rows.iter().zip(&cand) {
-            let w = original[j] * nalgebra::Vector3::from(*r).dot(&lam);
-            mass[j] += original[i] * w;
+        let xi = mesh.point(i);
+        // least Σ w²/m subject to A w = b: w = D Aᵀ (A D Aᵀ)⁻¹ b, A = [1; x − x_i; y − y_i (; z − z_i)];
+        // a candidate whose mass this would take below MODIFIED_MASS_FLOOR of its own is left
+        // out and the weights solved again (a corner node of a 3-D contact face extrapolates in
+        // three directions, which can ask more of a light neighbour than it has)
+        loop {
+            let rows: Vec<[f64; 4]> = cand
+                .iter()
+                .map(|&j| {
+                    let x = mesh.point(j);
+                    [1.0, x[0] - xi[0], x[1] - xi[1], x[2] - xi[2]]
+                })
+                .collect();
+            let lam = least_weights(dim, &rows, &cand, &original).ok_or_else(|| {
+                Error::scene(
+                    "solver.mass",
+                    format!(
+                        "\"modified\": contact node {i} at {} has too few free neighbours within two edges to move its mass \
+                         while keeping the centre of mass; refine the mesh near the contact side or use mass = \"lumped\"",
+                        at(i)
+                    ),
+                )
+            })?;
+            let change: Vec<f64> = rows.iter().zip(&cand).map(|(r, &j)| original[i] * original[j] * (0..=dim).map(|k| r[k] * lam[k]).sum::<f64>()).collect();
+            let worst = (0..cand.len())
+                .map(|q| ((mass[cand[q]] + change[q]) / original[cand[q]], q))
+                .filter(|(ratio, _)| *ratio < crate::defaults::MODIFIED_MASS_FLOOR)
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            // the weights must meet the conditions (a nearly singular system does not)
+            let weights: Vec<f64> = change.iter().map(|c| c / original[i]).collect();
+            let reach = rows.iter().map(|r| r[1].abs().max(r[2].abs()).max(r[3].abs())).fold(0.0, f64::max);
+            let defect = (0..=dim)
+                .map(|k| (rows.iter().zip(&weights).map(|(r, w)| r[k] * w).sum::<f64>() - if k == 0 { 1.0 } else { 0.0 }).abs() / if k == 0 { 1.0 } else { reach })
+                .fold(0.0, f64::max);
+            match worst {
+                Some((_, q)) if cand.len() > dim + 1 => {
+                    cand.remove(q);
+                }
+                None if defect <= 1e-10 => {
+                    for (q, &j) in cand.iter().enumerate() {
+                        mass[j] += change[q];
+                    }
+                    break;
+                }
+                _ => {
+                    return Err(Error::scene(
+                        "solver.mass",
+                        format!(
+                            "\"modified\": the mass of contact node {i} at {} cannot be moved to its free neighbours within two edges \
+                             keeping the centre of mass and every mass positive; refine the mesh near the contact side or use mass = \"lumped\"",
+                            at(i)
+                        ),
+                    ));
+                }
+            }
         }
         mass[i] = 0.0;
     }
     if let Some(j) = (0..n).find(|&j| !is_contact[j] && free(j) && mass[j] <= 0.0) {
-        let x = mesh.nodes[j];
         return Err(Error::scene(
             "solver.mass",
             format!(
-                "\"modified\": redistributing the contact nodes' mass leaves node {j} at ({}, {}) with mass {:.3e} <= 0; \
+                "\"modified\": redistributing the contact nodes' mass leaves node {j} at {} with mass {:.3e} <= 0; \
                  refine the mesh near the contact side or use mass = \"lumped\"",
-                x[0], x[1], mass[j]
+                at(j),
+                mass[j]
             ),
         ));
     }
     Ok(mass)
+}
+
+/// The multipliers λ of (R.1)'s least-squares weights w_j = m_j a_jᵀ λ, from
+/// (Σ_j m_j a_j a_jᵀ) λ = e_1 with a_j = [1, x_j − x_i, …] (`dim` + 1 entries of each row used);
+/// None when that matrix is singular.
+fn least_weights(dim: usize, rows: &[[f64; 4]], cand: &[usize], m: &[f64]) -> Option<[f64; 4]> {
+    if dim == 2 {
+        let mut g = nalgebra::Matrix3::<f64>::zeros();
+        for (r, &j) in rows.iter().zip(cand) {
+            let a = nalgebra::Vector3::new(r[0], r[1], r[2]);
+            g += m[j] * a * a.transpose();
+        }
+        g.try_inverse().map(|gi| {
+            let l = gi * nalgebra::Vector3::new(1.0, 0.0, 0.0);
+            [l[0], l[1], l[2], 0.0]
+        })
+    } else {
+        let mut g = nalgebra::Matrix4::<f64>::zeros();
+        for (r, &j) in rows.iter().zip(cand) {
+            let a = nalgebra::Vector4::from(*r);
+            g += m[j] * a * a.transpose();
+        }
+        g.try_inverse().map(|gi| {
+            let l = gi * nalgebra::Vector4::new(1.0, 0.0, 0.0, 0.0);
+            [l[0], l[1], l[2], l[3]]
+        })
+    }
 }
 
 /// Row-sum lumped mass per mesh node: Σ over adjacent triangles of ρ|T|/3.
