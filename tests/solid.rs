@@ -245,3 +245,26 @@ fn solid_mesh_errors_name_the_defect() {
     let e = bowtie.side_nodes(&["contact".to_string()], &[]).expect_err("non-manifold").to_string();
     assert!(e.contains("edge (0, 1)") && e.contains("not a manifold"), "{e}");
 }
+
+/// The degree-5 tetrahedron rule of the 3-D error norms integrates every monomial
+/// λ1^a λ2^b λ3^c λ0^d of degree ≤ 5 exactly: 3! a! b! c! d! / (a + b + c + d + 3)! of the volume
+/// (to 1e-14, round-off of 64 products).
+#[test]
+fn tet_rule_is_exact_to_degree_five() {
+    let rule = dyncontact::fem::norms::tet_rule();
+    let fact = |n: u32| (1..=n).map(f64::from).product::<f64>();
+    let mut worst = 0.0f64;
+    for a in 0..=5u32 {
+        for b in 0..=5 - a {
+            for c in 0..=5 - a - b {
+                for d in 0..=5 - a - b - c {
+                    let q: f64 = rule.iter().map(|(l, w)| w * l[1].powi(a as i32) * l[2].powi(b as i32) * l[3].powi(c as i32) * l[0].powi(d as i32)).sum();
+                    let exact = 6.0 * fact(a) * fact(b) * fact(c) * fact(d) / fact(a + b + c + d + 3);
+                    worst = worst.max((q - exact).abs() / exact);
+                }
+            }
+        }
+    }
+    println!("tet rule: worst relative error over monomials of degree ≤ 5: {worst:.2e}");
+    assert!(worst <= 1e-14, "{worst:.3e}");
+}

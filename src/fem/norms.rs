@@ -1,7 +1,9 @@
 //! Error norms of a P1 field against a smooth function, by a 7-point degree-5 quadrature
-//! (Dunavant), so the quadrature error is far below the discretization error measured.
+//! (Dunavant) on triangles and a degree-5 collapsed Gauss rule on tetrahedra, so the quadrature
+//! error is far below the discretization error measured.
 
 use super::element;
+use crate::mesh::solid::SolidMesh;
 use crate::mesh::Mesh;
 use crate::model::material::Material;
 
@@ -58,6 +60,73 @@ pub fn error_norms(
             let e = [gh[0][0] - ge[0][0], gh[1][1] - ge[1][1], gh[0][1] - ge[0][1] + gh[1][0] - ge[1][0]];
             let ev = nalgebra::Vector3::from(e);
             en += w * area * ev.dot(&(d * ev));
+        }
+    }
+    (l2.sqrt(), en.sqrt())
+}
+
+/// Barycentric points and weights (summing to 1) of a degree-5 rule on the tetrahedron: the
+/// collapsed (Duffy) product of 4-point Gauss–Legendre rules, λ1 = a, λ2 = b (1 − a),
+/// λ3 = c (1 − a)(1 − b) with the Jacobian (1 − a)²(1 − b) — 64 points, positive weights, exact
+/// for polynomials of degree ≤ 5 (the transformed integrand has degree ≤ 7 per direction).
+pub fn tet_rule() -> Vec<([f64; 4], f64)> {
+    let g: [(f64, f64); 4] = [
+        (0.5 - 0.5 * 0.861_136_311_594_052_6, 0.5 * 0.347_854_845_137_453_8),
+        (0.5 - 0.5 * 0.339_981_043_584_856_3, 0.5 * 0.652_145_154_862_546_1),
+        (0.5 + 0.5 * 0.339_981_043_584_856_3, 0.5 * 0.652_145_154_862_546_1),
+        (0.5 + 0.5 * 0.861_136_311_594_052_6, 0.5 * 0.347_854_845_137_453_8),
+    ];
+    let mut rule = Vec::with_capacity(64);
+    for &(a, wa) in &g {
+        for &(b, wb) in &g {
+            for &(c, wc) in &g {
+                let l1 = a;
+                let l2 = b * (1.0 - a);
+                let l3 = c * (1.0 - a) * (1.0 - b);
+                // the reference tetrahedron has volume 1/6: weights normalized to sum to 1
+                let w = 6.0 * wa * wb * wc * (1.0 - a).powi(2) * (1.0 - b);
+                rule.push(([1.0 - l1 - l2 - l3, l1, l2, l3], w));
+            }
+        }
+    }
+    rule
+}
+
+/// (‖u_h − u‖_{L²}, a(u_h − u, u_h − u)^{1/2}) on a tetrahedral mesh, a the elastic energy of
+/// `mat` (the energy norm), by the degree-5 rule of [`tet_rule`]. `u_h` is nodal; `u`,
+/// `grad_u` are the exact field and its gradient (∂_j u_i at [i][j]).
+pub fn error_norms_3d(
+    mesh: &SolidMesh,
+    mat: &Material,
+    u_h: &[[f64; 3]],
+    u: impl Fn([f64; 3]) -> [f64; 3],
+    grad_u: impl Fn([f64; 3]) -> [[f64; 3]; 3],
+) -> (f64, f64) {
+    let d = mat.elasticity_3d();
+    let rule = tet_rule();
+    let (mut l2, mut en) = (0.0, 0.0);
+    for tet in &mesh.tets {
+        let x = tet.map(|v| mesh.nodes[v]);
+        let Some((grad, signed)) = super::tet::gradients(x) else { continue };
+        let volume = signed.abs();
+        let mut gh = [[0.0; 3]; 3];
+        for (k, g) in grad.iter().enumerate() {
+            for i in 0..3 {
+                for j in 0..3 {
+                    gh[i][j] += u_h[tet[k]][i] * g[j];
+                }
+            }
+        }
+        for (bary, w) in &rule {
+            let p: [f64; 3] = std::array::from_fn(|c| (0..4).map(|k| bary[k] * x[k][c]).sum());
+            let uh: [f64; 3] = std::array::from_fn(|c| (0..4).map(|k| bary[k] * u_h[tet[k]][c]).sum());
+            let ue = u(p);
+            l2 += w * volume * (0..3).map(|c| (uh[c] - ue[c]).powi(2)).sum::<f64>();
+            let ge = grad_u(p);
+            let e = |i: usize, j: usize| gh[i][j] - ge[i][j];
+            // Voigt (ε_xx, ε_yy, ε_zz, γ_yz, γ_xz, γ_xy), the order of tet::strain_matrix
+            let ev = nalgebra::Vector6::new(e(0, 0), e(1, 1), e(2, 2), e(1, 2) + e(2, 1), e(0, 2) + e(2, 0), e(0, 1) + e(1, 0));
+            en += w * volume * ev.dot(&(d * ev));
         }
     }
     (l2.sqrt(), en.sqrt())

@@ -40,12 +40,16 @@ pub fn measured(test: &str, quantity: &str, value: f64, expected: &str) {
     }
 }
 
-/// L² distance of two free-DOF fields on the mesh of `p` (consistent mass with ρ = 1).
+/// L² distance of two free-DOF fields on the mesh of `p` (consistent mass with ρ = 1), in 2-D or 3-D.
 pub fn l2_diff(p: &Problem, a: &[f64], b: &[f64]) -> f64 {
     let mut mat = p.material;
     mat.rho = 1.0;
-    let (m, _, _) = dyncontact::fem::assemble::assemble_full(p.mesh.plane().expect("a 2-D mesh"), &mat, dyncontact::model::kinds::MassKind::Consistent)
-        .expect("assembly");
+    let consistent = dyncontact::model::kinds::MassKind::Consistent;
+    let (m, _, _) = match &p.mesh {
+        dyncontact::mesh::Geometry::Plane(mesh) => dyncontact::fem::assemble::assemble_full(mesh, &mat, consistent),
+        dyncontact::mesh::Geometry::Solid(mesh) => dyncontact::fem::assemble::assemble_solid(mesh, &mat, consistent),
+    }
+    .expect("assembly");
     let m = dyncontact::fem::assemble::restrict(&m, &p.dofs).expect("restrict");
     let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
     dyncontact::linalg::quad(&m, &d, &d).sqrt()
