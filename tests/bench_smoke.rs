@@ -83,7 +83,14 @@ fn quick_bench_writes_its_files() {
         assert!(share > 0.0 && share < 1.0, "a share of the step: {r:?}");
     }
 
-    for svg in ["work_precision.svg", "race.svg"] {
+    // the 3-D rows of part 2 and the 3-D points of part 4
+    let (header, rows) = read_csv(&dir.join("floor3d.csv"));
+    assert!(header.iter().any(|h| h == "ratio_to_floor") && header.iter().any(|h| h == "contact_nodes"), "floor3d.csv columns");
+    assert!(rows.iter().any(|r| r["scene"] == "academic3d") && rows.iter().any(|r| r["scene"] == "sliding_block3d"), "floor3d.csv rows");
+    let (_, rows) = read_csv(&dir.join("scaling.csv"));
+    assert!(rows.iter().any(|r| r["form"] == "3-D" && number(r, "contact_per_step_s") > 0.0), "a 3-D point in scaling.csv");
+
+    for svg in ["work_precision.svg", "race.svg", "scaling.svg"] {
         let text = std::fs::read_to_string(dir.join(svg)).expect(svg);
         assert!(text.starts_with("<svg") && text.contains("</svg>"), "{svg} is not an SVG document");
     }

@@ -137,3 +137,49 @@ fn e1_energy_balance_penalty() {
     assert!(recs.iter().all(|r| r.energy.constraint_dissipation == 0.0), "P_ε has no constraint dissipation");
     assert!(worst <= 1e-9, "relative (E.1) defect {worst:.3e}");
 }
+
+/// (E.1) in 3-D: on every 3-D fixture scene (the list is checked against fixtures/scenes) — and
+/// on academic3d with the unfrozen Newton (N.4) and the column with the modified mass (R.1) —
+/// every step's defect is ≤ 1e-10 of the energy scale (the solver tolerances are 1e-10 in
+/// velocity; measured ≤ 1e-12), and the friction, constraint and viscous dissipations never
+/// decrease (round-off allowance 1e-14 of the scale). academic3d runs at 8×4×4 cells for 0.5 s.
+#[test]
+fn e1_energy_balance_every_3d_fixture() {
+    use dyncontact::scene::{InnerSolver, MassKind};
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes");
+    let listed = ["academic3d", "cantilever3d", "column_impact3d", "gmsh_block3d", "hertz3d", "sliding_block3d"];
+    for e in std::fs::read_dir(&dir).expect("fixtures").flatten() {
+        let name = e.path().file_stem().expect("name").to_string_lossy().to_string();
+        if problem(fixture(&name)).mesh.dim() == 3 {
+            assert!(listed.contains(&name.as_str()), "{name}: a 3-D fixture this test does not check");
+        }
+    }
+    let coarse = |mut s: Scene| {
+        s.domain.cells = Some(vec![8, 4, 4]);
+        s.time.end = 0.5;
+        s
+    };
+    let mut cases: Vec<(String, Scene)> = listed.iter().map(|n| (n.to_string(), fixture(n))).collect();
+    cases[0].1 = coarse(fixture("academic3d"));
+    let mut unfrozen = coarse(fixture("academic3d"));
+    unfrozen.solver.inner = InnerSolver::NewtonUnfrozen;
+    cases.push(("academic3d, newton-unfrozen".into(), unfrozen));
+    let mut modified = fixture("column_impact3d");
+    modified.solver.mass = MassKind::Modified;
+    cases.push(("column_impact3d, modified mass".into(), modified));
+    for (name, s) in cases {
+        let recs = records(&problem(s));
+        let mut worst: f64 = 0.0;
+        for w in recs.windows(2) {
+            let (a, b) = (&w[0], &w[1]);
+            worst = worst.max(b.energy.residual.abs() / b.energy_scale);
+            let tol = 1e-14 * b.energy_scale;
+            assert!(b.energy.friction_dissipation >= a.energy.friction_dissipation - tol, "{name}: friction dissipation decreased at step {}", b.step);
+            assert!(b.energy.constraint_dissipation >= a.energy.constraint_dissipation - tol, "{name}: constraint dissipation decreased at step {}", b.step);
+            assert!(b.energy.viscous_dissipation >= a.energy.viscous_dissipation - tol, "{name}: viscous dissipation decreased at step {}", b.step);
+        }
+        println!("{name}: {} steps, max relative (E.1) defect {worst:.3e}", recs.len() - 1);
+        common::measured("energy::e1_energy_balance_every_3d_fixture", &format!("E.1 largest relative defect ({name})"), worst, "≤ 1e-10");
+        assert!(worst <= 1e-10, "{name}: relative (E.1) defect {worst:.3e}");
+    }
+}

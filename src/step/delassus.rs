@@ -16,11 +16,13 @@
 use std::cell::RefCell;
 use std::collections::HashMap;
 
-use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::matrix_free::conjugate_gradient::{conjugate_gradient, conjugate_gradient_scratch, CgParams};
+use faer::matrix_free::{InitialGuessStatus, LinOp, Precond};
 use faer::linalg::solvers::{DenseSolveCore, Llt, Solve};
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{Conj, Mat, Par, Side};
+use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
 
 use crate::linalg::Cholesky;
 use crate::model::contact::ContactModel;
@@ -74,6 +76,12 @@ impl std::ops::Index<(usize, usize)> for Delassus {
                 }
             }
         }
+    }
+}
+
+impl std::fmt::Debug for Delassus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Delassus({}, {} × {})", self.form(), self.dim(), self.dim())
     }
 }
 
@@ -519,6 +527,15 @@ enum FactorKind {
     Sparse(SparseFactor),
 }
 
+impl std::fmt::Debug for FactorKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            FactorKind::Dense(_) => "FactorKind::Dense",
+            FactorKind::Sparse(_) => "FactorKind::Sparse",
+        })
+    }
+}
+
 impl FactorKind {
     fn solve_in_place(&self, b: &mut [f64]) {
         match self {
@@ -636,6 +653,7 @@ impl DelassusFactors {
 /// both matrices have go through the factor (the kept matrix's other unknowns held at zero), the
 /// new ones are scaled by their diagonal entry. Symmetric positive definite whatever the change,
 /// so conjugate gradients converge; fast when little changed.
+#[derive(Debug)]
 struct Preconditioner<'f> {
     factor: &'f FactorKind,
     /// the kept factor's size and, per unknown of U, its position there (None: a new unknown)
@@ -663,7 +681,7 @@ impl<'f> Preconditioner<'f> {
         Preconditioner { factor: &f.llt, kept: f.unknown.len(), position, inv_diag }
     }
     /// z ← P⁻¹ z.
-    fn apply(&self, z: &mut [f64]) {
+    fn apply_to(&self, z: &mut [f64]) {
         let mut x = vec![0.0; self.kept];
         for (p, q) in self.position.iter().enumerate() {
             if let Some(q) = q {
@@ -680,63 +698,103 @@ impl<'f> Preconditioner<'f> {
     }
 }
 
+/// Conjugate gradients (faer's `matrix_free::conjugate_gradient`) on `op` x = b preconditioned
+/// by `prec`, from the initial guess in `x`, to the relative residual `tolerance` within
+/// `max_iterations`: the iterations, or None (x unspecified) when they did not get there or met
+/// a non-positive curvature.
+fn conjugate_gradients(op: &impl LinOp<f64>, prec: &impl Precond<f64>, b: &[f64], x: &mut [f64], tolerance: f64, max_iterations: usize) -> Option<usize> {
+    let n = b.len();
+    let params = CgParams { initial_guess: InitialGuessStatus::MaybeNonZero, abs_tolerance: 0.0, rel_tolerance: tolerance, max_iters: max_iterations, ..CgParams::default() };
+    let mut mem = MemBuffer::new(conjugate_gradient_scratch(prec, op, 1, Par::Seq));
+    let info = conjugate_gradient(
+        faer::MatMut::from_column_major_slice_mut(x, n, 1),
+        prec,
+        op,
+        faer::MatRef::from_column_major_slice(b, n, 1),
+        params,
+        |_| {},
+        Par::Seq,
+        MemStack::new(&mut mem),
+    )
+    .ok()?;
+    x.iter().all(|v| v.is_finite()).then_some(info.iter_count)
+}
+
+/// W'_UU + D as an operator on the unknowns U (force form).
+#[derive(Debug)]
+struct ForceMatrix<'a> {
+    w: &'a Delassus,
+    frames: &'a SlipFrames,
+    unknown: &'a [usize],
+    diag: &'a [f64],
+}
+
+impl LinOp<f64> for ForceMatrix<'_> {
+    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
+        StackReq::EMPTY
+    }
+    fn nrows(&self) -> usize {
+        self.unknown.len()
+    }
+    fn ncols(&self) -> usize {
+        self.unknown.len()
+    }
+    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _stack: &mut MemStack) {
+        let m = self.w.dim();
+        for c in 0..rhs.ncols() {
+            let mut full = vec![0.0; m];
+            for (p, &l) in self.unknown.iter().enumerate() {
+                full[l] = rhs[(p, c)];
+            }
+            let mut wx = vec![0.0; m];
+            self.w.add_times_in(self.frames, &full, 1.0, &mut wx);
+            for (p, &l) in self.unknown.iter().enumerate() {
+                out[(p, c)] = wx[l] + self.diag[p] * rhs[(p, c)];
+            }
+        }
+    }
+    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
+        self.apply(out, rhs, par, stack)
+    }
+}
+
+impl LinOp<f64> for Preconditioner<'_> {
+    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
+        StackReq::EMPTY
+    }
+    fn nrows(&self) -> usize {
+        self.position.len()
+    }
+    fn ncols(&self) -> usize {
+        self.position.len()
+    }
+    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _stack: &mut MemStack) {
+        for c in 0..rhs.ncols() {
+            let mut z: Vec<f64> = (0..rhs.nrows()).map(|p| rhs[(p, c)]).collect();
+            self.apply_to(&mut z);
+            for (p, v) in z.into_iter().enumerate() {
+                out[(p, c)] = v;
+            }
+        }
+    }
+    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
+        self.apply(out, rhs, par, stack)
+    }
+}
+
+impl Precond<f64> for Preconditioner<'_> {}
+
 /// Conjugate gradients on (W'_UU + D) x = b preconditioned by `prec`, started from the
 /// preconditioned right-hand side; x in place of b. The number of iterations, or None (b
-/// untouched) when the relative residual did not reach
-/// [`PCG_TOLERANCE`](crate::defaults::PCG_TOLERANCE) within
+/// untouched) when the relative residual did not reach `tolerance` within
 /// [`PCG_MAX_ITERATIONS`](crate::defaults::PCG_MAX_ITERATIONS).
 fn pcg(w: &Delassus, frames: &SlipFrames, unknown: &[usize], diag: &[f64], prec: &Preconditioner, tolerance: f64, b: &mut [f64]) -> Option<usize> {
-    let (k, m) = (unknown.len(), w.dim());
-    let apply = |x: &[f64]| -> Vec<f64> {
-        let mut full = vec![0.0; m];
-        for (&l, &v) in unknown.iter().zip(x) {
-            full[l] = v;
-        }
-        let mut wx = vec![0.0; m];
-        w.add_times_in(frames, &full, 1.0, &mut wx);
-        (0..k).map(|p| wx[unknown[p]] + diag[p] * x[p]).collect()
-    };
-    let b_norm = crate::linalg::dot(b, b).sqrt();
-    if b_norm == 0.0 {
-        return Some(0);
-    }
     let mut x = b.to_vec();
-    prec.apply(&mut x);
-    let ax = apply(&x);
-    let mut r: Vec<f64> = b.iter().zip(&ax).map(|(bi, ai)| bi - ai).collect();
-    let tol = tolerance * b_norm;
-    let mut z = r.clone();
-    prec.apply(&mut z);
-    let mut p = z.clone();
-    let mut rz = crate::linalg::dot(&r, &z);
-    for it in 0..=crate::defaults::PCG_MAX_ITERATIONS {
-        if crate::linalg::dot(&r, &r).sqrt() <= tol {
-            b.copy_from_slice(&x);
-            return Some(it);
-        }
-        if it == crate::defaults::PCG_MAX_ITERATIONS {
-            break;
-        }
-        let ap = apply(&p);
-        let pap = crate::linalg::dot(&p, &ap);
-        if !(pap > 0.0) {
-            return None;
-        }
-        let alpha = rz / pap;
-        for q in 0..k {
-            x[q] += alpha * p[q];
-            r[q] -= alpha * ap[q];
-        }
-        z.copy_from_slice(&r);
-        prec.apply(&mut z);
-        let rz_new = crate::linalg::dot(&r, &z);
-        let beta = rz_new / rz;
-        rz = rz_new;
-        for q in 0..k {
-            p[q] = z[q] + beta * p[q];
-        }
-    }
-    None
+    prec.apply_to(&mut x);
+    let op = ForceMatrix { w, frames, unknown, diag };
+    let iterations = conjugate_gradients(&op, prec, b, &mut x, tolerance, crate::defaults::PCG_MAX_ITERATIONS)?;
+    b.copy_from_slice(&x);
+    Some(iterations)
 }
 
 /// The Cholesky factor of W'_UU + D in W's own form (dense LLᵀ, or sparse with AMD ordering).
@@ -831,7 +889,7 @@ impl InverseDelassus {
 
     /// Solve [(W⁻¹)_FF + Ĝ_F] x_F = b_F by conjugate gradients preconditioned with the node
     /// blocks, to the relative residual `tolerance` within `max_iterations`. F: the free
-    /// components (`free[l]` true; x and b are full-length, zero off F); Ĝ: `diag` per component
+    /// components (`free_list`; x and b are full-length, zero off F); Ĝ: `diag` per component
     /// plus, per node, an optional 2 × 2 block on its tangential pair (3-D slip; it replaces the
     /// diagonal there). The iterations, or None when the matrix showed a non-positive curvature
     /// (not positive definite: N.4 beyond (C.k)) or the tolerance was not reached.
@@ -846,45 +904,96 @@ impl InverseDelassus {
         max_iterations: usize,
         x: &mut [f64],
     ) -> Option<usize> {
-        let (m, d) = (b.len(), self.dim);
+        let m = b.len();
         let mut is_free = vec![false; m];
         for &l in free_list {
             is_free[l] = true;
         }
-        // Ĝ x on F
-        let g_times = |v: &[f64], out: &mut [f64]| {
-            for &l in free_list {
-                out[l] += diag[l] * v[l];
+        let op = VelocityMatrix { inverse: self, is_free: &is_free, free_list, diag, blocks };
+        let prec = NodeBlocks::new(self, &is_free, diag, blocks)?;
+        x.iter_mut().for_each(|v| *v = 0.0);
+        conjugate_gradients(&op, &prec, b, x, tolerance, max_iterations)
+    }
+}
+
+impl std::fmt::Debug for InverseDelassus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "InverseDelassus({} × {}, {} per node)", self.winv.nrows(), self.winv.ncols(), self.dim)
+    }
+}
+
+/// (W⁻¹)_FF + Ĝ_F as an operator on all m components (zero off F).
+#[derive(Debug)]
+struct VelocityMatrix<'a> {
+    inverse: &'a InverseDelassus,
+    is_free: &'a [bool],
+    free_list: &'a [usize],
+    diag: &'a [f64],
+    blocks: &'a [Option<[[f64; 2]; 2]>],
+}
+
+impl LinOp<f64> for VelocityMatrix<'_> {
+    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
+        StackReq::EMPTY
+    }
+    fn nrows(&self) -> usize {
+        self.is_free.len()
+    }
+    fn ncols(&self) -> usize {
+        self.is_free.len()
+    }
+    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _stack: &mut MemStack) {
+        let (m, d) = (self.is_free.len(), self.inverse.dim);
+        for c in 0..rhs.ncols() {
+            let v: Vec<f64> = (0..m).map(|l| if self.is_free[l] { rhs[(l, c)] } else { 0.0 }).collect();
+            let mut o = self.inverse.apply(&v);
+            for l in 0..m {
+                if !self.is_free[l] {
+                    o[l] = 0.0;
+                }
             }
-            for (i, blk) in blocks.iter().enumerate() {
+            for &l in self.free_list {
+                o[l] += self.diag[l] * v[l];
+            }
+            for (i, blk) in self.blocks.iter().enumerate() {
                 if let Some(g) = blk {
-                    let (a, c) = (d * i + 1, d * i + 2);
-                    if is_free[a] && is_free[c] {
-                        out[a] += g[0][0] * v[a] + g[0][1] * v[c];
-                        out[c] += g[1][0] * v[a] + g[1][1] * v[c];
+                    let (a, b) = (d * i + 1, d * i + 2);
+                    if self.is_free[a] && self.is_free[b] {
+                        o[a] += g[0][0] * v[a] + g[0][1] * v[b];
+                        o[b] += g[1][0] * v[a] + g[1][1] * v[b];
                     }
                 }
             }
-        };
-        let op = |v: &[f64]| -> Vec<f64> {
-            let mut out = self.apply(v);
-            for l in 0..m {
-                if !is_free[l] {
-                    out[l] = 0.0;
-                }
+            for (l, ol) in o.into_iter().enumerate() {
+                out[(l, c)] = ol;
             }
-            g_times(v, &mut out);
-            out
-        };
-        // node-block preconditioner: each node's free components, its block of the matrix
-        let mut prec: Vec<(Vec<usize>, nalgebra::DMatrix<f64>)> = Vec::new();
+        }
+    }
+    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
+        self.apply(out, rhs, par, stack)
+    }
+}
+
+/// The node-block preconditioner of the velocity form: per node, the inverse of its free
+/// components' block of (W⁻¹)_FF + Ĝ_F (1 × 1 to 3 × 3).
+#[derive(Debug)]
+struct NodeBlocks {
+    m: usize,
+    blocks: Vec<(Vec<usize>, nalgebra::DMatrix<f64>)>,
+}
+
+impl NodeBlocks {
+    /// None when a node's block is not positive definite.
+    fn new(inverse: &InverseDelassus, is_free: &[bool], diag: &[f64], blocks: &[Option<[[f64; 2]; 2]>]) -> Option<NodeBlocks> {
+        let (m, d) = (is_free.len(), inverse.dim);
+        let mut out = Vec::new();
         for i in 0..m / d {
             let comps: Vec<usize> = (d * i..d * i + d).filter(|&l| is_free[l]).collect();
             if comps.is_empty() {
                 continue;
             }
             let mut blk = nalgebra::DMatrix::<f64>::from_fn(comps.len(), comps.len(), |p, q| {
-                self.winv[(comps[p], comps[q])] + if p == q { diag[comps[p]] } else { 0.0 }
+                inverse.winv[(comps[p], comps[q])] + if p == q { diag[comps[p]] } else { 0.0 }
             });
             if let Some(g) = blocks[i] {
                 for (p, &lp) in comps.iter().enumerate() {
@@ -896,53 +1005,37 @@ impl InverseDelassus {
                     }
                 }
             }
-            let inv = blk.cholesky()?.inverse();
-            prec.push((comps, inv));
+            out.push((comps, blk.cholesky()?.inverse()));
         }
-        let precondition = |r: &[f64]| -> Vec<f64> {
-            let mut z = vec![0.0; m];
-            for (comps, inv) in &prec {
-                for (p, &lp) in comps.iter().enumerate() {
-                    z[lp] = comps.iter().enumerate().map(|(q, &lq)| inv[(p, q)] * r[lq]).sum();
-                }
-            }
-            z
-        };
-        let dot = crate::linalg::dot;
-        let b_norm = dot(b, b).sqrt();
-        x.iter_mut().for_each(|v| *v = 0.0);
-        if b_norm == 0.0 {
-            return Some(0);
-        }
-        let mut r = b.to_vec();
-        let mut z = precondition(&r);
-        let mut p = z.clone();
-        let mut rz = dot(&r, &z);
-        for it in 0..=max_iterations {
-            if dot(&r, &r).sqrt() <= tolerance * b_norm {
-                return Some(it);
-            }
-            if it == max_iterations {
-                break;
-            }
-            let ap = op(&p);
-            let pap = dot(&p, &ap);
-            if !(pap > 0.0) {
-                return None;
-            }
-            let alpha = rz / pap;
-            for l in 0..m {
-                x[l] += alpha * p[l];
-                r[l] -= alpha * ap[l];
-            }
-            z = precondition(&r);
-            let rz_new = dot(&r, &z);
-            let beta = rz_new / rz;
-            rz = rz_new;
-            for l in 0..m {
-                p[l] = z[l] + beta * p[l];
-            }
-        }
-        None
+        Some(NodeBlocks { m, blocks: out })
     }
 }
+
+impl LinOp<f64> for NodeBlocks {
+    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
+        StackReq::EMPTY
+    }
+    fn nrows(&self) -> usize {
+        self.m
+    }
+    fn ncols(&self) -> usize {
+        self.m
+    }
+    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _stack: &mut MemStack) {
+        for c in 0..rhs.ncols() {
+            for l in 0..self.m {
+                out[(l, c)] = 0.0;
+            }
+            for (comps, inv) in &self.blocks {
+                for (p, &lp) in comps.iter().enumerate() {
+                    out[(lp, c)] = comps.iter().enumerate().map(|(q, &lq)| inv[(p, q)] * rhs[(lq, c)]).sum();
+                }
+            }
+        }
+    }
+    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
+        self.apply(out, rhs, par, stack)
+    }
+}
+
+impl Precond<f64> for NodeBlocks {}
