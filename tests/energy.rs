@@ -74,6 +74,22 @@ fn e1_backward_euler_dissipates_numerically() {
     assert!(-total >= 1e-3 * scale, "numerical dissipation {total:.3e} is smaller than expected");
 }
 
+/// The largest (E.1) defect relative to the energy scale over `recs`, asserting that the
+/// friction, constraint and viscous dissipations never decrease (their increments are ≥ 0:
+/// λ ≥ 0, d^n ≤ g, S ≥ 0; a round-off allowance of 1e-14 of the scale only).
+fn largest_defect_with_monotone_dissipations(name: &str, recs: &[dyncontact::simulation::StepRecord]) -> f64 {
+    let mut worst: f64 = 0.0;
+    for w in recs.windows(2) {
+        let (a, b) = (&w[0], &w[1]);
+        worst = worst.max(b.energy.residual.abs() / b.energy_scale);
+        let tol = 1e-14 * b.energy_scale;
+        assert!(b.energy.friction_dissipation >= a.energy.friction_dissipation - tol, "{name}: friction dissipation decreased at step {}", b.step);
+        assert!(b.energy.constraint_dissipation >= a.energy.constraint_dissipation - tol, "{name}: constraint dissipation decreased at step {}", b.step);
+        assert!(b.energy.viscous_dissipation >= a.energy.viscous_dissipation - tol, "{name}: viscous dissipation decreased at step {}", b.step);
+    }
+    worst
+}
+
 fn check_contact_balance(name: &str, end: Option<f64>) {
     let mut s = fixture(name);
     if let Some(t) = end {
@@ -81,16 +97,7 @@ fn check_contact_balance(name: &str, end: Option<f64>) {
     }
     let p = problem(s);
     let recs = records(&p);
-    let mut worst: f64 = 0.0;
-    for w in recs.windows(2) {
-        let (a, b) = (&w[0], &w[1]);
-        worst = worst.max(b.energy.residual.abs() / b.energy_scale);
-        // dissipation increments are ≥ 0 (λ ≥ 0, d^n ≤ g, S ≥ 0): a round-off allowance only
-        let tol = 1e-14 * b.energy_scale;
-        assert!(b.energy.friction_dissipation >= a.energy.friction_dissipation - tol, "{name}: friction dissipation decreased at step {}", b.step);
-        assert!(b.energy.constraint_dissipation >= a.energy.constraint_dissipation - tol, "{name}: constraint dissipation decreased at step {}", b.step);
-        assert!(b.energy.viscous_dissipation >= a.energy.viscous_dissipation - tol, "{name}: viscous dissipation decreased at step {}", b.step);
-    }
+    let worst = largest_defect_with_monotone_dissipations(name, &recs);
     let last = recs.last().expect("records");
     println!(
         "{name}: max relative (E.1) defect {worst:.3e}; friction {:.4e}, constraint {:.4e}, viscous {:.4e}",
@@ -139,7 +146,8 @@ fn e1_energy_balance_penalty() {
 }
 
 /// (E.1) in 3-D: on every 3-D fixture scene (the list is checked against fixtures/scenes) — and
-/// on academic3d with the unfrozen Newton (N.4) and the column with the modified mass (R.1) —
+/// on academic3d with the unfrozen Newton (N.4) and with the bound at the midpoint (Co.2), the
+/// column with the modified mass (R.1), the sliding block with the total bound (Co.1) —
 /// every step's defect is ≤ 1e-10 of the energy scale (the solver tolerances are 1e-10 in
 /// velocity; measured ≤ 1e-12), and the friction, constraint and viscous dissipations never
 /// decrease (round-off allowance 1e-14 of the scale). academic3d runs at 8×4×4 cells for 0.5 s.
@@ -167,17 +175,16 @@ fn e1_energy_balance_every_3d_fixture() {
     let mut modified = fixture("column_impact3d");
     modified.solver.mass = MassKind::Modified;
     cases.push(("column_impact3d, modified mass".into(), modified));
+    // the friction bound at the iterate's midpoint (Co.2), and Coulomb's with the whole force (Co.1)
+    let mut midpoint = coarse(fixture("academic3d"));
+    midpoint.contact.as_mut().expect("contact").friction_bound_at = dyncontact::scene::BoundAt::Midpoint;
+    cases.push(("academic3d, bound at the midpoint".into(), midpoint));
+    let mut total = fixture("sliding_block3d");
+    total.contact.as_mut().expect("contact").friction_bound = dyncontact::scene::FrictionBound::Total;
+    cases.push(("sliding_block3d, total bound".into(), total));
     for (name, s) in cases {
         let recs = records(&problem(s));
-        let mut worst: f64 = 0.0;
-        for w in recs.windows(2) {
-            let (a, b) = (&w[0], &w[1]);
-            worst = worst.max(b.energy.residual.abs() / b.energy_scale);
-            let tol = 1e-14 * b.energy_scale;
-            assert!(b.energy.friction_dissipation >= a.energy.friction_dissipation - tol, "{name}: friction dissipation decreased at step {}", b.step);
-            assert!(b.energy.constraint_dissipation >= a.energy.constraint_dissipation - tol, "{name}: constraint dissipation decreased at step {}", b.step);
-            assert!(b.energy.viscous_dissipation >= a.energy.viscous_dissipation - tol, "{name}: viscous dissipation decreased at step {}", b.step);
-        }
+        let worst = largest_defect_with_monotone_dissipations(&name, &recs);
         println!("{name}: {} steps, max relative (E.1) defect {worst:.3e}", recs.len() - 1);
         common::measured("energy::e1_energy_balance_every_3d_fixture", &format!("E.1 largest relative defect ({name})"), worst, "≤ 1e-10");
         assert!(worst <= 1e-10, "{name}: relative (E.1) defect {worst:.3e}");

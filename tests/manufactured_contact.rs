@@ -22,10 +22,11 @@
 
 mod common;
 
+use common::Regime;
+
 use common::problem;
 use dyncontact::fem::norms::error_norms;
 use dyncontact::model::material::lame;
-use dyncontact::problem::Problem;
 use dyncontact::scene::Scene;
 use dyncontact::simulation::Simulation;
 
@@ -38,12 +39,6 @@ const ZETA: f64 = 0.01;
 const CQ: f64 = 0.02; // c, the x² coefficient of u_x
 const C_NU: f64 = 50.0; // compliance
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Regime {
-    Separation,
-    Slip,
-    Constraint,
-}
 
 struct Mms {
     regime: Regime,
@@ -180,60 +175,22 @@ max_fixed_point_iterations = 200
     }
 }
 
-/// Run to the end; return the problem, the final displacement and the set of regimes seen.
-fn solve(s: Scene) -> (Problem, Vec<f64>, (bool, bool, bool)) {
-    let p = problem(s);
-    let (u, seen) = {
-        let mut sim = Simulation::new(&p).expect("setup");
-        let (mut sep, mut slip, mut active) = (false, false, false);
-        for r in sim.steps() {
-            let r = r.expect("step");
-            sep |= r.contact_nodes < r.nodes.len();
-            slip |= r.slip_nodes > 0;
-            active |= r.nodes.iter().any(|n| n.lambda > 0.0);
-        }
-        (sim.state.u.clone(), (sep, slip, active))
-    };
-    (p, u, seen)
-}
-
-fn orders(e: &[f64]) -> Vec<f64> {
-    e.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
-}
-
 fn check(regime: Regime) {
     let m = Mms::new(regime);
     // space: k = 1/512 keeps the O(k²) time error (~1e-7) below the finest energy error
     let mut en = Vec::new();
     for cells in [4, 8, 16, 32] {
-        let (p, u, seen) = solve(m.scene(cells, 1.0 / 512.0));
+        let (p, u, seen) = common::run_regimes(m.scene(cells, 1.0 / 512.0));
         let mat = p.material;
         let (_, e1) = error_norms(p.mesh.plane().expect("a 2-D mesh"), &mat, &p.dofs.expand(&u), |x, y| m.u(x, y, END), |x, y| m.grad(x, y, END));
         en.push(e1);
         if cells == 32 {
-            match regime {
-                Regime::Separation => assert!(seen.0 && !seen.1 && !seen.2, "{regime:?}: regimes seen {seen:?}"),
-                Regime::Slip => assert!(seen.1 && !seen.2, "{regime:?}: regimes seen {seen:?}"),
-                Regime::Constraint => assert!(seen.2, "{regime:?}: regimes seen {seen:?}"),
-            }
+            regime.assert_seen(seen);
         }
     }
-    let oh = orders(&en);
-    // time: self-convergence on 8×8 cells
     let ks = [END / 8.0, END / 16.0, END / 32.0, END / 64.0, END / 128.0];
-    let sols: Vec<(Problem, Vec<f64>)> = ks.iter().map(|&k| {
-        let (p, u, _) = solve(m.scene(8, k));
-        (p, u)
-    }).collect();
-    let ek: Vec<f64> = sols.windows(2).map(|w| common::l2_diff(&w[0].0, &w[0].1, &w[1].1)).collect();
-    let ok = orders(&ek);
-    println!("{regime:?}: energy errors {en:?}, orders in h {oh:?}");
-    println!("{regime:?}: ‖u_k − u_(k/2)‖ {ek:?}, orders in k {ok:?}");
-    let (lh, lk) = (oh[oh.len() - 1], ok[ok.len() - 1]);
-    common::measured("manufactured_contact", &format!("{regime:?}: energy order in h"), lh, "1 ± 0.2");
-    common::measured("manufactured_contact", &format!("{regime:?}: midpoint order in k"), lk, "2 ± 0.3");
-    assert!((lh - 1.0).abs() <= 0.2, "{regime:?}: energy order in h {lh}");
-    assert!((lk - 2.0).abs() <= 0.3, "{regime:?}: midpoint order in k {lk}");
+    let ek = common::self_convergence_in_k(&ks, |k| m.scene(8, k));
+    common::assert_contact_orders("manufactured_contact", &format!("{regime:?}"), &en, &ek);
 }
 
 /// (B.5) Separation: energy order ≈ 1 in h, midpoint order ≈ 2 in k; no contact force acts.
@@ -266,8 +223,8 @@ fn b5_mms_velocity_weakening_slip_is_unstable() {
         let mat = p.material;
         en.push(error_norms(p.mesh.plane().expect("a 2-D mesh"), &mat, &p.dofs.expand(&sim.state.u), |x, y| m.u(x, y, END), |x, y| m.grad(x, y, END)).1);
     }
-    println!("velocity weakening: energy errors {en:?}, orders {:?}, a node stuck: {stuck}", orders(&en));
-    common::measured("manufactured_contact", "velocity-weakening slip: energy order in h (unstable)", orders(&en)[1], "reported");
+    println!("velocity weakening: energy errors {en:?}, orders {:?}, a node stuck: {stuck}", common::orders(&en));
+    common::measured("manufactured_contact", "velocity-weakening slip: energy order in h (unstable)", common::orders(&en)[1], "reported");
     assert!(stuck, "the weakening case no longer sticks: update the documentation");
 }
 

@@ -25,12 +25,11 @@
 
 mod common;
 
-use common::problem;
+use common::Regime;
+
 use dyncontact::fem::norms::error_norms_3d;
 use dyncontact::model::material::lame;
-use dyncontact::problem::Problem;
 use dyncontact::scene::Scene;
-use dyncontact::simulation::Simulation;
 
 const END: f64 = 0.5;
 const RHO: f64 = 1.0;
@@ -43,12 +42,6 @@ const C_NU: f64 = 50.0;
 const SPEED: f64 = 0.05; // V
 const OMEGA: f64 = 3.0; // ω
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Regime {
-    Separation,
-    Slip,
-    Constraint,
-}
 
 struct Mms {
     regime: Regime,
@@ -213,63 +206,22 @@ max_fixed_point_iterations = 200
     }
 }
 
-/// Run to the end; the problem, the final displacement, and the regimes seen (some node
-/// separated, some slipping, some on the constraint).
-fn solve(s: Scene) -> (Problem, Vec<f64>, (bool, bool, bool)) {
-    let p = problem(s);
-    let (u, seen) = {
-        let mut sim = Simulation::new(&p).expect("setup");
-        let (mut sep, mut slip, mut active) = (false, false, false);
-        for r in sim.steps() {
-            let r = r.expect("step");
-            sep |= r.contact_nodes < r.nodes.len();
-            slip |= r.slip_nodes > 0;
-            active |= r.nodes.iter().any(|n| n.lambda > 0.0);
-        }
-        (sim.state.u.clone(), (sep, slip, active))
-    };
-    (p, u, seen)
-}
-
-fn orders(e: &[f64]) -> Vec<f64> {
-    e.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
-}
-
 fn check(regime: Regime) {
     let m = Mms::new(regime);
     // space: k = 1/256 keeps the O(k²) time error well below the finest energy error
     let mut en = Vec::new();
     for cells in [4, 8, 16] {
-        let (p, u, seen) = solve(m.scene(cells, 1.0 / 256.0));
+        let (p, u, seen) = common::run_regimes(m.scene(cells, 1.0 / 256.0));
         let (_, e1) = error_norms_3d(p.mesh.solid().expect("a 3-D mesh"), &p.material, &p.dofs.expand_dim(&u), |x| m.u(x, END), |x| m.grad(x, END));
         en.push(e1);
         if cells == 16 {
-            match regime {
-                Regime::Separation => assert!(seen.0 && !seen.1 && !seen.2, "{regime:?}: regimes seen {seen:?}"),
-                Regime::Slip => assert!(seen.1 && !seen.2, "{regime:?}: regimes seen {seen:?}"),
-                Regime::Constraint => assert!(seen.2, "{regime:?}: regimes seen {seen:?}"),
-            }
+            regime.assert_seen(seen);
         }
     }
-    let oh = orders(&en);
     // time: self-convergence on 4×4×4 cells
     let ks = [END / 8.0, END / 16.0, END / 32.0, END / 64.0, END / 128.0];
-    let sols: Vec<(Problem, Vec<f64>)> = ks
-        .iter()
-        .map(|&k| {
-            let (p, u, _) = solve(m.scene(4, k));
-            (p, u)
-        })
-        .collect();
-    let ek: Vec<f64> = sols.windows(2).map(|w| common::l2_diff(&w[0].0, &w[0].1, &w[1].1)).collect();
-    let ok = orders(&ek);
-    println!("3-D {regime:?}: energy errors {en:?}, orders in h {oh:?}");
-    println!("3-D {regime:?}: ‖u_k − u_(k/2)‖ {ek:?}, orders in k {ok:?}");
-    let (lh, lk) = (oh[oh.len() - 1], ok[ok.len() - 1]);
-    common::measured("manufactured_contact3d", &format!("{regime:?}: energy order in h"), lh, "1 ± 0.2");
-    common::measured("manufactured_contact3d", &format!("{regime:?}: midpoint order in k"), lk, "2 ± 0.3");
-    assert!((lh - 1.0).abs() <= 0.2, "{regime:?}: energy order in h {lh}");
-    assert!((lk - 2.0).abs() <= 0.3, "{regime:?}: midpoint order in k {lk}");
+    let ek = common::self_convergence_in_k(&ks, |k| m.scene(4, k));
+    common::assert_contact_orders("manufactured_contact3d", &format!("3-D {regime:?}"), &en, &ek);
 }
 
 /// (B.5) in 3-D, separation: energy order ≈ 1 in h, midpoint order ≈ 2 in k; no contact force acts.

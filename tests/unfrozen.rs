@@ -58,6 +58,22 @@ fn compare(p: &Problem, tol: f64) -> Agreement {
     a
 }
 
+/// The scene's step is inside (C.k), and on every step N.4 gives F.1's solution (≤ 1e-6) with
+/// fewer Newton iterations (printed for `test`).
+fn agree_under_ck(test: &str, name: &str, p: &Problem) -> Agreement {
+    if let Some(k) = dyncontact::output::ModelInfo::of(p).ck_step_limit {
+        assert!(p.k <= k, "{name}: the step violates (C.k)");
+    }
+    let a = compare(p, 1e-6);
+    println!(
+        "{test} — {name}: {} steps, differing {}, fallbacks {}, worst agreeing |Δy| {:.2e}, |Δr| {:.2e}; Newton iterations F.1 {} vs unfrozen {}",
+        a.steps, a.differing, a.fallbacks, a.worst_v, a.worst_f, a.newton_f1, a.newton_unfrozen
+    );
+    assert_eq!(a.differing, 0, "{name}: the unfrozen Newton and F.1 disagree on some step");
+    assert!(a.newton_unfrozen < a.newton_f1, "{name}: the unfrozen Newton is not cheaper in iterations");
+    a
+}
+
 /// (N.4) (C.k) Where (C.k) holds — the academic scene at k = 2.5e-4 < 3.47e-4, and the frictional
 /// impact — the unfrozen Newton gives the F.1 solution on every step (≤ 1e-6 relative) and
 /// needs fewer Newton iterations.
@@ -68,17 +84,8 @@ fn n4_unfrozen_newton_agrees_with_f1_under_ck() {
     academic.time.end = 0.5;
     for (name, s) in [("academic, k = 2.5e-4", academic), ("impact_friction", fixture("impact_friction"))] {
         let p = problem(s);
-        if let Some(k) = dyncontact::output::ModelInfo::of(&p).ck_step_limit {
-            assert!(p.k <= k, "{name}: the step violates (C.k)");
-        }
-        let a = compare(&p, 1e-6);
-        println!(
-            "{name}: {} steps, differing {}, fallbacks {}, worst agreeing |Δy| {:.2e}, |Δr| {:.2e}; Newton iterations F.1 {} vs unfrozen {}",
-            a.steps, a.differing, a.fallbacks, a.worst_v, a.worst_f, a.newton_f1, a.newton_unfrozen
-        );
+        let a = agree_under_ck("unfrozen::n4_unfrozen_newton_agrees_with_f1_under_ck", name, &p);
         common::measured("unfrozen::n4_unfrozen_newton_agrees_with_f1_under_ck", &format!("N.4 vs F.1 velocity difference ({name})"), a.worst_v, "≤ 1e-6");
-        assert_eq!(a.differing, 0, "{name}: the unfrozen Newton and F.1 disagree on some step");
-        assert!(a.newton_unfrozen < a.newton_f1, "{name}: the unfrozen Newton is not cheaper in iterations");
     }
 }
 
@@ -113,18 +120,8 @@ fn n4_unfrozen_newton_agrees_with_f1_in_3d() {
     finer.domain.cells = Some(vec![12, 8, 4]);
     finer.time.end = 0.3;
     for (name, s) in [("academic3d 8×4×4", coarse), ("academic3d 12×8×4", finer)] {
-        let p = problem(s);
-        if let Some(k) = dyncontact::output::ModelInfo::of(&p).ck_step_limit {
-            assert!(p.k <= k, "{name}: the step violates (C.k)");
-        }
-        let a = compare(&p, 1e-6);
-        println!(
-            "{name}: {} steps, differing {}, fallbacks {}, worst agreeing |Δy| {:.2e}, |Δr| {:.2e}; Newton iterations F.1 {} vs unfrozen {}",
-            a.steps, a.differing, a.fallbacks, a.worst_v, a.worst_f, a.newton_f1, a.newton_unfrozen
-        );
+        let a = agree_under_ck("unfrozen::n4_unfrozen_newton_agrees_with_f1_in_3d", name, &problem(s));
         common::measured("unfrozen::n4_unfrozen_newton_agrees_with_f1_in_3d", &format!("N.4 vs F.1 force difference ({name})"), a.worst_f, "≤ 1e-6");
-        assert_eq!(a.differing, 0, "{name}: the unfrozen Newton and F.1 disagree on some step");
         assert_eq!(a.fallbacks, 0, "{name}: the unfrozen Newton fell back to F.1");
-        assert!(a.newton_unfrozen < a.newton_f1, "{name}: the unfrozen Newton is not cheaper in iterations");
     }
 }

@@ -74,6 +74,23 @@ fn strip(n: i64, plan: &ScalingPlan, form: ContactSolve) -> Scene {
     s
 }
 
+/// One run of `scene`, as a row labelled `form`.
+fn measure(scene: &Scene, form: &'static str) -> Result<ScalingRow> {
+    let p = Problem::from_scene(scene, Path::new("."))?;
+    let (_, st) = simulate(&p, &[])?;
+    let steps = st.steps as f64;
+    Ok(ScalingRow {
+        contact_nodes: p.contact.as_ref().map_or(0, |c| c.n()),
+        form,
+        steps: st.steps,
+        contact_per_step: st.contact_time_s / steps,
+        step_time: st.step_time_s / steps,
+        floor: st.floor_s,
+        delassus_setup: st.setup_delassus_s,
+        factorizations: st.factorizations,
+    })
+}
+
 /// The academic3d box at `cells`, `steps` steps.
 fn box3d(cells: [i64; 3], steps: usize) -> Result<Scene> {
     let mut s = Scene::from_toml(include_str!("../../fixtures/scenes/academic3d.toml"), "academic3d.toml")?;
@@ -88,19 +105,7 @@ pub fn run(plan: &ScalingPlan, progress: &dyn Fn(&str)) -> Result<Vec<ScalingRow
     let mut rows = Vec::new();
     for &cells in &plan.boxes {
         progress(&format!("scaling: 3-D box {}x{}x{}", cells[0], cells[1], cells[2]));
-        let p = Problem::from_scene(&box3d(cells, plan.steps_3d)?, Path::new("."))?;
-        let (_, st) = simulate(&p, &[])?;
-        let steps = st.steps as f64;
-        rows.push(ScalingRow {
-            contact_nodes: p.contact.as_ref().map_or(0, |c| c.n()),
-            form: "3-D",
-            steps: st.steps,
-            contact_per_step: st.contact_time_s / steps,
-            step_time: st.step_time_s / steps,
-            floor: st.floor_s,
-            delassus_setup: st.setup_delassus_s,
-            factorizations: st.factorizations,
-        });
+        rows.push(measure(&box3d(cells, plan.steps_3d)?, "3-D")?);
     }
     for &n in &plan.ns {
         for (form, name) in [(ContactSolve::Dense, "dense"), (ContactSolve::Sparse, "sparse")] {
@@ -108,19 +113,7 @@ pub fn run(plan: &ScalingPlan, progress: &dyn Fn(&str)) -> Result<Vec<ScalingRow
                 continue;
             }
             progress(&format!("scaling: {} contact nodes, {name}", n + 1));
-            let p = Problem::from_scene(&strip(n, plan, form), Path::new("."))?;
-            let (_, st) = simulate(&p, &[])?;
-            let steps = st.steps as f64;
-            rows.push(ScalingRow {
-                contact_nodes: (n + 1) as usize,
-                form: name,
-                steps: st.steps,
-                contact_per_step: st.contact_time_s / steps,
-                step_time: st.step_time_s / steps,
-                floor: st.floor_s,
-                delassus_setup: st.setup_delassus_s,
-                factorizations: st.factorizations,
-            });
+            rows.push(measure(&strip(n, plan, form), name)?);
         }
     }
     Ok(rows)

@@ -91,3 +91,74 @@ pub fn each_frozen_step(
         rec.unwrap_or_else(|e| panic!("step: {e}"));
     }
 }
+
+/// Run to the end; the problem, the final displacement, and the regimes seen (some node
+/// separated, some slipping, some on the constraint) — the manufactured solutions with contact.
+pub fn run_regimes(s: Scene) -> (Problem, Vec<f64>, (bool, bool, bool)) {
+    let p = problem(s);
+    let (u, seen) = {
+        let mut sim = Simulation::new(&p).expect("setup");
+        let (mut sep, mut slip, mut active) = (false, false, false);
+        for r in sim.steps() {
+            let r = r.expect("step");
+            sep |= r.contact_nodes < r.nodes.len();
+            slip |= r.slip_nodes > 0;
+            active |= r.nodes.iter().any(|n| n.lambda > 0.0);
+        }
+        (sim.state.u.clone(), (sep, slip, active))
+    };
+    (p, u, seen)
+}
+
+/// Observed orders of errors under halving.
+pub fn orders(e: &[f64]) -> Vec<f64> {
+    e.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
+}
+
+/// The manufactured solutions with contact: the energy-norm order in h at the finest level is
+/// 1 ± 0.2 (P1) and the midpoint order in k 2 ± 0.3 (the friction bound at the predictor and
+/// the slip rate at the midpoint are O(k²) consistent, with larger constants); printed and
+/// recorded as `test`, `label`.
+pub fn assert_contact_orders(test: &str, label: &str, en: &[f64], ek: &[f64]) {
+    let (oh, ok) = (orders(en), orders(ek));
+    println!("{label}: energy errors {en:?}, orders in h {oh:?}");
+    println!("{label}: ‖u_k − u_(k/2)‖ {ek:?}, orders in k {ok:?}");
+    let (lh, lk) = (oh[oh.len() - 1], ok[ok.len() - 1]);
+    measured(test, &format!("{label}: energy order in h"), lh, "1 ± 0.2");
+    measured(test, &format!("{label}: midpoint order in k"), lk, "2 ± 0.3");
+    assert!((lh - 1.0).abs() <= 0.2, "{label}: energy order in h {lh}");
+    assert!((lk - 2.0).abs() <= 0.3, "{label}: midpoint order in k {lk}");
+}
+
+/// ‖u_k − u_(k/2)‖ (consistent-mass L²) at the end of runs of `scene(k)` for successive k of `ks`:
+/// the midpoint rule's self-convergence in time (the space error cancels on one mesh).
+pub fn self_convergence_in_k(ks: &[f64], scene: impl Fn(f64) -> Scene) -> Vec<f64> {
+    let sols: Vec<(Problem, Vec<f64>)> = ks
+        .iter()
+        .map(|&k| {
+            let (p, u, _) = run_regimes(scene(k));
+            (p, u)
+        })
+        .collect();
+    sols.windows(2).map(|w| l2_diff(&w[0].0, &w[0].1, &w[1].1)).collect()
+}
+
+/// The contact regime a manufactured solution with contact is built in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Regime {
+    Separation,
+    Slip,
+    Constraint,
+}
+
+impl Regime {
+    /// The run saw the regime it was built in: `seen` = (some node separated, some slipping,
+    /// some on the constraint) from [`run_regimes`].
+    pub fn assert_seen(self, seen: (bool, bool, bool)) {
+        match self {
+            Regime::Separation => assert!(seen.0 && !seen.1 && !seen.2, "{self:?}: regimes seen {seen:?}"),
+            Regime::Slip => assert!(seen.1 && !seen.2, "{self:?}: regimes seen {seen:?}"),
+            Regime::Constraint => assert!(seen.2, "{self:?}: regimes seen {seen:?}"),
+        }
+    }
+}
