@@ -25,6 +25,8 @@ pub struct Counters {
     pub fixed_point_iterations_total: usize,
     pub fixed_point_iterations_max: usize,
     pub fixed_point_cap_hits: usize,
+    #[serde(default)]
+    pub unfrozen_fallbacks: usize,
     pub first_cap: Option<usize>,
     pub max_abs_energy_residual: u64,
     pub max_relative_energy_residual: u64,

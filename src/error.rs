@@ -40,6 +40,11 @@ pub enum Error {
     #[error("interrupted after step {step} (t = {time}); the outputs are valid up to that step and checkpoint.json holds it")]
     Interrupted { step: usize, time: f64 },
 
+    /// A sweep was stopped (SIGINT): the points that finished stay, the rest run when the same
+    /// sweep is run again.
+    #[error("interrupted: {finished} of {total} points are done (sweep.csv has them); run the same sweep again to resume — completed points are skipped")]
+    SweepInterrupted { finished: usize, total: usize },
+
     /// Reading or writing a file failed.
     #[error("{path}: {source}")]
     Io {
@@ -62,6 +67,21 @@ impl Error {
     /// True for failures of the numerical method (exit code 2), false for bad input.
     pub fn is_solver_failure(&self) -> bool {
         matches!(self, Error::Solver(_) | Error::LinearAlgebra(_))
+    }
+
+    /// What kind of stop this is, for summary.json's `failure_kind` (the sweep's collectors
+    /// classify runs by it): `non_finite` (a NaN or infinity in the state), `solver` (a solver
+    /// could not continue), `linear_algebra` (a factorization failed), `input` (the scene or
+    /// the mesh), `interrupted`, or `output`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Error::Solver(f) if matches!(f.cause, crate::failure::StepFailureCause::NonFinite { .. }) => "non_finite",
+            Error::Solver(_) => "solver",
+            Error::LinearAlgebra(_) => "linear_algebra",
+            Error::Scene { .. } | Error::SceneSyntax { .. } | Error::Mesh { .. } | Error::Expression { .. } => "input",
+            Error::Interrupted { .. } | Error::SweepInterrupted { .. } => "interrupted",
+            Error::Output(_) | Error::Io { .. } => "output",
+        }
     }
 }
 

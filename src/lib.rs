@@ -4,7 +4,8 @@
 //! The model, its equation IDs and the project's decisions are in spec/model.md.
 //!
 //! Module map (data flows one way: scene → model → problem → operators → time loop → outputs):
-//! - [`scene`]: the TOML scene (the README's contract); `Scene::validate` gives the typed [`model::Model`]
+//! - [`scene`]: the TOML scene (the README's contract); `Scene::validate` gives the typed [`model::Model`];
+//!   [`overrides`]: `--set KEY=VALUE` on the scene's table before it is read
 //! - [`model`]: the typed model, material (P.1), contact laws (P.5, P.6, P.8, Pe.5), expressions
 //! - [`mesh`]: rectangle generator, Gmsh reader, Γ1/Γ2/Γ3, normals and weights ω_i (§4.1)
 //! - [`fem`]: P1 assembly of M, K, C and f(t) (P.2–P.4)
@@ -16,6 +17,7 @@
 //! - [`failure`]: why a solver or a run stopped (enums), and their messages; [`defaults`]: every tuning constant
 //! - [`output`]: history.csv, contact.csv, summary.json, VTU frames, SVG charts
 //! - [`run`], [`checkpoint`]: a run with its outputs, checkpoints and resume; [`resources`]: memory and cost estimates
+//! - [`sweep`]: many runs of one scene (axes, `[set]`), in parallel here or as Snakemake jobs; sweep.csv
 //! - [`studies`]: the ε-study, the stability map, the benchmarks (on the public API only)
 //! - [`linalg`]: thin wrappers over faer; [`reference`]: closed forms; [`variational`]: V.1/V.2 checks
 
@@ -29,6 +31,7 @@ pub mod linalg;
 pub mod mesh;
 pub mod model;
 pub mod output;
+pub mod overrides;
 pub mod problem;
 pub mod reference;
 pub mod resources;
@@ -38,6 +41,7 @@ pub mod scheme;
 pub mod simulation;
 pub mod step;
 pub mod studies;
+pub mod sweep;
 pub mod variational;
 
 pub use error::{Error, Result};

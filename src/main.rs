@@ -9,6 +9,7 @@ use std::sync::Arc;
 
 use clap::{Parser, Subcommand};
 use dyncontact::output::ModelInfo;
+use dyncontact::overrides::Override;
 use dyncontact::problem::Problem;
 use dyncontact::run::{run, RunOptions};
 use dyncontact::scene::Scene;
@@ -39,6 +40,10 @@ enum Command {
         /// stop cleanly after step N, writing a checkpoint (batch control, tests)
         #[arg(long, value_name = "N", hide = true)]
         stop_after: Option<usize>,
+        /// override a scene key by its dotted path, the value in TOML (repeatable):
+        /// --set contact.penalty=1e-5 --set domain.cells=[64,32]
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Studies: `study penalty [SCENE] [--eps LIST]` — the ε → 0 study of Problem P_ε against P.
     Study {
@@ -52,10 +57,45 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Run many variants of one scene (a sweep file: axes, [set]) in parallel, each point into
+    /// DIR/points/<id>, and collect DIR/sweep.csv and DIR/plots/; also writes DIR/Snakefile and
+    /// DIR/config.yaml for running the same points with Snakemake. `sweep collect DIR` gathers
+    /// sweep.csv from the point folders (after Snakemake).
+    #[command(args_conflicts_with_subcommands = true)]
+    Sweep {
+        #[command(subcommand)]
+        action: Option<SweepAction>,
+        /// the sweep file (TOML)
+        sweep: Option<PathBuf>,
+        /// output folder (default: out/<sweep name>)
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// points run at once (default: the number of cores)
+        #[arg(long, value_name = "N")]
+        jobs: Option<usize>,
+        /// validate every point and write the folder (scenes, Snakefile), without running
+        #[arg(long)]
+        plan_only: bool,
+        /// override a key of every point, after the sweep's own (repeatable)
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
     /// Validate a scene and print the model it switches on, without solving.
     Check {
         /// scene file (TOML)
         scene: PathBuf,
+        /// override a scene key by its dotted path, the value in TOML (repeatable)
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+}
+
+#[derive(Subcommand)]
+enum SweepAction {
+    /// Gather DIR/sweep.csv and DIR/plots/ from the point folders of the sweep in DIR.
+    Collect {
+        /// the sweep's output folder
+        dir: PathBuf,
     },
 }
 
@@ -69,9 +109,13 @@ enum StudyKind {
         /// comma-separated ε values (default 1e-2,1e-3,1e-4,1e-5,1e-6,1e-7)
         #[arg(long, value_delimiter = ',')]
         eps: Option<Vec<f64>>,
-        /// output folder (default: out/<scene name>); files go to its study/ subfolder
+        /// output folder (default: out/<scene name>); files go to its study/ subfolder, the
+        /// sweep's runs to study/penalty-sweep/
         #[arg(long)]
         out: Option<PathBuf>,
+        /// runs at once (default: the number of cores)
+        #[arg(long, value_name = "N")]
+        jobs: Option<usize>,
     },
     /// Work–precision benchmark: error against a fine reference vs wall time, for schemes ×
     /// inner solvers × masses × refinement levels; the linear-algebra floor; F.1 vs N.4.
@@ -92,12 +136,15 @@ enum StudyKind {
     /// Stability map: sweeps of k, ε, the friction decay, the impact speed and θ per scheme,
     /// each run classified (converged, fixed point failed, Newton failed, energy grew, error).
     Stability {
-        /// output folder (default: target/stability)
+        /// output folder (default: target/stability); its sweeps run in OUT/sweeps/
         #[arg(long)]
         out: Option<PathBuf>,
         /// a small sweep (smoke test)
         #[arg(long)]
         quick: bool,
+        /// runs at once (default: the number of cores)
+        #[arg(long, value_name = "N")]
+        jobs: Option<usize>,
     },
     /// Where the friction bound is evaluated: the predictor against u_ν^{n+½} of the iterate,
     /// convergence in k for c_ν = 1e3 … 1e8 on the academic scene and the pulled block.
@@ -127,11 +174,14 @@ macro_rules! esay {
     }};
 }
 
-fn load(scene: Option<&Path>) -> Result<(Scene, PathBuf), Error> {
+/// The scene (the embedded default when `scene` is None) with the `--set` overrides, and the
+/// folder relative paths in it are read from.
+fn load(scene: Option<&Path>, set: &[String]) -> Result<(Scene, PathBuf), Error> {
+    let overrides = set.iter().map(|a| Override::parse(a)).collect::<Result<Vec<_>, Error>>()?;
     match scene {
-        None => Ok((Scene::default_scene(), PathBuf::from("."))),
+        None => Ok((Scene::from_toml_with(dyncontact::scene::DEFAULT_SCENE, "<embedded academic scene>", &overrides)?, PathBuf::from("."))),
         Some(p) => {
-            let s = Scene::from_file(p)?;
+            let s = Scene::from_file_with(p, &overrides)?;
             let dir = p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
             Ok((s, dir))
         }
@@ -146,36 +196,39 @@ fn main() -> ExitCode {
     faer::set_global_parallelism(faer::Par::Seq);
     let cli = Cli::parse();
     let result = match &cli.command {
-        Command::Run { scene, out, checkpoint_every, resume, stop_after } => {
-            cmd_run(scene.as_deref(), out.as_deref(), *checkpoint_every, resume.as_deref(), *stop_after)
+        Command::Run { scene, out, checkpoint_every, resume, stop_after, set } => {
+            cmd_run(scene.as_deref(), set, out.as_deref(), *checkpoint_every, resume.as_deref(), *stop_after)
         }
-        Command::Study { study: StudyKind::Penalty { scene, eps, out } } => cmd_penalty(scene.as_deref(), eps.as_deref(), out.as_deref()),
+        Command::Study { study: StudyKind::Penalty { scene, eps, out, jobs } } => cmd_penalty(scene.as_deref(), eps.as_deref(), out.as_deref(), *jobs),
         Command::Study { study: StudyKind::Bench { out, quick, floor_only, bookkeeping_only } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/bench"));
             studies::bench::run(&out, &studies::bench::BenchOptions { quick: *quick, floor_only: *floor_only, bookkeeping_only: *bookkeeping_only }).map(|report| say!("{report}"))
         }
-        Command::Study { study: StudyKind::Stability { out, quick } } => {
+        Command::Study { study: StudyKind::Stability { out, quick, jobs } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/stability"));
-            studies::stability::run(&out, &studies::stability::StabilityOptions { quick: *quick }).map(|report| say!("{report}"))
+            studies::stability::run(&out, &studies::stability::StabilityOptions { quick: *quick, jobs: jobs.unwrap_or(0) }).map(|report| say!("{report}"))
         }
         Command::Study { study: StudyKind::BoundAt { out, quick } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/bound_at"));
             studies::bound_at::run(&out, &studies::bound_at::BoundAtOptions { quick: *quick }).map(|report| say!("{report}"))
         }
-        Command::ExportOperators { scene, out } => load(Some(scene)).and_then(|(s, dir)| {
+        Command::ExportOperators { scene, out } => load(Some(scene), &[]).and_then(|(s, dir)| {
             let problem = Problem::from_scene(&s, &dir)?;
             dyncontact::output::export::export_operators(&problem, out)?;
             say!("operators of {} written to {}", problem.model.name, out.display());
             Ok(())
         }),
-        Command::Check { scene } => cmd_check(scene),
+        Command::Check { scene, set } => cmd_check(scene, set),
+        Command::Sweep { action: Some(SweepAction::Collect { dir }), .. } => cmd_collect(dir),
+        Command::Sweep { action: None, sweep: Some(file), out, jobs, plan_only, set } => cmd_sweep(file, out.as_deref(), *jobs, *plan_only, set),
+        Command::Sweep { action: None, sweep: None, .. } => Err(Error::scene("sweep", "give a sweep file (dyncontact sweep SWEEP.toml) or `collect DIR`")),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             esay!("error: {e}");
             match e {
-                Error::Interrupted { .. } => ExitCode::from(130),
+                Error::Interrupted { .. } | Error::SweepInterrupted { .. } => ExitCode::from(130),
                 e if e.is_solver_failure() => ExitCode::from(2),
                 _ => ExitCode::from(1),
             }
@@ -186,17 +239,29 @@ fn main() -> ExitCode {
 /// `dyncontact run`: a run with a progress bar, Ctrl-C as a clean stop, and a one-line report.
 fn cmd_run(
     scene: Option<&Path>,
+    set: &[String],
     out: Option<&Path>,
     checkpoint_every: Option<usize>,
     resume: Option<&Path>,
     stop_after: Option<usize>,
 ) -> Result<(), Error> {
-    let (s, dir) = load(scene)?;
+    let (s, dir) = load(scene, set)?;
     let out = resume.or(out).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&s.name));
-    let model = s.validate()?;
-    // refuse before anything large is built
-    resources::check_fits(&resources::estimate(&model, &dir)?, resources::available_memory())?;
-    let problem = Problem::new(model, &dir)?;
+    let prepared = s.validate().and_then(|model| {
+        // refuse before anything large is built
+        resources::check_fits(&resources::estimate(&model, &dir)?, resources::available_memory())?;
+        Problem::new(model, &dir)
+    });
+    let problem = match prepared {
+        Ok(p) => p,
+        Err(e) => {
+            // in a folder that exists (a sweep's point) summary.json says why nothing ran
+            if out.is_dir() && resume.is_none() {
+                dyncontact::run::write_failed_start(&out, &s.name, &e)?;
+            }
+            return Err(e);
+        }
+    };
     let interrupt = Arc::new(AtomicBool::new(false));
     let flag = interrupt.clone();
     // a second Ctrl-C while the step finishes is ignored: the step completes and the files stay valid
@@ -227,13 +292,23 @@ fn cmd_run(
     Ok(())
 }
 
-/// `dyncontact study penalty`: the ε → 0 study, printed and written under OUT/study.
-fn cmd_penalty(scene: Option<&Path>, eps: Option<&[f64]>, out: Option<&Path>) -> Result<(), Error> {
-    let (s, dir) = load(scene)?;
+/// `dyncontact study penalty`: the ε → 0 study (a sweep: fixtures/sweeps/penalty.toml on the
+/// scene), printed and written under OUT/study.
+fn cmd_penalty(scene: Option<&Path>, eps: Option<&[f64]>, out: Option<&Path>, jobs: Option<usize>) -> Result<(), Error> {
+    let (s, _) = load(scene, &[])?;
+    let base = match scene {
+        None => dyncontact::sweep::Base { text: dyncontact::scene::DEFAULT_SCENE.to_string(), label: "<embedded academic scene>".into(), dir: PathBuf::from(".") },
+        Some(p) => dyncontact::sweep::Base {
+            text: std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?,
+            label: p.display().to_string(),
+            dir: p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")),
+        },
+    };
     let out = out.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&s.name));
-    let eps = eps.map(<[f64]>::to_vec).unwrap_or_else(|| studies::penalty::DEFAULT_EPS.to_vec());
-    let st = studies::penalty::penalty_study(&s, &dir, &eps)?;
-    say!("penalty study of {} (exact reference: {:.2} s)", s.name, st.reference_wall_time_s);
+    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
+    let work = out.join("study").join("penalty-sweep");
+    let st = studies::penalty::penalty_study(&base, &[], eps, &work, jobs)?;
+    say!("penalty study of {} (exact reference: {:.2} s; runs in {})", s.name, st.reference_wall_time_s, work.display());
     say!("{:>10} {:>12} {:>12} {:>12} {:>10}", "eps", "e_V", "e_H", "delta", "time [s]");
     for r in &st.rows {
         say!("{:>10.1e} {:>12.4e} {:>12.4e} {:>12.4e} {:>10.2}", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s);
@@ -244,9 +319,56 @@ fn cmd_penalty(scene: Option<&Path>, eps: Option<&[f64]>, out: Option<&Path>) ->
     Ok(())
 }
 
+/// `dyncontact sweep`: validate every point, lay the folder out, run the points here (skipping
+/// those completed with the same scene), collect sweep.csv and the charts.
+fn cmd_sweep(file: &Path, out: Option<&Path>, jobs: Option<usize>, plan_only: bool, set: &[String]) -> Result<(), Error> {
+    use dyncontact::sweep::{collect, runner, Plan};
+    let extra = set.iter().map(|a| Override::parse(a)).collect::<Result<Vec<_>, Error>>()?;
+    let plan = Plan::from_file(file, &extra)?;
+    let dir = out.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&plan.name));
+    let done = plan.write(&dir)?;
+    say!("sweep {}: {} points ({} already completed), folder {}", plan.name, plan.points.len(), done.iter().filter(|d| **d).count(), dir.display());
+    if plan_only {
+        say!("plan only: every point validated; run them with `dyncontact sweep {}` or with Snakemake in {}", file.display(), dir.display());
+        return Ok(());
+    }
+    let interrupt = Arc::new(AtomicBool::new(false));
+    let flag = interrupt.clone();
+    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
+    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)).max(1);
+    let opts = runner::RunnerOptions { jobs, progress: std::io::stdout().is_terminal(), interrupt: Some(interrupt.clone()) };
+    let outcomes = runner::run_points(&plan, &dir, &done, &opts)?;
+    let (_, rows) = collect::collect(&dir)?;
+    report_rows(&rows);
+    let failed = outcomes.iter().filter(|o| matches!(o, runner::Outcome::Failed(_))).count();
+    if failed > 0 {
+        esay!("warning: {failed} of {} points failed (sweep.csv: status and reason)", plan.points.len());
+    }
+    say!("written {}", dir.join("sweep.csv").display());
+    if interrupt.load(Ordering::SeqCst) {
+        let finished = rows.iter().filter(|r| r.status == "completed" || r.status == "failed").count();
+        return Err(Error::SweepInterrupted { finished, total: rows.len() });
+    }
+    Ok(())
+}
+
+/// `dyncontact sweep collect DIR`.
+fn cmd_collect(dir: &Path) -> Result<(), Error> {
+    let (_, rows) = dyncontact::sweep::collect::collect(dir)?;
+    report_rows(&rows);
+    say!("written {}", dir.join("sweep.csv").display());
+    Ok(())
+}
+
+/// The counts of a collected sweep by status.
+fn report_rows(rows: &[dyncontact::sweep::collect::Row]) {
+    let count = |s: &str| rows.iter().filter(|r| r.status == s).count();
+    say!("{} points: {} completed, {} failed, {} interrupted, {} missing", rows.len(), count("completed"), count("failed"), count("interrupted"), count("missing"));
+}
+
 /// `dyncontact check`: validate, build the problem, and print the model it switches on.
-fn cmd_check(scene: &Path) -> Result<(), Error> {
-    let (s, dir) = load(Some(scene))?;
+fn cmd_check(scene: &Path, set: &[String]) -> Result<(), Error> {
+    let (s, dir) = load(Some(scene), set)?;
     let model = s.validate()?;
     let estimate = resources::estimate(&model, &dir)?;
     if let Err(e) = resources::check_fits(&estimate, resources::available_memory()) {

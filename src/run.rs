@@ -41,6 +41,21 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Summary> {
     run_with(problem, Settings::from_problem(problem), opts)
 }
 
+/// summary.json of a run that could not start — its scene, mesh or operators were refused —
+/// in an output folder that exists (a sweep's point folder): `"status": "failed"` with the
+/// reason and its kind, so every point of a sweep is read the same way.
+pub fn write_failed_start(out: &std::path::Path, scene: &str, e: &Error) -> Result<()> {
+    let json = serde_json::json!({
+        "scene": scene,
+        "status": "failed",
+        "failure": e.to_string(),
+        "failure_kind": e.kind(),
+        "steps_completed": 0,
+    });
+    let text = serde_json::to_string_pretty(&json).map_err(|e| Error::Output(format!("summary.json: {e}")))?;
+    crate::output::write_atomic(&out.join("summary.json"), text.as_bytes())
+}
+
 /// The run's counters in the form a checkpoint stores.
 fn counters(s: &Summary, first_cap: Option<usize>) -> Counters {
     Counters {
@@ -48,6 +63,7 @@ fn counters(s: &Summary, first_cap: Option<usize>) -> Counters {
         fixed_point_iterations_total: s.fixed_point_iterations_total,
         fixed_point_iterations_max: s.fixed_point_iterations_max,
         fixed_point_cap_hits: s.fixed_point_cap_hits,
+        unfrozen_fallbacks: s.unfrozen_fallbacks,
         first_cap,
         max_abs_energy_residual: s.max_abs_energy_residual.to_bits(),
         max_relative_energy_residual: s.max_relative_energy_residual.to_bits(),
@@ -60,6 +76,7 @@ fn restore_counters(summary: &mut Summary, c: &Counters) {
     summary.fixed_point_iterations_total = c.fixed_point_iterations_total;
     summary.fixed_point_iterations_max = c.fixed_point_iterations_max;
     summary.fixed_point_cap_hits = c.fixed_point_cap_hits;
+    summary.unfrozen_fallbacks = c.unfrozen_fallbacks;
     summary.max_abs_energy_residual = f64::from_bits(c.max_abs_energy_residual);
     summary.max_relative_energy_residual = f64::from_bits(c.max_relative_energy_residual);
 }
@@ -74,6 +91,7 @@ fn tally(summary: &mut Summary, first_cap: &mut Option<usize>, rec: &StepRecord)
         summary.fixed_point_cap_hits += 1;
         first_cap.get_or_insert(rec.step);
     }
+    summary.unfrozen_fallbacks += usize::from(r.fallback.is_some());
     let res = rec.energy.residual.abs();
     summary.max_abs_energy_residual = summary.max_abs_energy_residual.max(res);
     if rec.energy_scale > 0.0 {
@@ -97,6 +115,7 @@ fn new_summary(problem: &Problem, sim: &Simulation, start: Instant) -> Summary {
         description: problem.model.description.clone(),
         status: RunStatus::Running,
         failure: None,
+        failure_kind: None,
         warnings: info.warnings(),
         model: info,
         steps_completed: 0,
@@ -121,6 +140,7 @@ fn new_summary(problem: &Problem, sim: &Simulation, start: Instant) -> Summary {
         fixed_point_iterations_total: 0,
         fixed_point_iterations_max: 0,
         fixed_point_cap_hits: 0,
+        unfrozen_fallbacks: 0,
         max_abs_energy_residual: 0.0,
         max_relative_energy_residual: 0.0,
     }
@@ -177,7 +197,15 @@ fn progress_bar(opts: &RunOptions, steps: usize, at: usize) -> Option<indicatif:
 pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Result<Summary> {
     let start = Instant::now();
     let scene_hash = fingerprint(&format!("{:?}", problem.model));
-    let mut sim = Simulation::with_settings(problem, settings)?;
+    let mut sim = match Simulation::with_settings(problem, settings) {
+        Ok(sim) => sim,
+        Err(e) => {
+            if opts.out.is_dir() && !opts.resume {
+                write_failed_start(&opts.out, &problem.model.name, &e)?;
+            }
+            return Err(e);
+        }
+    };
     let mut summary = new_summary(problem, &sim, start);
     let mut first_cap: Option<usize> = None;
     let mut writer = open_writer(problem, &mut sim, opts, &scene_hash, &mut summary, &mut first_cap)?;
@@ -195,6 +223,7 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
             Err(e) => {
                 summary.status = RunStatus::Failed;
                 summary.failure = Some(e.to_string());
+                summary.failure_kind = Some(e.kind().to_string());
                 finish_timing(&mut summary);
                 writer.write_summary(&summary)?;
                 if let Some(b) = &bar {
@@ -223,6 +252,7 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
         }
         if stopping {
             summary.status = RunStatus::Interrupted;
+            summary.failure_kind = Some("interrupted".to_string());
             summary.failure = Some(format!(
                 "stopped after step {} (t = {}); checkpoint.json holds that step: continue with --resume {}",
                 state.n,

@@ -322,6 +322,10 @@ impl Default for Solver {
 pub struct Output {
     #[serde(default = "d_every")]
     pub every: i64,
+    /// write trajectory.f64: u and v of every free DOF at every step (studies that compare
+    /// whole trajectories read it)
+    #[serde(default)]
+    pub trajectory: bool,
 }
 
 fn d_every() -> i64 {
@@ -330,10 +334,17 @@ fn d_every() -> i64 {
 
 impl Default for Output {
     fn default() -> Self {
-        Output { every: d_every() }
+        Output { every: d_every(), trajectory: false }
     }
 }
 
+
+/// The scene text with `overrides` applied to its table (TOML again).
+pub fn overridden_text(text: &str, file: &str, overrides: &[crate::overrides::Override]) -> Result<String> {
+    let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| Error::SceneSyntax { file: file.to_string(), message: one_paragraph(&e.to_string()) })?;
+    crate::overrides::apply_all(&mut table, overrides)?;
+    toml::to_string(&table).map_err(|e| Error::SceneSyntax { file: file.to_string(), message: one_paragraph(&e.to_string()) })
+}
 
 impl Scene {
     /// Parse TOML text. `file` names the source in error messages.
@@ -363,6 +374,23 @@ impl Scene {
     pub fn from_file(path: &std::path::Path) -> Result<Scene> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         Scene::from_toml(&text, &path.display().to_string())
+    }
+
+    /// Parse TOML text with `--set` overrides applied to its table first (see
+    /// [`crate::overrides`]): the result is read exactly as a file with those values would be,
+    /// so an unknown key or a wrong type gets the same key-path error.
+    pub fn from_toml_with(text: &str, file: &str, overrides: &[crate::overrides::Override]) -> Result<Scene> {
+        if overrides.is_empty() {
+            return Scene::from_toml(text, file);
+        }
+        // positions in a message are those of the overridden text, so the source says so
+        Scene::from_toml(&overridden_text(text, file, overrides)?, &format!("{file} with --set"))
+    }
+
+    /// Read a scene file with `--set` overrides.
+    pub fn from_file_with(path: &std::path::Path, overrides: &[crate::overrides::Override]) -> Result<Scene> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Scene::from_toml_with(&text, &path.display().to_string(), overrides)
     }
 
     /// The embedded default scene.
@@ -411,6 +439,7 @@ impl Scene {
             time,
             solver,
             output_every: self.output.every as usize,
+            output_trajectory: self.output.trajectory,
             warnings: self.warnings(),
         })
     }
@@ -895,7 +924,7 @@ fn validate_table(pts: &[[f64; 2]]) -> Result<()> {
     Ok(())
 }
 
-fn one_paragraph(s: &str) -> String {
+pub fn one_paragraph(s: &str) -> String {
     // every line terminator (TOML errors quote the offending source line, which may hold a lone \r)
     s.split(['\n', '\r', '\u{b}', '\u{c}', '\u{85}', '\u{2028}', '\u{2029}'])
         .map(str::trim_end)

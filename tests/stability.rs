@@ -54,7 +54,7 @@ fn lost_fraction(m: &Measured) -> f64 {
 fn quick_sweep_writes_csv_and_svg_with_a_row_per_run() {
     let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("stability_quick");
     let _ = std::fs::remove_dir_all(&out);
-    let report = dyncontact::studies::stability::run(&out, &StabilityOptions { quick: true }).expect("quick sweep");
+    let report = dyncontact::studies::stability::run(&out, &StabilityOptions { quick: true, jobs: 2 }).expect("quick sweep");
     println!("{report}");
     let n = cases(true).len();
     assert!(n >= 7 * variants().len(), "the quick sweep has every sweep × every variant, got {n} cases");
@@ -323,4 +323,25 @@ fn newton_iteration_cap_of_one_stops_with_newton_failed() {
     assert!(m.steps_completed <= 10, "fails within the first 10 steps (measured 5 completed), got {}", m.steps_completed);
     assert!(m.note.contains("no convergence in 1 iterations"), "{}", m.note);
     assert_eq!(cap(4).class, RunClass::Converged);
+}
+
+/// The map runs its cases as sweeps (fixtures/sweeps/stability_*.toml, each point a `run` into
+/// its folder, read back from history.csv and summary.json): on the quick map every measured
+/// quantity of every run — class, steps, k, (C.k) limit, fixed-point and Newton counts,
+/// fallbacks, (E.1) defect, drift, energy gain, final energies, note — equals the in-process
+/// run of the same case (`run_case`), exactly (the files hold every f64 to the last bit; only
+/// the wall time differs).
+#[test]
+fn sweep_path_gives_the_in_process_numbers() {
+    let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("stability_sweep_path");
+    let _ = std::fs::remove_dir_all(&out);
+    let rows = map_runs(&out, &StabilityOptions { quick: true, jobs: 2 }).expect("the quick map");
+    assert_eq!(rows.len(), cases(true).len());
+    for r in &rows {
+        let mut a = run_case(&r.case, true).m;
+        let mut b = r.m.clone();
+        (a.wall_time_s, b.wall_time_s) = (0.0, 0.0);
+        assert_eq!(format!("{a:?}"), format!("{b:?}"), "{} = {} / {}", r.case.sweep.key(), r.case.value, r.case.variant.name);
+    }
+    println!("{} runs: the sweep path and the in-process runs agree in every field", rows.len());
 }

@@ -11,19 +11,26 @@
 
 mod common;
 
-use common::fixture;
+use dyncontact::overrides::Override;
 use dyncontact::studies::penalty::penalty_study;
+use dyncontact::sweep::Base;
+
+/// A fixture scene as a sweep's base.
+fn base(name: &str) -> Base {
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes");
+    let path = dir.join(format!("{name}.toml"));
+    Base { text: std::fs::read_to_string(&path).expect("fixture"), label: path.display().to_string(), dir }
+}
 
 /// (E.0) δ(ε) falls with a log–log slope ≥ ½ over ε ∈ [1e-7, 1e-3] and e_V decreases
 /// monotonically; the study's CSV and SVG are written with one row / point per ε.
 #[test]
 fn e0_penalty_study_penetration_and_error_fall_with_eps() {
-    let mut s = fixture("academic");
-    s.domain.cells = Some([16, 8].to_vec());
-    s.time.step = 1e-3;
-    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes");
+    let coarse = [Override::parse("domain.cells=[16, 8]").expect("override"), Override::parse("time.step=1e-3").expect("override")];
     let eps = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
-    let st = penalty_study(&s, &dir, &eps).expect("study");
+    let work = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("penalty_sweep");
+    let _ = std::fs::remove_dir_all(&work);
+    let st = penalty_study(&base("academic"), &coarse, Some(&eps), &work, 2).expect("study");
     for r in &st.rows {
         println!("ε = {:.0e}: e_V {:.4e}, e_H {:.4e}, δ {:.4e}, {:.2} s", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s);
     }
@@ -47,9 +54,8 @@ fn e0_penalty_study_penetration_and_error_fall_with_eps() {
 /// The study refuses a scene without a finite bound, naming the key.
 #[test]
 fn penalty_study_needs_a_finite_bound() {
-    let mut s = fixture("sliding_block");
-    s.time.end = 0.01;
-    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes");
-    let e = penalty_study(&s, &dir, &[1e-3]).expect_err("must refuse g = inf").to_string();
+    let work = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("penalty_sweep_refused");
+    let short = [Override::parse("time.end=0.01").expect("override")];
+    let e = penalty_study(&base("sliding_block"), &short, Some(&[1e-3]), &work, 1).expect_err("must refuse g = inf").to_string();
     assert!(e.starts_with("contact.penetration_bound"), "{e}");
 }

@@ -38,6 +38,8 @@ pub struct Model {
     pub solver: SolverParams,
     /// a frame every `output_every` steps
     pub output_every: usize,
+    /// write trajectory.f64 (u, v at every step)
+    pub output_trajectory: bool,
     /// where the model switched on is less than the scene states (or a choice has no effect):
     /// printed by `check` and `run`, stored in summary.json
     pub warnings: Vec<String>,

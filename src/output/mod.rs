@@ -15,6 +15,7 @@ pub mod fs;
 pub mod plots;
 pub mod resume;
 pub mod summary;
+pub mod trajectory;
 pub mod vtu;
 
 use std::fs::File;
@@ -128,6 +129,8 @@ pub struct Writer {
     mesh: Arc<crate::mesh::Geometry>,
     /// the frame being written (VTU, then series.pvd)
     pending: Option<JoinHandle<Result<()>>>,
+    /// trajectory.f64 (`output.trajectory`)
+    trajectory: Option<trajectory::TrajectoryWriter>,
 }
 
 impl Drop for Writer {
@@ -171,7 +174,11 @@ impl Writer {
             std::fs::write(&cp, format!("{}\n", contact_columns(problem.mesh.dim()))).map_err(csv_io(&cp))?;
             None
         };
-        Ok(Writer::new(dir, problem, history, contact, Vec::new(), Vec::new(), Vec::new()))
+        let mut w = Writer::new(dir, problem, history, contact, Vec::new(), Vec::new(), Vec::new());
+        if problem.model.output_trajectory {
+            w.trajectory = Some(trajectory::TrajectoryWriter::create(&dir.join("trajectory.f64"), problem.dofs.n_free)?);
+        }
+        Ok(w)
     }
 
     pub(crate) fn new(
@@ -193,6 +200,7 @@ impl Writer {
             contact_frames,
             mesh: Arc::new(problem.mesh.clone()),
             pending: None,
+            trajectory: None,
         }
     }
 
@@ -231,6 +239,9 @@ impl Writer {
             normal_force: rec.normal_force,
             tangential_force: rec.tangential_force,
         });
+        if let Some(tw) = self.trajectory.as_mut() {
+            tw.record(rec.step, rec.t, &state.u, &state.v)?;
+        }
         if rec.step.is_multiple_of(self.every) || last {
             self.frame(rec, problem, state)?;
         }
@@ -314,8 +325,8 @@ impl Writer {
         let residual = [s("(E.1) residual", |r| r.residual)];
         let energy = plots::stacked_chart(
             &[
-                (plots::Panel { title: "Energy balance (E.1)", x_desc: "t [s]", y_desc: "energy [J/m]", series: &terms, hlines: &[] }, 2.0),
-                (plots::Panel { title: "(E.1) residual per step", x_desc: "t [s]", y_desc: "residual [J/m]", series: &residual, hlines: &[] }, 1.0),
+                (plots::Panel { title: "Energy balance (E.1)", x_desc: "t [s]", y_desc: "energy [J/m]", series: &terms, hlines: &[], log: (false, false) }, 2.0),
+                (plots::Panel { title: "(E.1) residual per step", x_desc: "t [s]", y_desc: "residual [J/m]", series: &residual, hlines: &[], log: (false, false) }, 1.0),
             ],
             &plots::Options::default(),
         );

@@ -79,13 +79,16 @@ pub fn tick_label(v: f64, lo: f64, hi: f64) -> String {
     if s == "-0" { "0".into() } else { s }
 }
 
-/// One panel of a chart: title, axis names, series and labelled horizontal lines.
+/// One panel of a chart: title, axis names, series and labelled horizontal lines, and which
+/// axes are logarithmic (x, y: the values' log10 is drawn and the ticks read as powers of ten;
+/// non-positive values are left out).
 pub struct Panel<'a> {
     pub title: &'a str,
     pub x_desc: &'a str,
     pub y_desc: &'a str,
     pub series: &'a [Series],
     pub hlines: &'a [(String, f64)],
+    pub log: (bool, bool),
 }
 
 /// A line chart as an SVG document. `hlines` are labelled horizontal reference lines.
@@ -102,7 +105,7 @@ pub fn line_chart_with(
     hlines: &[(String, f64)],
     opts: &Options,
 ) -> Result<String, String> {
-    stacked_chart(&[(Panel { title, x_desc, y_desc, series, hlines }, 1.0)], opts)
+    stacked_chart(&[(Panel { title, x_desc, y_desc, series, hlines, log: (false, false) }, 1.0)], opts)
 }
 
 /// Panels stacked top to bottom on one SVG page, each taking its share of the height (the
@@ -110,7 +113,11 @@ pub fn line_chart_with(
 pub fn stacked_chart(panels: &[(Panel, f64)], opts: &Options) -> Result<String, String> {
     let mut svg = String::new();
     {
-        let height = if panels.len() > 1 { 720 } else { 540 };
+        let height = match panels.len() {
+            0 | 1 => 540,
+            2 => 720,
+            n => 260 * n as u32,
+        };
         let root = SVGBackend::with_string(&mut svg, (960, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let total: f64 = panels.iter().map(|p| p.1).sum();
@@ -132,8 +139,13 @@ pub fn stacked_chart(panels: &[(Panel, f64)], opts: &Options) -> Result<String, 
 
 /// Draw one panel on `area`.
 fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>, p: &Panel, opts: &Options) -> Result<(), String> {
-    let (x0, x1) = range(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.0)));
-    let (y0, mut y1) = range(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.1)).chain(p.hlines.iter().map(|h| h.1)));
+    // on a logarithmic axis the values' log10 is drawn (NaN, so left out, for v ≤ 0)
+    let axis = |log: bool| move |v: f64| if !log { v } else if v > 0.0 { v.log10() } else { f64::NAN };
+    let (fx, fy) = (axis(p.log.0), axis(p.log.1));
+    let drawn: Vec<Series> = p.series.iter().map(|s| Series { name: s.name.clone(), points: s.points.iter().map(|q| (fx(q.0), fy(q.1))).collect() }).collect();
+    let hlines: Vec<(String, f64)> = p.hlines.iter().map(|h| (h.0.clone(), fy(h.1))).collect();
+    let (x0, x1) = range(drawn.iter().flat_map(|s| s.points.iter().map(|q| q.0)));
+    let (y0, mut y1) = range(drawn.iter().flat_map(|s| s.points.iter().map(|q| q.1)).chain(hlines.iter().map(|h| h.1)));
     if opts.headroom > 0.0 && (y1 + opts.headroom * (y1 - y0)).is_finite() {
         y1 += opts.headroom * (y1 - y0);
     }
@@ -148,11 +160,11 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>
         .configure_mesh()
         .x_desc(p.x_desc)
         .y_desc(p.y_desc)
-        .x_label_formatter(&|v| tick_label(*v, x0, x1))
-        .y_label_formatter(&|v| tick_label(*v, y0, y1))
+        .x_label_formatter(&|v| if p.log.0 { format!("{:.0e}", 10f64.powf(*v)) } else { tick_label(*v, x0, x1) })
+        .y_label_formatter(&|v| if p.log.1 { format!("{:.0e}", 10f64.powf(*v)) } else { tick_label(*v, y0, y1) })
         .draw()
         .map_err(|e| e.to_string())?;
-    for (k, s) in p.series.iter().enumerate() {
+    for (k, s) in drawn.iter().enumerate() {
         let color = PALETTE[k % PALETTE.len()];
         let style = ShapeStyle::from(&color).stroke_width(2);
         let pts = s.points.iter().copied().filter(|q| q.0.is_finite() && q.1.is_finite());
@@ -165,7 +177,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>
             .label(s.name.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
     }
-    for (label, y) in p.hlines.iter().filter(|h| h.1.is_finite()) {
+    for (label, y) in hlines.iter().filter(|h| h.1.is_finite()) {
         let style = ShapeStyle::from(&BLACK).stroke_width(1);
         chart
             .draw_series(LineSeries::new(vec![(x0, *y), (x1, *y)], style))

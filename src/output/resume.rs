@@ -57,7 +57,11 @@ impl Writer {
         write_atomic(&dir.join("series.pvd"), super::vtu::pvd(&frames).as_bytes())?;
         let open = |p: &Path| OpenOptions::new().append(true).open(p).map(BufWriter::new).map_err(|e| Error::io(p, e));
         let contact = if problem.contact.is_some() { Some(open(&cp)?) } else { None };
-        Ok(Writer::new(dir, problem, open(&hp)?, contact, frames, chart_rows, contact_frames))
+        let mut w = Writer::new(dir, problem, open(&hp)?, contact, frames, chart_rows, contact_frames);
+        if problem.model.output_trajectory {
+            w.trajectory = Some(super::trajectory::TrajectoryWriter::reopen(&dir.join("trajectory.f64"), problem.dofs.n_free, step)?);
+        }
+        Ok(w)
     }
 }
 

@@ -277,6 +277,8 @@ pub struct Summary {
     /// completed | failed | interrupted (running while the run goes on)
     pub status: RunStatus,
     pub failure: Option<String>,
+    /// the kind of the failure (`Error::kind`: non_finite, solver, input, interrupted, output)
+    pub failure_kind: Option<String>,
     pub model: ModelInfo,
     pub steps_completed: usize,
     pub final_time: f64,
@@ -301,6 +303,8 @@ pub struct Summary {
     pub fixed_point_iterations_total: usize,
     pub fixed_point_iterations_max: usize,
     pub fixed_point_cap_hits: usize,
+    /// `newton-unfrozen` only: steps where it failed and the fixed point (F.1) took over
+    pub unfrozen_fallbacks: usize,
     pub max_abs_energy_residual: f64,
     pub max_relative_energy_residual: f64,
     pub warnings: Vec<String>,

@@ -5,18 +5,21 @@
 //!   e_H(ε) = max_n ‖v_ε^n − v^n‖_{L²} / max_n ‖v^n‖_{L²},
 //!   δ(ε)   = max_{n,i} (u_ε,ν,i^n − g)_+ (the penetration beyond the bound),
 //! and the least-squares log–log slopes of e_V, e_H and δ against ε. E.0 bounds δ by O(ε^½);
-//! B.2 gives O(ε) under steady pressing.
+//! B.2 gives O(ε) under steady pressing. The runs are a sweep (fixtures/sweeps/penalty.toml:
+//! the point "exact" and one point per ε, each writing trajectory.f64); [`collect`] reads them.
 
 use std::path::Path;
-use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::fem::assemble::{assemble_full, restrict};
 use crate::linalg::{self, SpMat};
-use crate::model::kinds::{Bound, EnforcementKind, FixedPointAcceleration, MassKind};
+use crate::model::kinds::{Bound, MassKind};
+use crate::output::trajectory::{self, TrajectoryRecord};
+use crate::overrides::Override;
 use crate::problem::Problem;
 use crate::scene::Scene;
-use crate::simulation::{NodeRecord, Simulation};
+use crate::sweep::runner::{self, RunnerOptions};
+use crate::sweep::{Base, Plan, SweepFile};
 
 use super::harness::{self, loglog_slope};
 
@@ -61,74 +64,102 @@ fn norm(a: &SpMat, x: &[f64]) -> f64 {
     linalg::quad(a, x, x).max(0.0).sqrt()
 }
 
-/// (E.0) The penetration beyond the bound of one step, max_i (u_ν,i − g)_+: the energy
-/// estimate of P_ε bounds it by C ε^½ (the study measures the rate).
-pub fn penetration_beyond_bound(nodes: &[NodeRecord], g: f64) -> f64 {
-    nodes.iter().map(|n| (n.u_n - g).max(0.0)).fold(0.0, f64::max)
+/// (E.0) The penetration beyond the bound of one step, max_i (u_ν,i − g)_+ = (max_i u_ν,i − g)_+
+/// (rounding is monotone, so the two are the same number): the energy estimate of P_ε bounds it
+/// by C ε^½ (the study measures the rate). `max_penetration` is history.csv's column.
+pub fn penetration_beyond_bound(max_penetration: f64, g: f64) -> f64 {
+    (max_penetration - g).max(0.0)
 }
 
-/// Run the study for `scene` (its contact section must have a finite penetration bound).
-pub fn penalty_study(scene: &Scene, scene_dir: &Path, eps_list: &[f64]) -> Result<PenaltyStudy> {
+/// The study's sweep file (fixtures/sweeps/penalty.toml), embedded.
+const SWEEP: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sweeps/penalty.toml"));
+
+/// The label of the reference point (exact enforcement) on the sweep's `eps` axis.
+pub const EXACT: &str = "exact";
+
+/// The study's sweep: fixtures/sweeps/penalty.toml, with the ε list replaced when given (the
+/// point "exact" and one point per ε).
+pub fn sweep_file(eps_list: Option<&[f64]>) -> Result<SweepFile> {
+    let mut sweep = crate::sweep::parse(SWEEP, "fixtures/sweeps/penalty.toml")?;
+    if let Some(eps) = eps_list {
+        if let Some(e) = eps.iter().find(|e| !(e.is_finite() && **e > 0.0)) {
+            return Err(Error::scene("--eps", format!("every ε must be > 0, got {e}")));
+        }
+        let axis = &mut sweep.axes[0];
+        axis.sets.truncate(1);
+        axis.labels.truncate(1);
+        for &e in eps {
+            let mut t = toml::Table::new();
+            t.insert("contact.enforcement".into(), toml::Value::String("penalty".into()));
+            t.insert("contact.penalty".into(), toml::Value::Float(e));
+            axis.sets.push(t);
+            axis.labels.push(format!("{e:e}"));
+        }
+    }
+    Ok(sweep)
+}
+
+/// Run the study: the sweep of the ε list (default: the file's) on `base` with `overrides`,
+/// its points in `work` (`jobs` at once; points completed earlier with the same scene are
+/// skipped), then the collector. The scene must have contact with a finite penetration bound.
+pub fn penalty_study(base: &Base, overrides: &[Override], eps_list: Option<&[f64]>, work: &Path, jobs: usize) -> Result<PenaltyStudy> {
+    let sweep = sweep_file(eps_list)?;
+    let scene = crate::sweep::scene_for(&sweep, base, overrides)?;
     let c = scene.contact.as_ref().ok_or_else(|| Error::scene("contact", "the penalty study needs a scene with contact"))?;
     if Scene::bound_of(c)? == Bound::Infinite {
         return Err(Error::scene("contact.penetration_bound", "the penalty study needs a finite g (it penalizes u_ν > g)"));
     }
-    if let Some(e) = eps_list.iter().find(|e| !(e.is_finite() && **e > 0.0)) {
-        return Err(Error::scene("--eps", format!("every ε must be > 0, got {e}")));
-    }
-    // the study is of the paper's plain (F.1) iteration on both problems: beyond (C.k) a
-    // trajectory is reproducible only to a few percent across fixed-point variants (README,
-    // "Speed"), which at ε ≤ 1e-5 is the size of the penalty error itself
-    let mut scene = scene.clone();
-    scene.solver.fixed_point_acceleration = FixedPointAcceleration::None;
-    let scene = &scene;
-    let mut exact_scene = scene.clone();
-    if let Some(c) = exact_scene.contact.as_mut() {
-        c.enforcement = EnforcementKind::Exact;
-        c.penalty = None;
-    }
-    let exact = Problem::from_scene(&exact_scene, scene_dir)?;
+    let plan = Plan::resolve_with(&sweep, base, overrides)?;
+    let done = plan.write(work)?;
+    runner::run_points(&plan, work, &done, &RunnerOptions { jobs: jobs.max(1), progress: false, interrupt: None })?;
+    collect(&plan, work)
+}
+
+/// The study from its sweep's folder `dir`: e_V, e_H and δ of every ε point against the point
+/// "exact", from their trajectory.f64 and history.csv (the steps paired one to one).
+pub fn collect(plan: &Plan, dir: &Path) -> Result<PenaltyStudy> {
+    let axis = &plan.axes[0];
+    let point = |label: &str| plan.points.iter().find(|p| axis.labels[p.choice[0]] == label);
+    let exact_point = point(EXACT).ok_or_else(|| Error::Output(format!("{}: the sweep has no point {EXACT:?}", dir.display())))?;
+    let exact_dir = Plan::point_dir(dir, &exact_point.id);
+    let failed = |pd: &Path, id: &str| -> Result<()> {
+        match crate::sweep::collect::point_status(pd).as_deref() {
+            Some("completed") => Ok(()),
+            other => Err(Error::Output(format!("point {id} of the penalty study ended {:?}: see {}", other.unwrap_or("without a summary"), pd.join("summary.json").display()))),
+        }
+    };
+    failed(&exact_dir, &exact_point.id)?;
+    let exact = Problem::from_scene(&Scene::from_file(&exact_dir.join("scene.toml"))?, &exact_dir)?;
     let g = match exact.contact.as_ref().map(|c| c.bound) {
         Some(Bound::Finite(g)) => g,
         _ => return Err(Error::scene("contact.penetration_bound", "must be finite")),
     };
     let (kv, mh) = norm_matrices(&exact)?;
-    // the reference trajectory, kept in memory (two vectors per step)
-    let clock = Instant::now();
-    let mut sim = Simulation::new(&exact)?;
-    let mut reference = Vec::with_capacity(exact.steps);
-    let mut steps = sim.steps();
-    while let Some(rec) = steps.next() {
-        rec?;
-        let state = &steps.simulation().state;
-        reference.push((state.u.clone(), state.v.clone()));
-    }
-    let reference_wall_time_s = clock.elapsed().as_secs_f64();
-    let u_max = reference.iter().map(|(u, _)| norm(&kv, u)).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
-    let v_max = reference.iter().map(|(_, v)| norm(&mh, v)).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+    // the reference trajectory: every step after t = 0
+    let reference: Vec<TrajectoryRecord> = trajectory::read(&exact_dir.join("trajectory.f64"))?.into_iter().skip(1).collect();
+    let reference_wall_time_s = wall_time(&exact_dir);
+    let u_max = reference.iter().map(|r| norm(&kv, &r.u)).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+    let v_max = reference.iter().map(|r| norm(&mh, &r.v)).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
     let mut rows = Vec::new();
-    for &eps in eps_list {
-        let mut s = scene.clone();
-        if let Some(c) = s.contact.as_mut() {
-            c.enforcement = EnforcementKind::Penalty;
-            c.penalty = Some(eps);
-        }
-        let pen = Problem::from_scene(&s, scene_dir)?;
-        let clock = Instant::now();
-        let mut sim = Simulation::new(&pen)?;
+    for p in plan.points.iter().filter(|p| axis.labels[p.choice[0]] != EXACT) {
+        let label = &axis.labels[p.choice[0]];
+        let eps: f64 = label.parse().map_err(|_| Error::Output(format!("point {}: the ε label {label:?} is not a number", p.id)))?;
+        let pd = Plan::point_dir(dir, &p.id);
+        failed(&pd, &p.id)?;
+        let run = trajectory::read(&pd.join("trajectory.f64"))?;
+        let penetration = crate::sweep::collect::History::read(&pd.join("history.csv")).and_then(|h| h.numbers("max_penetration")).unwrap_or_default();
         let (mut e_v, mut e_h, mut delta): (f64, f64, f64) = (0.0, 0.0, 0.0);
-        let mut steps = sim.steps();
-        for (u_ref, v_ref) in &reference {
-            let Some(rec) = steps.next() else { break };
-            let rec = rec?;
-            let state = &steps.simulation().state;
-            let du: Vec<f64> = state.u.iter().zip(u_ref).map(|(a, b)| a - b).collect();
-            let dv: Vec<f64> = state.v.iter().zip(v_ref).map(|(a, b)| a - b).collect();
+        for (n, r) in reference.iter().enumerate() {
+            let Some(q) = run.get(n + 1) else { break };
+            let du: Vec<f64> = q.u.iter().zip(&r.u).map(|(a, b)| a - b).collect();
+            let dv: Vec<f64> = q.v.iter().zip(&r.v).map(|(a, b)| a - b).collect();
             e_v = e_v.max(norm(&kv, &du));
             e_h = e_h.max(norm(&mh, &dv));
-            delta = delta.max(penetration_beyond_bound(&rec.nodes, g));
+            if let Some(&d) = penetration.get(n + 1) {
+                delta = delta.max(penetration_beyond_bound(d, g));
+            }
         }
-        rows.push(PenaltyRow { eps, e_v: e_v / u_max, e_h: e_h / v_max, delta, wall_time_s: clock.elapsed().as_secs_f64() });
+        rows.push(PenaltyRow { eps, e_v: e_v / u_max, e_h: e_h / v_max, delta, wall_time_s: wall_time(&pd) });
     }
     let eps: Vec<f64> = rows.iter().map(|r| r.eps).collect();
     let col = |f: fn(&PenaltyRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
@@ -139,6 +170,15 @@ pub fn penalty_study(scene: &Scene, scene_dir: &Path, eps_list: &[f64]) -> Resul
         rows,
         reference_wall_time_s,
     })
+}
+
+/// summary.json's wall time of a point (0 when missing).
+fn wall_time(pd: &Path) -> f64 {
+    std::fs::read_to_string(pd.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v.get("wall_time_s").and_then(serde_json::Value::as_f64))
+        .unwrap_or(0.0)
 }
 
 impl PenaltyStudy {

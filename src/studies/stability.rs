@@ -36,12 +36,16 @@ use crate::scene::Scene;
 use crate::simulation::Simulation;
 
 use super::harness;
+use crate::sweep::runner::{self, RunnerOptions};
+use crate::sweep::{Base, Plan, SweepFile};
 
 /// Options of the stability sweep.
 #[derive(Debug, Clone, Default)]
 pub struct StabilityOptions {
     /// a small sweep for smoke tests
     pub quick: bool,
+    /// runs at once (0: the number of cores)
+    pub jobs: usize,
 }
 
 /// Horizon of the full sweep (s): the academic scene's own T = 1, so the whole stick–slip
@@ -270,6 +274,20 @@ impl Sweep {
             Sweep::Relaxation => vec![1.0, 0.7, 0.4],
             Sweep::NewtonCap => vec![50.0, 4.0, 2.0, 1.0],
             Sweep::ElasticImpactPenalty => vec![1e-3, 1e-5, 1e-7, 1e-9, 1e-12],
+        }
+    }
+
+    /// The sweep of a case label's key (`Sweep::key`).
+    pub fn from_key(key: &str) -> Option<Sweep> {
+        Sweep::ALL.into_iter().find(|s| s.key() == key)
+    }
+
+    /// Values of the full sweep that no scene may take (a sweep refuses such a point before
+    /// anything runs): the map records them as refused with their validation error.
+    pub fn refused_values(self) -> Vec<f64> {
+        match self {
+            Sweep::Penalty => vec![0.0],
+            _ => Vec::new(),
         }
     }
 
@@ -535,7 +553,8 @@ pub struct RunResult {
     pub m: Measured,
 }
 
-/// Run one case of the map (horizon [`QUICK_END`] or [`FULL_END`]).
+/// Run one case of the map in this process (horizon [`QUICK_END`] or [`FULL_END`]): the map
+/// itself runs its cases as sweeps ([`map_runs`]); this is what a test compares that path with.
 pub fn run_case(case: &Case, quick: bool) -> RunResult {
     let end = if quick { QUICK_END } else { FULL_END };
     let m = match case.scene(end) {
@@ -564,29 +583,208 @@ pub fn cases(quick: bool) -> Vec<Case> {
     out
 }
 
-/// Run every case (progress on stderr).
-pub fn sweep(opts: &StabilityOptions) -> Vec<RunResult> {
-    let cases = cases(opts.quick);
-    let n = cases.len();
-    cases
-        .iter()
-        .enumerate()
-        .map(|(i, c)| {
-            let r = run_case(c, opts.quick);
-            eprintln!(
-                "[{:>3}/{n}] {:<10} {:<10} {:<24} {:<18} {:>5}/{:<5} steps {:>7.2} s",
-                i + 1,
-                c.sweep.key(),
-                c.sweep.format_value(c.value),
-                c.variant.name,
-                r.m.class.label(),
-                r.m.steps_completed,
-                r.m.steps_planned,
-                r.m.wall_time_s
-            );
-            r
-        })
-        .collect()
+/// The map's sweep files (fixtures/sweeps/stability_*.toml) with their base scenes, embedded
+/// so the map runs from any folder: the academic scene's cases and the impact's.
+const SWEEPS: [(&str, &str, &str); 2] = [
+    ("stability_academic.toml", include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sweeps/stability_academic.toml")), crate::scene::DEFAULT_SCENE),
+    ("stability_impact.toml", include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sweeps/stability_impact.toml")), IMPACT_SCENE),
+];
+
+/// A case label of the sweep files, "<sweep key> <value>".
+pub fn parse_case(label: &str) -> Option<(Sweep, f64)> {
+    let (key, value) = label.split_once(' ')?;
+    Some((Sweep::from_key(key)?, value.parse().ok()?))
+}
+
+/// The map's sweeps resolved (every point validated): the full map, or the quick one (each
+/// case's quick values, horizon [`QUICK_END`]).
+pub fn plans(quick: bool) -> Result<Vec<(SweepFile, Base, Plan)>> {
+    let mut out = Vec::new();
+    for (file, text, base_text) in SWEEPS {
+        let mut sweep = crate::sweep::parse(text, &format!("fixtures/sweeps/{file}"))?;
+        let extra = if quick {
+            // keep the cases whose value is among its sweep's quick values
+            let case = &mut sweep.axes[0];
+            let keep: Vec<bool> = case.labels.iter().map(|l| parse_case(l).is_some_and(|(sw, v)| sw.quick_values().contains(&v))).collect();
+            let mut k = keep.iter();
+            case.sets.retain(|_| *k.next().unwrap_or(&false));
+            let mut k = keep.iter();
+            case.labels.retain(|_| *k.next().unwrap_or(&false));
+            vec![crate::overrides::Override::new("time.end", toml::Value::Float(QUICK_END))?]
+        } else {
+            Vec::new()
+        };
+        let base = Base { text: base_text.to_string(), label: format!("the base of fixtures/sweeps/{file}"), dir: std::path::PathBuf::from(".") };
+        let plan = Plan::resolve_with(&sweep, &base, &extra)?;
+        out.push((sweep, base, plan));
+    }
+    Ok(out)
+}
+
+/// Run the map's sweeps under `out/sweeps/` (in parallel, `opts.jobs` at once; points completed
+/// earlier with the same scene are skipped) and read every point back as a [`RunResult`], with
+/// the refused values added: in the order of [`cases`].
+pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
+    let jobs = if opts.jobs == 0 { std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) } else { opts.jobs };
+    let mut found: Vec<RunResult> = Vec::new();
+    for (sweep, base, plan) in plans(opts.quick)? {
+        let dir = out.join("sweeps").join(&plan.name);
+        let done = plan.write(&dir)?;
+        runner::run_points(&plan, &dir, &done, &RunnerOptions { jobs, progress: false, interrupt: None })?;
+        for p in &plan.points {
+            let case_label = &plan.axes[0].labels[p.choice[0]];
+            let variant_label = &plan.axes[1].labels[p.choice[1]];
+            let (Some((sw, value)), Some(v)) = (parse_case(case_label), variant(variant_label)) else {
+                return Err(Error::Output(format!("{}: point {} has the case {case_label:?} / variant {variant_label:?}, which the map does not know", dir.display(), p.id)));
+            };
+            let m = measure_point(&Plan::point_dir(&dir, &p.id), v.energy_conserving())?;
+            found.push(RunResult { case: Case { sweep: sw, value, variant: v }, m });
+        }
+        // the refused values of this file's sweeps, validated as the points would be
+        if !opts.quick {
+            for sw in Sweep::ALL {
+                for value in sw.refused_values() {
+                    let Some(proto) = plan.points.iter().find(|p| parse_case(&plan.axes[0].labels[p.choice[0]]).is_some_and(|(s, _)| s == sw)) else { continue };
+                    let case_set = &plan.axes[0].overrides[proto.choice[0]];
+                    for (vi, v) in variants().into_iter().enumerate() {
+                        let mut ovs: Vec<crate::overrides::Override> = case_set.iter().map(|o| if o.key == "contact.penalty" { crate::overrides::Override { value: toml::Value::Float(value), ..o.clone() } } else { o.clone() }).collect();
+                        ovs.extend(plan.axes[1].overrides[vi].iter().cloned());
+                        found.push(RunResult { case: Case { sweep: sw, value, variant: v }, m: refused(crate::sweep::scene_for(&sweep, &base, &ovs)) });
+                    }
+                }
+            }
+        }
+    }
+    // the order of `cases`, with the refused values where the full sweep lists them
+    let mut rows = Vec::with_capacity(found.len());
+    for c in cases(opts.quick) {
+        let pos = found.iter().position(|r| r.case.sweep == c.sweep && r.case.value == c.value && r.case.variant.name == c.variant.name);
+        match pos {
+            Some(i) => rows.push(found.swap_remove(i)),
+            None => return Err(Error::Output(format!("the map's sweeps have no run of {} = {} / {}", c.sweep.key(), c.value, c.variant.name))),
+        }
+    }
+    for r in &rows {
+        eprintln!(
+            "{:<10} {:<10} {:<24} {:<18} {:>5}/{:<5} steps {:>7.2} s",
+            r.case.sweep.key(),
+            r.case.sweep.format_value(r.case.value),
+            r.case.variant.name,
+            r.m.class.label(),
+            r.m.steps_completed,
+            r.m.steps_planned,
+            r.m.wall_time_s
+        );
+    }
+    Ok(rows)
+}
+
+/// The measure of a value no scene may take: the error its scene is refused with (a clear error).
+fn refused(scene: Result<Scene>) -> Measured {
+    let planned = scene.as_ref().map(|s| ((s.time.end / s.time.step).round() as usize, s.time.step)).unwrap_or((0, f64::NAN));
+    let mut m = Measured::empty(planned.0, planned.1);
+    let e = match scene.and_then(|s| s.validate().map(|_| ())) {
+        Err(e) => e,
+        Ok(()) => Error::Output("expected to be refused, but the scene is valid".into()),
+    };
+    m.class = RunClass::ClearError;
+    m.note = e.to_string();
+    m.max_gain = 0.0;
+    m
+}
+
+/// The [`Measured`] of a run from its folder (history.csv, summary.json) — the same numbers
+/// [`run_scene`] finds in process (tested): the per-step (E.1) defects, fixed-point and Newton
+/// counts and energies of history.csv, the steps, k, (C.k) limit, fallbacks, wall time and
+/// failure (kind and message) of summary.json; a row with a non-finite energy term ends the
+/// run there, as a non-finite value reaching the caller.
+pub fn measure_point(pd: &Path, energy_conserving: bool) -> Result<Measured> {
+    let sp = pd.join("summary.json");
+    let summary: serde_json::Value = std::fs::read_to_string(&sp)
+        .map_err(|e| Error::io(&sp, e))
+        .and_then(|t| serde_json::from_str(&t).map_err(|e| Error::Output(format!("{}: {e}", sp.display()))))?;
+    let model = summary.get("model");
+    let num = |v: Option<&serde_json::Value>| v.and_then(serde_json::Value::as_f64);
+    let (steps, k) = match model {
+        Some(m) => (num(m.get("steps")).unwrap_or(0.0) as usize, num(m.get("step")).unwrap_or(f64::NAN)),
+        None => {
+            // a run that could not start: its scene says what it would have run
+            let s = Scene::from_file(&pd.join("scene.toml"))?;
+            ((s.time.end / s.time.step).round() as usize, s.time.step)
+        }
+    };
+    let mut m = Measured::empty(steps, k);
+    m.ck_limit = model.and_then(|m| num(m.get("ck_step_limit")));
+    m.fallbacks = summary.get("unfrozen_fallbacks").and_then(serde_json::Value::as_u64).unwrap_or(0) as usize;
+    m.wall_time_s = num(summary.get("wall_time_s")).unwrap_or(0.0);
+    let mut non_finite = false;
+    if let Some(h) = crate::sweep::collect::History::read(&pd.join("history.csv")) {
+        let col = |name: &str| h.numbers(name).ok_or_else(|| Error::Output(format!("{}: history.csv has no column {name}", pd.display())));
+        let terms: Vec<Vec<f64>> = ["kinetic", "elastic", "compliance", "external_work", "viscous_dissipation", "friction_dissipation", "constraint_dissipation", "persistency_dissipation", "energy_residual", "energy_scale"]
+            .iter()
+            .map(|n| col(n))
+            .collect::<Result<_>>()?;
+        let (fp, converged, newton) = (col("fixed_point_iterations")?, col("fixed_point_converged")?, col("newton_iterations")?);
+        let energy = |r: usize| EnergyTerms {
+            kinetic: terms[0][r],
+            elastic: terms[1][r],
+            compliance: terms[2][r],
+            external_work: terms[3][r],
+            viscous_dissipation: terms[4][r],
+            friction_dissipation: terms[5][r],
+            constraint_dissipation: terms[6][r],
+            persistency_dissipation: terms[7][r],
+            residual: terms[8][r],
+        };
+        if !h.rows.is_empty() {
+            let e0 = stored(&energy(0));
+            m.final_energy = energy(0);
+            let (mut fp_sum, mut cum_defect) = (0usize, 0.0f64);
+            for r in 1..h.rows.len() {
+                if terms.iter().any(|t| !t[r].is_finite()) {
+                    non_finite = true;
+                    break;
+                }
+                let e = energy(r);
+                m.steps_completed += 1;
+                fp_sum += fp[r] as usize;
+                m.fp_max = m.fp_max.max(fp[r] as usize);
+                m.fp_capped_steps += usize::from(converged[r] == 0.0);
+                m.newton_total += newton[r] as usize;
+                m.newton_max = m.newton_max.max(newton[r] as usize);
+                let scale = terms[9][r].max(f64::MIN_POSITIVE);
+                m.max_defect = m.max_defect.max(e.residual.abs() / scale);
+                cum_defect += e.residual;
+                m.max_gain = m.max_gain.max((stored(&e) - e0 - e.external_work) / scale);
+                m.final_energy = e;
+                m.scale = scale;
+            }
+            if m.steps_completed > 0 {
+                m.fp_mean = fp_sum as f64 / m.steps_completed as f64;
+                m.drift = cum_defect / m.scale;
+            }
+        }
+    }
+    let failed = summary.get("status").and_then(|s| s.as_str()) == Some("failed");
+    let kind = summary.get("failure_kind").and_then(|s| s.as_str()).unwrap_or_default();
+    if non_finite {
+        m.note = format!("a non-finite energy term reached the caller at step {}", m.steps_completed + 1);
+    } else if failed {
+        m.note = summary.get("failure").and_then(|s| s.as_str()).unwrap_or_default().to_string();
+    }
+    if !m.max_gain.is_finite() {
+        m.max_gain = 0.0;
+    }
+    m.class = if non_finite || (failed && kind == "non_finite") {
+        RunClass::NonFinite
+    } else if failed && kind == "solver" {
+        RunClass::NewtonFailed
+    } else if failed {
+        RunClass::ClearError
+    } else {
+        classify(None, false, &m, energy_conserving)
+    };
+    Ok(m)
 }
 
 /// The CSV header of stability.csv.
@@ -808,10 +1006,10 @@ pub fn report(rows: &[RunResult], wall_time_s: f64) -> String {
 
 const RED_CORNER: RGBColor = RGBColor(200, 0, 0);
 
-/// Run the sweep and write its CSV and SVG files under `out`.
+/// Run the map (its sweeps, in parallel) and write its CSV and SVG files under `out`.
 pub fn run(out: &Path, opts: &StabilityOptions) -> Result<String> {
     let clock = Instant::now();
-    let rows = sweep(opts);
+    let rows = map_runs(out, opts)?;
     let wall = clock.elapsed().as_secs_f64();
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     write_atomic(&out.join("stability.csv"), csv(&rows).as_bytes())?;

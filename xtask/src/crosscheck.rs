@@ -15,7 +15,8 @@
 //!    Gmsh mesh fixtures/meshes/holed_block.msh with scikit-fem into
 //!    `fixtures/reference/{box3d,holed_block}_*.mtx` (tests/crosscheck.rs compares dyncontact's);
 //! 4. short `dyncontact run`s of [`RUN_SCENES`] (2-D and 3-D), whose `series.pvd` and frames
-//!    `check_frames.py` reads with meshio.
+//!    `check_frames.py` reads with meshio;
+//! 5. the GetFEM dynamic-contact checks, and the sweeps' Snakemake path (src/workflow.rs).
 //!
 //! The solver is the binary `target/debug/dyncontact`, built only if it is missing: `cargo run`
 //! from here would rebuild dependencies with other features than `cargo test` uses (cargo's
@@ -105,6 +106,11 @@ pub fn run(root: &Path) -> Result<String, String> {
         record(&mut report, &mut failures, &format!("GetFEM dynamic contact ({which})"), result);
     }
 
+    let t = Instant::now();
+    let result = super::workflow::check(root, &bin, &python, &out_root.join("workflow"));
+    let _ = writeln!(report, "  sweeps: in-process against Snakemake, and the stability map's job lists ({:.1} s)", t.elapsed().as_secs_f64());
+    record(&mut report, &mut failures, "sweeps with Snakemake", result);
+
     let refs = rel(root, &reference);
     let _ = writeln!(report, "  scikit-fem reference operators written to {refs}/<scene>_{{M,K,C}}.mtx, <scene>_f.txt");
     let total = start.elapsed().as_secs_f64();
@@ -112,7 +118,7 @@ pub fn run(root: &Path) -> Result<String, String> {
         let n = scenes.len();
         let _ = write!(
             report,
-            "crosscheck OK: {n} scenes, tolerance 1e-12 relative, frames readable, GetFEM dynamic contact agrees with and without friction ({total:.1} s)"
+            "crosscheck OK: {n} scenes, tolerance 1e-12 relative, frames readable, GetFEM dynamic contact agrees with and without friction, Snakemake runs the sweep as in-process ({total:.1} s)"
         );
         Ok(report)
     } else {
@@ -259,7 +265,7 @@ fn record(report: &mut String, failures: &mut Vec<String>, label: &str, result: 
 
 /// Run to completion with captured output: Ok((exited with 0, stdout + stderr, or on failure the
 /// command line and the end of its output)); Err only when the program could not start.
-fn spawn(cmd: &mut Command) -> Result<(bool, String), String> {
+pub fn spawn(cmd: &mut Command) -> Result<(bool, String), String> {
     // the command line for messages, with paths shown relative to the working directory
     let cwd = cmd.get_current_dir().map(Path::to_path_buf);
     let short = |a: &std::ffi::OsStr| match &cwd {
@@ -289,7 +295,7 @@ fn push_lines(report: &mut String, text: &str) {
 }
 
 /// An empty directory (removed first if it exists: stale frames would spoil the frame count).
-fn fresh_dir(dir: &Path) -> Result<PathBuf, String> {
+pub fn fresh_dir(dir: &Path) -> Result<PathBuf, String> {
     if dir.exists() {
         std::fs::remove_dir_all(dir).map_err(|e| format!("remove {}: {e}", dir.display()))?;
     }

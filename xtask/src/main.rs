@@ -12,6 +12,7 @@
 //! 4. writes target/verify/trace.md and exits non-zero on any failure.
 
 mod crosscheck;
+mod workflow;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};

@@ -1,0 +1,263 @@
+//! `DIR/sweep.csv` and `DIR/plots/` from the points' folders: the same files whether the points
+//! ran here (`dyncontact sweep`) or as Snakemake jobs (`dyncontact sweep collect DIR`).
+//!
+//! sweep.csv has one row per point: `point`, one column per axis (named by its key or name, the
+//! value's label), `status` (completed, failed, interrupted, or missing when the point has not
+//! run), `wall_time_s`, the figures of [`FIGURES`] (from the point's history.csv and
+//! summary.json; empty where the run gave none), and `reason` (why it failed).
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::{Plan, Point};
+use crate::error::{Error, Result};
+use crate::output::plots::{stacked_chart, Options, Panel, Series};
+use crate::output::write_atomic;
+use crate::studies::harness::csv_field;
+
+/// The figures of sweep.csv, in column order (SCENES.md: final energies, cumulative
+/// dissipations, max normal force, max penetration, max |energy_residual|, iteration totals).
+pub const FIGURES: [&str; 18] = [
+    "final_kinetic",
+    "final_elastic",
+    "final_compliance",
+    "external_work",
+    "viscous_dissipation",
+    "friction_dissipation",
+    "constraint_dissipation",
+    "persistency_dissipation",
+    "max_normal_force",
+    "max_tangential_force",
+    "max_penetration",
+    "max_abs_energy_residual",
+    "max_relative_energy_residual",
+    "newton_iterations",
+    "fixed_point_iterations",
+    "fixed_point_cap_hits",
+    "steps_completed",
+    "final_time",
+];
+
+/// One row of sweep.csv.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    pub point: String,
+    /// the label of each axis' value
+    pub axes: Vec<String>,
+    pub status: String,
+    pub wall_time_s: Option<f64>,
+    /// the figures of [`FIGURES`], as written (empty: not available)
+    pub figures: Vec<String>,
+    pub reason: String,
+}
+
+impl Row {
+    /// The value of figure `name` as a number, if the row has it.
+    pub fn figure(&self, name: &str) -> Option<f64> {
+        let i = FIGURES.iter().position(|f| *f == name)?;
+        self.figures.get(i)?.parse().ok()
+    }
+}
+
+/// The `status` of a point folder's summary.json (None: there is none).
+pub fn point_status(pd: &Path) -> Option<String> {
+    let v = read_json(&pd.join("summary.json"))?;
+    v.get("status").and_then(|s| s.as_str()).map(str::to_string)
+}
+
+fn read_json(p: &Path) -> Option<serde_json::Value> {
+    serde_json::from_str(&std::fs::read_to_string(p).ok()?).ok()
+}
+
+/// Read every point of the sweep in `dir` (its sweep.json and point folders).
+pub fn rows(dir: &Path) -> Result<(Plan, Vec<Row>)> {
+    let plan = Plan::read(dir)?;
+    let rows = plan.points.iter().map(|p| row(&plan, p, &Plan::point_dir(dir, &p.id))).collect::<Result<Vec<_>>>()?;
+    Ok((plan, rows))
+}
+
+/// One point's row.
+fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
+    let axes = plan.axes.iter().zip(&p.choice).map(|(a, &c)| a.labels[c].clone()).collect();
+    let Some(summary) = read_json(&pd.join("summary.json")) else {
+        return Ok(Row { point: p.id.clone(), axes, status: "missing".into(), wall_time_s: None, figures: vec![String::new(); FIGURES.len()], reason: String::new() });
+    };
+    let text = |k: &str| summary.get(k).and_then(|v| v.as_str()).unwrap_or_default().to_string();
+    let number = |k: &str| summary.get(k).and_then(|v| v.as_f64());
+    let mut figures: HashMap<&str, String> = HashMap::new();
+    // from summary.json
+    for (fig, key) in [
+        ("max_abs_energy_residual", "max_abs_energy_residual"),
+        ("max_relative_energy_residual", "max_relative_energy_residual"),
+        ("newton_iterations", "newton_iterations_total"),
+        ("fixed_point_iterations", "fixed_point_iterations_total"),
+        ("fixed_point_cap_hits", "fixed_point_cap_hits"),
+        ("steps_completed", "steps_completed"),
+        ("final_time", "final_time"),
+    ] {
+        if let Some(v) = summary.get(key).filter(|v| v.is_number()) {
+            figures.insert(fig, v.to_string());
+        }
+    }
+    // from history.csv: the last row and the maxima
+    if let Some(h) = History::read(&pd.join("history.csv")) {
+        for (fig, col) in [
+            ("final_kinetic", "kinetic"),
+            ("final_elastic", "elastic"),
+            ("final_compliance", "compliance"),
+            ("external_work", "external_work"),
+            ("viscous_dissipation", "viscous_dissipation"),
+            ("friction_dissipation", "friction_dissipation"),
+            ("constraint_dissipation", "constraint_dissipation"),
+            ("persistency_dissipation", "persistency_dissipation"),
+        ] {
+            if let Some(v) = h.last(col) {
+                figures.insert(fig, v);
+            }
+        }
+        for (fig, col, abs) in [("max_normal_force", "normal_force", false), ("max_tangential_force", "tangential_force", true), ("max_penetration", "max_penetration", false)] {
+            if let Some(v) = h.max(col, abs) {
+                figures.insert(fig, v.to_string());
+            }
+        }
+    }
+    Ok(Row {
+        point: p.id.clone(),
+        axes,
+        status: text("status"),
+        wall_time_s: number("wall_time_s"),
+        figures: FIGURES.iter().map(|f| figures.remove(f).unwrap_or_default()).collect(),
+        reason: text("failure"),
+    })
+}
+
+/// A point's history.csv: its header and rows (numbers as written).
+pub struct History {
+    pub columns: Vec<String>,
+    pub rows: Vec<Vec<String>>,
+}
+
+impl History {
+    /// None when the file is missing or empty.
+    pub fn read(p: &Path) -> Option<History> {
+        let text = std::fs::read_to_string(p).ok()?;
+        let mut lines = text.lines();
+        let columns: Vec<String> = lines.next()?.split(',').map(str::to_string).collect();
+        let rows = lines.map(|l| l.split(',').map(str::to_string).collect::<Vec<_>>()).filter(|r| r.len() == columns.len()).collect();
+        Some(History { columns, rows })
+    }
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.columns.iter().position(|c| c == name)
+    }
+    /// Column `name` as numbers (NaN where unreadable).
+    pub fn numbers(&self, name: &str) -> Option<Vec<f64>> {
+        let c = self.column(name)?;
+        Some(self.rows.iter().map(|r| r[c].parse().unwrap_or(f64::NAN)).collect())
+    }
+    fn last(&self, name: &str) -> Option<String> {
+        let c = self.column(name)?;
+        self.rows.last().map(|r| r[c].clone())
+    }
+    fn max(&self, name: &str, abs: bool) -> Option<f64> {
+        let v = self.numbers(name)?;
+        v.into_iter().map(|x| if abs { x.abs() } else { x }).filter(|x| x.is_finite()).reduce(f64::max)
+    }
+}
+
+/// sweep.csv of `rows`.
+pub fn csv(plan: &Plan, rows: &[Row]) -> String {
+    let mut s = String::from("point");
+    for a in &plan.axes {
+        s.push(',');
+        s.push_str(&csv_field(&a.column));
+    }
+    s.push_str(",status,wall_time_s");
+    for f in FIGURES {
+        s.push(',');
+        s.push_str(f);
+    }
+    s.push_str(",reason\n");
+    for r in rows {
+        let _ = write!(s, "{}", r.point);
+        for a in &r.axes {
+            let _ = write!(s, ",{}", csv_field(a));
+        }
+        let _ = write!(s, ",{},{}", r.status, r.wall_time_s.map(|t| format!("{t:.3}")).unwrap_or_default());
+        for f in &r.figures {
+            let _ = write!(s, ",{f}");
+        }
+        let _ = writeln!(s, ",{}", csv_field(&r.reason));
+    }
+    s
+}
+
+/// Collect the sweep in `dir`: write sweep.csv and plots/<axis>.svg; returns the rows.
+pub fn collect(dir: &Path) -> Result<(Plan, Vec<Row>)> {
+    let (plan, rows) = rows(dir)?;
+    write_atomic(&dir.join("sweep.csv"), csv(&plan, &rows).as_bytes())?;
+    let plots = dir.join("plots");
+    std::fs::create_dir_all(&plots).map_err(|e| Error::io(&plots, e))?;
+    for (a, axis) in plan.axes.iter().enumerate() {
+        if axis.numbers.is_some() && !plan.figures.is_empty() {
+            let svg = chart(&plan, &rows, a)?;
+            write_atomic(&plots.join(format!("{}.svg", file_name(&axis.column))), svg.as_bytes())?;
+        }
+    }
+    Ok((plan, rows))
+}
+
+/// A file name for a column (`contact.penalty` → `contact.penalty`, other characters → `_`).
+fn file_name(column: &str) -> String {
+    column.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' || c == '_' { c } else { '_' }).collect()
+}
+
+/// Whether values span at least two decades (all positive): the axis is drawn logarithmic.
+fn spans_decades(v: &[f64]) -> bool {
+    let pos: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    !pos.is_empty() && pos.iter().all(|&x| x > 0.0) && pos.iter().copied().fold(0.0, f64::max) >= 100.0 * pos.iter().copied().fold(f64::INFINITY, f64::min)
+}
+
+/// plots/<axis>.svg: one panel per chosen figure against the axis' numbers, a line per
+/// combination of the other axes' values (completed points only).
+fn chart(plan: &Plan, rows: &[Row], a: usize) -> Result<String> {
+    let axis = &plan.axes[a];
+    let numbers = axis.numbers.as_deref().unwrap_or_default();
+    let log_x = spans_decades(numbers);
+    // the lines: the other axes' values
+    let mut groups: Vec<String> = Vec::new();
+    for p in &plan.points {
+        let k = group_key(plan, p, a);
+        if !groups.contains(&k) {
+            groups.push(k);
+        }
+    }
+    let mut panels_data: Vec<(String, Vec<Series>, bool)> = Vec::new();
+    for fig in &plan.figures {
+        let mut series = Vec::new();
+        let mut all = Vec::new();
+        for key in &groups {
+            let mut pts: Vec<(f64, f64)> = rows
+                .iter()
+                .zip(&plan.points)
+                .filter(|(r, p)| r.status == "completed" && group_key(plan, p, a) == *key)
+                .filter_map(|(r, p)| Some((numbers[p.choice[a]], r.figure(fig)?)))
+                .collect();
+            pts.sort_by(|x, y| x.0.total_cmp(&y.0));
+            all.extend(pts.iter().map(|q| q.1));
+            series.push(Series { name: if key.is_empty() { fig.clone() } else { key.clone() }, points: pts });
+        }
+        let log_y = spans_decades(&all);
+        panels_data.push((fig.clone(), series, log_y));
+    }
+    let panels: Vec<(Panel, f64)> = panels_data
+        .iter()
+        .map(|(fig, series, log_y)| (Panel { title: fig, x_desc: &axis.column, y_desc: fig, series, hlines: &[], log: (log_x, *log_y) }, 1.0))
+        .collect();
+    let opts = Options { markers: true, ..Options::default() };
+    stacked_chart(&panels, &opts).map_err(|e| Error::Output(format!("plots/{}.svg: {e}", file_name(&axis.column))))
+}
+
+fn group_key(plan: &Plan, p: &Point, a: usize) -> String {
+    plan.axes.iter().enumerate().filter(|(b, _)| *b != a).map(|(b, ax)| format!("{} = {}", ax.column, ax.labels[p.choice[b]])).collect::<Vec<_>>().join(", ")
+}

@@ -1,0 +1,431 @@
+//! Sweeps (SCENES.md, "Overrides and sweeps"): many runs of one scene, each point a scene with
+//! some keys set, run into its own folder.
+//!
+//! A sweep file names a base scene (a file relative to it, or `"default"`), fixed overrides
+//! (`[set]`, applied to every point) and axes. An axis is a key with its values, or — for keys
+//! that change together (a scheme with its mass and inner solver) — a named list of override
+//! tables (`sets`); `labels` name the values in sweep.csv and the charts. `mode = "grid"` runs
+//! the Cartesian product of the axes (the first axis slowest), `"zip"` advances them together.
+//!
+//! ```toml
+//! name = "penalty-sweep"
+//! base = "academic.toml"
+//! mode = "grid"
+//! [[axis]]
+//! key = "contact.penalty"
+//! values = [1e-3, 1e-4, 1e-5]
+//! [[axis]]
+//! name = "variant"
+//! sets = [{ "time.scheme" = "midpoint" }, { "time.scheme" = "backward-euler", "solver.mass" = "consistent" }]
+//! labels = ["midpoint", "backward-euler"]
+//! [set]
+//! "contact.enforcement" = "penalty"
+//! [plot]
+//! figures = ["max_penetration", "friction_dissipation"]
+//! ```
+//!
+//! The flow is one way: [`Plan::from_file`] resolves and validates every point (a bad point
+//! refuses the whole sweep, naming its axis values and the key); [`Plan::write`] lays out
+//! `DIR/sweep.json`, `DIR/points/<id>/scene.toml`, `DIR/Snakefile` and `DIR/config.yaml`;
+//! [`runner::run`] runs the points in parallel (each one `run` into its folder, a point already
+//! completed with the same scene skipped); [`collect::collect`] reads the folders into
+//! `DIR/sweep.csv` and `DIR/plots/` — the same files whether the points ran here or as
+//! Snakemake jobs on a cluster (`dyncontact sweep collect DIR`).
+
+pub mod collect;
+pub mod runner;
+pub mod snakemake;
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::output::write_atomic;
+use crate::overrides::Override;
+use crate::scene::{Scene, DEFAULT_SCENE};
+
+/// The most points a sweep may have.
+pub const MAX_POINTS: usize = 100_000;
+
+/// The sweep file (TOML).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepFile {
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    /// a scene file relative to the sweep file, or "default" (the embedded academic scene)
+    #[serde(default = "default_base")]
+    pub base: String,
+    #[serde(default)]
+    pub mode: Mode,
+    #[serde(default, rename = "axis")]
+    pub axes: Vec<AxisSpec>,
+    /// overrides of every point: dotted key → value
+    #[serde(default)]
+    pub set: toml::Table,
+    #[serde(default)]
+    pub plot: PlotSpec,
+}
+
+fn default_base() -> String {
+    "default".into()
+}
+
+/// How the axes combine.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// the Cartesian product (the first axis slowest)
+    #[default]
+    Grid,
+    /// the axes advance together (all of one length)
+    Zip,
+}
+
+/// One axis as written: `key` with `values`, or `name` with `sets` (override tables).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisSpec {
+    pub key: Option<String>,
+    #[serde(default)]
+    pub values: Vec<toml::Value>,
+    pub name: Option<String>,
+    #[serde(default)]
+    pub sets: Vec<toml::Table>,
+    /// names of the values (sweep.csv, charts); default: the values themselves
+    #[serde(default)]
+    pub labels: Vec<String>,
+}
+
+/// What the collector charts.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlotSpec {
+    /// sweep.csv figures drawn against every numeric axis (DIR/plots/<axis>.svg)
+    #[serde(default = "default_figures")]
+    pub figures: Vec<String>,
+}
+
+impl Default for PlotSpec {
+    fn default() -> PlotSpec {
+        PlotSpec { figures: default_figures() }
+    }
+}
+
+fn default_figures() -> Vec<String> {
+    ["max_normal_force", "max_penetration", "friction_dissipation", "max_relative_energy_residual", "newton_iterations"].map(String::from).to_vec()
+}
+
+/// A resolved axis: its column in sweep.csv, the label of each value, the numbers when every
+/// value is one (a numeric axis gets a chart), and the overrides of each value.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Axis {
+    pub column: String,
+    pub labels: Vec<String>,
+    pub numbers: Option<Vec<f64>>,
+    #[serde(skip)]
+    pub overrides: Vec<Vec<Override>>,
+}
+
+/// One point: its id, the value it takes on each axis, and its scene (TOML text, validated).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Point {
+    pub id: String,
+    pub choice: Vec<usize>,
+    #[serde(skip)]
+    pub scene_text: String,
+    /// the point's estimated peak memory (MB) and a conservative run time (minutes), for the
+    /// cluster's resources
+    pub mem_mb: u64,
+    pub runtime_min: u64,
+}
+
+/// A sweep with every point resolved and validated.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Plan {
+    pub name: String,
+    pub description: String,
+    pub mode: Mode,
+    pub base: String,
+    pub axes: Vec<Axis>,
+    pub points: Vec<Point>,
+    pub figures: Vec<String>,
+}
+
+impl Plan {
+    /// Read a sweep file and resolve it; `extra` overrides every point after its own (`--set`).
+    pub fn from_file(path: &Path, extra: &[Override]) -> Result<Plan> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let file = path.display().to_string();
+        let sweep = parse(&text, &file)?;
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+        Plan::resolve(&sweep, &dir, extra)
+    }
+
+    /// Resolve a parsed sweep: `dir` is where its `base` path is read from.
+    pub fn resolve(sweep: &SweepFile, dir: &Path, extra: &[Override]) -> Result<Plan> {
+        let base = Base::of(sweep, dir)?;
+        Plan::resolve_with(sweep, &base, extra)
+    }
+
+    /// Resolve a parsed sweep on a given base scene (a study that embeds its scenes).
+    pub fn resolve_with(sweep: &SweepFile, base: &Base, extra: &[Override]) -> Result<Plan> {
+        if sweep.name.trim().is_empty() || sweep.name.contains(['/', '\\']) || sweep.name == "." || sweep.name == ".." {
+            return Err(Error::scene("name", format!("must be a non-empty folder name without slashes, got {:?}", sweep.name)));
+        }
+        let (base_text, base_label, base_dir) = (&base.text, &base.label, &base.dir);
+        let fixed = fixed_overrides(sweep)?;
+        let axes = sweep.axes.iter().enumerate().map(|(a, spec)| resolve_axis(a, spec)).collect::<Result<Vec<_>>>()?;
+        for (a, axis) in axes.iter().enumerate() {
+            if axes[..a].iter().any(|b| b.column == axis.column) {
+                return Err(Error::scene(format!("axis[{a}]"), format!("the column {:?} names two axes", axis.column)));
+            }
+            for o in axis.overrides.iter().flatten() {
+                if fixed.iter().any(|f| f.key == o.key) {
+                    return Err(Error::scene(format!("axis[{a}]"), format!("{} is also in [set]: an axis and [set] cannot both set a key", o.key)));
+                }
+            }
+        }
+        let choices = combinations(&axes, sweep.mode)?;
+        let width = choices.len().saturating_sub(1).to_string().len().max(3);
+        let mut points = Vec::with_capacity(choices.len());
+        for (index, choice) in choices.into_iter().enumerate() {
+            let id = format!("p{index:0width$}");
+            let mut ovs = fixed.clone();
+            for (axis, &c) in axes.iter().zip(&choice) {
+                ovs.extend(axis.overrides[c].iter().cloned());
+            }
+            ovs.extend(extra.iter().cloned());
+            let label = describe(&axes, &choice);
+            let refuse = |e: Error| Error::scene(format!("point {id} ({label})"), e.to_string());
+            let scene_text = point_text(base_text, base_label, base_dir, &ovs, &format!("{}-{id}", sweep.name)).map_err(refuse)?;
+            let (mem_mb, runtime_min) = check_point(&scene_text, &id).map_err(refuse)?;
+            points.push(Point { id, choice, scene_text, mem_mb, runtime_min });
+        }
+        Ok(Plan {
+            name: sweep.name.clone(),
+            description: sweep.description.clone(),
+            mode: sweep.mode,
+            base: base_label.clone(),
+            axes,
+            points,
+            figures: sweep.plot.figures.clone(),
+        })
+    }
+
+    /// The folder of point `id` below `dir`.
+    pub fn point_dir(dir: &Path, id: &str) -> PathBuf {
+        dir.join("points").join(id)
+    }
+
+    /// Lay the sweep out in `dir`: sweep.json (what the collector reads), every point's
+    /// scene.toml (rewritten only when it changed — a changed scene also drops the point's old
+    /// summary.json, so the point runs again), the Snakefile and config.yaml. Returns, per point,
+    /// whether its folder already holds a completed run of the same scene.
+    pub fn write(&self, dir: &Path) -> Result<Vec<bool>> {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        let json = serde_json::to_string_pretty(self).map_err(|e| Error::Output(format!("sweep.json: {e}")))?;
+        write_atomic(&dir.join("sweep.json"), json.as_bytes())?;
+        let mut done = Vec::with_capacity(self.points.len());
+        for p in &self.points {
+            let pd = Plan::point_dir(dir, &p.id);
+            std::fs::create_dir_all(&pd).map_err(|e| Error::io(&pd, e))?;
+            let sp = pd.join("scene.toml");
+            let same = std::fs::read_to_string(&sp).is_ok_and(|t| t == p.scene_text);
+            if !same {
+                write_atomic(&sp, p.scene_text.as_bytes())?;
+                let _ = std::fs::remove_file(pd.join("summary.json"));
+            }
+            done.push(same && collect::point_status(&pd).as_deref() == Some("completed"));
+        }
+        snakemake::write(self, dir)?;
+        Ok(done)
+    }
+
+    /// Read the plan a sweep wrote to `dir` (sweep.json).
+    pub fn read(dir: &Path) -> Result<Plan> {
+        let p = dir.join("sweep.json");
+        let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, e))?;
+        serde_json::from_str(&text).map_err(|e| Error::Output(format!("{}: not a sweep folder's plan ({e})", p.display())))
+    }
+
+    /// "axis = label, …" of a point.
+    pub fn describe(&self, p: &Point) -> String {
+        describe(&self.axes, &p.choice)
+    }
+}
+
+/// The base scene of a sweep: its text, how messages name it, and the folder its relative
+/// paths (a Gmsh file) are read from.
+#[derive(Debug, Clone)]
+pub struct Base {
+    pub text: String,
+    pub label: String,
+    pub dir: PathBuf,
+}
+
+impl Base {
+    /// The sweep's `base`: "default" (the embedded academic scene) or a file relative to `dir`.
+    pub fn of(sweep: &SweepFile, dir: &Path) -> Result<Base> {
+        if sweep.base == "default" {
+            return Ok(Base { text: DEFAULT_SCENE.to_string(), label: "<embedded academic scene>".into(), dir: PathBuf::from(".") });
+        }
+        let p = dir.join(&sweep.base);
+        let text = std::fs::read_to_string(&p).map_err(|e| Error::scene("base", format!("cannot read {}: {e}", p.display())))?;
+        Ok(Base { text, label: p.display().to_string(), dir: p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")) })
+    }
+}
+
+/// The sweep's `[set]` as overrides.
+fn fixed_overrides(sweep: &SweepFile) -> Result<Vec<Override>> {
+    sweep.set.iter().map(|(k, v)| Override::new(k, v.clone()).map_err(|e| Error::scene(format!("set.\"{k}\""), e.to_string()))).collect()
+}
+
+/// The scene of a sweep's base with its `[set]` and `overrides`, read but *not* validated — for
+/// a study that records what a point outside the sweep (an invalid value) is refused with.
+pub fn scene_for(sweep: &SweepFile, base: &Base, overrides: &[Override]) -> Result<Scene> {
+    let mut ovs = fixed_overrides(sweep)?;
+    ovs.extend(overrides.iter().cloned());
+    let text = point_text(&base.text, &base.label, &base.dir, &ovs, &sweep.name)?;
+    Scene::from_toml(&text, &base.label)
+}
+
+/// Parse a sweep file's text; errors name the key path as a scene's do.
+pub fn parse(text: &str, file: &str) -> Result<SweepFile> {
+    let de = toml::de::Deserializer::parse(text).map_err(|e| Error::SceneSyntax { file: file.to_string(), message: crate::scene::one_paragraph(&e.to_string()) })?;
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = crate::scene::one_paragraph(&e.into_inner().to_string());
+        let message = if path.is_empty() || path == "." { inner } else { format!("{path}: {inner}") };
+        Error::SceneSyntax { file: file.to_string(), message }
+    })
+}
+
+/// An axis as written → its column, labels, numbers and overrides.
+fn resolve_axis(a: usize, spec: &AxisSpec) -> Result<Axis> {
+    let at = format!("axis[{a}]");
+    let (column, overrides, shown): (String, Vec<Vec<Override>>, Vec<String>) = match (&spec.key, spec.sets.is_empty()) {
+        (Some(key), true) => {
+            if spec.values.is_empty() {
+                return Err(Error::scene(format!("{at}.values"), "is empty: an axis needs at least one value"));
+            }
+            let ovs = spec.values.iter().map(|v| Override::new(key, v.clone()).map(|o| vec![o])).collect::<Result<Vec<_>>>().map_err(|e| Error::scene(format!("{at}.key"), e.to_string()))?;
+            (spec.name.clone().unwrap_or_else(|| key.clone()), ovs, spec.values.iter().map(show_value).collect())
+        }
+        (None, false) => {
+            let Some(name) = &spec.name else {
+                return Err(Error::scene(format!("{at}.name"), "missing: an axis of `sets` needs a name (its sweep.csv column)"));
+            };
+            if !spec.values.is_empty() {
+                return Err(Error::scene(format!("{at}.values"), "goes with `key`; an axis of `sets` has no values"));
+            }
+            let ovs = spec
+                .sets
+                .iter()
+                .enumerate()
+                .map(|(i, t)| t.iter().map(|(k, v)| Override::new(k, v.clone()).map_err(|e| Error::scene(format!("{at}.sets[{i}]"), e.to_string()))).collect::<Result<Vec<_>>>())
+                .collect::<Result<Vec<_>>>()?;
+            let shown = spec.sets.iter().map(|t| t.iter().map(|(k, v)| format!("{k}={}", show_value(v))).collect::<Vec<_>>().join(" ")).collect();
+            (name.clone(), ovs, shown)
+        }
+        (Some(_), false) => return Err(Error::scene(&at, "has both `key` and `sets`: give one")),
+        (None, true) => return Err(Error::scene(&at, "needs `key` with `values`, or `name` with `sets`")),
+    };
+    let labels = if spec.labels.is_empty() {
+        shown
+    } else if spec.labels.len() == overrides.len() {
+        spec.labels.clone()
+    } else {
+        return Err(Error::scene(format!("{at}.labels"), format!("has {} entries for {} values", spec.labels.len(), overrides.len())));
+    };
+    if column.trim().is_empty() || column.contains([',', '"', '\n']) {
+        return Err(Error::scene(&at, format!("the column name {column:?} must be non-empty, without commas or quotes")));
+    }
+    // a numeric axis: the values (or, for `sets`, the labels) are all numbers
+    let numbers: Option<Vec<f64>> = if spec.key.is_some() {
+        spec.values.iter().map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64))).collect()
+    } else {
+        labels.iter().map(|l| l.parse::<f64>().ok()).collect()
+    };
+    Ok(Axis { column, labels, numbers, overrides })
+}
+
+/// A value as it reads in sweep.csv: strings bare, numbers and the rest as TOML.
+fn show_value(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => s.clone(),
+        toml::Value::Float(f) => f.to_string(),
+        other => other.to_string(),
+    }
+}
+
+/// The choices (one value index per axis) of every point.
+fn combinations(axes: &[Axis], mode: Mode) -> Result<Vec<Vec<usize>>> {
+    if axes.is_empty() {
+        return Ok(vec![Vec::new()]);
+    }
+    let lens: Vec<usize> = axes.iter().map(|a| a.labels.len()).collect();
+    match mode {
+        Mode::Zip => {
+            if let Some(a) = lens.iter().position(|&l| l != lens[0]) {
+                return Err(Error::scene("mode", format!("\"zip\" needs axes of one length: axis[0] has {}, axis[{a}] {}", lens[0], lens[a])));
+            }
+            Ok((0..lens[0]).map(|i| vec![i; axes.len()]).collect())
+        }
+        Mode::Grid => {
+            let total = lens.iter().try_fold(1usize, |acc, &l| acc.checked_mul(l)).filter(|&t| t <= MAX_POINTS);
+            let Some(total) = total else {
+                return Err(Error::scene("axis", format!("the grid has more than {MAX_POINTS} points")));
+            };
+            Ok((0..total)
+                .map(|mut i| {
+                    let mut c = vec![0; lens.len()];
+                    for a in (0..lens.len()).rev() {
+                        c[a] = i % lens[a];
+                        i /= lens[a];
+                    }
+                    c
+                })
+                .collect())
+        }
+    }
+}
+
+fn describe(axes: &[Axis], choice: &[usize]) -> String {
+    if axes.is_empty() {
+        return "the base scene".into();
+    }
+    axes.iter().zip(choice).map(|(a, &c)| format!("{} = {}", a.column, a.labels[c])).collect::<Vec<_>>().join(", ")
+}
+
+/// The point's scene: the base text with its overrides, its name set to `name`, and a relative
+/// mesh file made absolute (the point's scene lives in another folder).
+fn point_text(base: &str, label: &str, base_dir: &Path, ovs: &[Override], name: &str) -> Result<String> {
+    let mut table: toml::Table = base.parse().map_err(|e: toml::de::Error| Error::SceneSyntax { file: label.to_string(), message: crate::scene::one_paragraph(&e.to_string()) })?;
+    crate::overrides::apply_all(&mut table, ovs)?;
+    table.insert("name".into(), toml::Value::String(name.to_string()));
+    if let Some(toml::Value::Table(d)) = table.get_mut("domain") {
+        if let Some(toml::Value::String(f)) = d.get("file") {
+            if Path::new(f).is_relative() {
+                let abs = base_dir.join(f);
+                let abs = abs.canonicalize().unwrap_or(abs);
+                d.insert("file".into(), toml::Value::String(abs.display().to_string()));
+            }
+        }
+    }
+    toml::to_string(&table).map_err(|e| Error::Output(format!("{label}: {e}")))
+}
+
+/// Validate a point's scene as `run` would before it builds anything; its memory estimate (MB)
+/// and a conservative run time (minutes: the estimated work at 0.1 Gflop/s, at least 10).
+fn check_point(text: &str, id: &str) -> Result<(u64, u64)> {
+    let scene = Scene::from_toml(text, &format!("points/{id}/scene.toml"))?;
+    let model = scene.validate()?;
+    let e = crate::resources::estimate(&model, Path::new("."))?;
+    let (solves, contact) = e.flops_per_step();
+    let steps = model.time.steps as f64;
+    let minutes = ((solves + contact) * steps / 1e8 / 60.0).ceil().max(10.0);
+    Ok(((e.total() / 1e6).ceil().max(100.0) as u64, minutes.min(1e7) as u64))
+}

@@ -1,0 +1,92 @@
+//! `DIR/Snakefile` and `DIR/config.yaml`: the same points as Snakemake jobs, so a workstation
+//! (`snakemake --cores N`) or a cluster (`snakemake --executor slurm --jobs 200`, README) runs the
+//! sweep and `dyncontact sweep collect .` gathers the same sweep.csv. One rule runs one point
+//! (`dyncontact run points/<id>/scene.toml --out points/<id>`; a point that fails still leaves
+//! its summary.json, which says why, so the others go on and the collector records it), one
+//! collects. config.yaml names the binary and each point's resources: `mem_mb` from `check`'s
+//! memory estimate and a conservative `runtime` in minutes.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::Plan;
+use crate::error::Result;
+use crate::output::write_atomic;
+
+/// The Snakefile (the same for every sweep but its header).
+pub fn snakefile(plan: &Plan) -> String {
+    format!(
+        r#"# Written by `dyncontact sweep` for the sweep "{name}" ({n} points): one job per point
+# (`dyncontact run` into points/<id>), then `dyncontact sweep collect .` writes sweep.csv and plots/.
+#   on this machine:  snakemake --cores 2
+#   on a cluster:     snakemake --profile profiles/slurm   (executor: slurm; README, "Sweeps")
+configfile: "config.yaml"
+
+POINTS = list(config["points"])
+
+
+rule all:
+    input:
+        "sweep.csv",
+
+
+rule point:
+    input:
+        "points/{{point}}/scene.toml",
+    output:
+        "points/{{point}}/summary.json",
+    log:
+        "points/{{point}}/run.log",
+    resources:
+        mem_mb=lambda wildcards: config["points"][wildcards.point]["mem_mb"],
+        runtime=lambda wildcards: config["points"][wildcards.point]["runtime"],
+    shell:
+        # a run that fails still writes its summary.json (status "failed" and why): keep going
+        '"{{config[dyncontact]}}" run {{input}} --out points/{{wildcards.point}} > {{log}} 2>&1 || test -f {{output}}'
+
+
+rule collect:
+    input:
+        expand("points/{{point}}/summary.json", point=POINTS),
+    output:
+        "sweep.csv",
+    shell:
+        '"{{config[dyncontact]}}" sweep collect .'
+"#,
+        name = plan.name,
+        n = plan.points.len()
+    )
+}
+
+/// config.yaml: the binary that wrote the sweep (edit it where the cluster's copy lives) and
+/// each point's resources.
+pub fn config(plan: &Plan, binary: &str) -> String {
+    let mut s = String::from("# written by `dyncontact sweep`: the binary that runs a point, and each point's resources\n");
+    s.push_str("# (mem_mb: the memory estimate of `dyncontact check`; runtime: minutes, a conservative bound)\n");
+    let _ = writeln!(s, "dyncontact: \"{}\"", binary.replace('\\', "\\\\").replace('"', "\\\""));
+    s.push_str("points:\n");
+    for p in &plan.points {
+        let _ = writeln!(s, "  {}: {{mem_mb: {}, runtime: {}}}", p.id, p.mem_mb, p.runtime_min);
+    }
+    s
+}
+
+/// Write DIR/Snakefile and DIR/config.yaml (the binary: this process's executable).
+pub fn write(plan: &Plan, dir: &Path) -> Result<()> {
+    let binary = std::env::current_exe().map(|p| p.display().to_string()).unwrap_or_else(|_| "dyncontact".into());
+    // a test binary is not the CLI: point at the CLI built beside it when there is one
+    let binary = cli_beside(&binary).unwrap_or(binary);
+    write_atomic(&dir.join("Snakefile"), snakefile(plan).as_bytes())?;
+    write_atomic(&dir.join("config.yaml"), config(plan, &binary).as_bytes())
+}
+
+/// The `dyncontact` executable of the build a test binary (target/<profile>/deps/…) belongs to.
+fn cli_beside(exe: &str) -> Option<String> {
+    let p = Path::new(exe);
+    if p.file_stem()?.to_str()? == "dyncontact" {
+        return None;
+    }
+    let profile = p.parent()?.parent()?;
+    let cli = profile.join(if cfg!(windows) { "dyncontact.exe" } else { "dyncontact" });
+    cli.is_file().then(|| cli.display().to_string())
+}
