@@ -495,9 +495,8 @@ fn simulate(scene: &Scene, m: &mut Measured) -> (Option<Error>, bool) {
         Ok(s) => s,
         Err(e) => return (Some(e), false),
     };
-    let e0 = stored(&sim.state.energy);
+    let mut tally = Tally::new(stored(&sim.state.energy));
     m.final_energy = sim.state.energy;
-    let (mut fp_sum, mut cum_defect) = (0usize, 0.0f64);
     let mut out = (None, false);
     for rec in sim.steps() {
         let rec = match rec {
@@ -524,26 +523,48 @@ fn simulate(scene: &Scene, m: &mut Measured) -> (Option<Error>, bool) {
             out.1 = true;
             break;
         }
-        m.steps_completed += 1;
         let r = &rec.report;
-        fp_sum += r.fixed_point_iterations;
-        m.fp_max = m.fp_max.max(r.fixed_point_iterations);
-        m.fp_capped_steps += usize::from(!r.fixed_point_converged());
-        m.newton_total += r.inner_iterations;
-        m.newton_max = m.newton_max.max(r.inner_iterations);
         m.fallbacks += usize::from(r.fallback.is_some());
-        let scale = rec.energy_scale.max(f64::MIN_POSITIVE);
+        tally.step(m, e, rec.energy_scale, r.fixed_point_iterations, r.fixed_point_converged(), r.inner_iterations);
+    }
+    tally.finish(m);
+    out
+}
+
+/// The per-step sums of a run's [`Measured`], the same for a run in process and one read from
+/// its files: the stored energy at t = 0, the fixed-point iterations, the (E.1) defects.
+struct Tally {
+    e0: f64,
+    fp_sum: usize,
+    cum_defect: f64,
+}
+
+impl Tally {
+    fn new(e0: f64) -> Tally {
+        Tally { e0, fp_sum: 0, cum_defect: 0.0 }
+    }
+    /// One completed step: its energy terms, energy scale, convex solves (and whether F.1
+    /// converged) and Newton iterations.
+    fn step(&mut self, m: &mut Measured, e: EnergyTerms, energy_scale: f64, fp: usize, converged: bool, newton: usize) {
+        m.steps_completed += 1;
+        self.fp_sum += fp;
+        m.fp_max = m.fp_max.max(fp);
+        m.fp_capped_steps += usize::from(!converged);
+        m.newton_total += newton;
+        m.newton_max = m.newton_max.max(newton);
+        let scale = energy_scale.max(f64::MIN_POSITIVE);
         m.max_defect = m.max_defect.max(e.residual.abs() / scale);
-        cum_defect += e.residual;
-        m.max_gain = m.max_gain.max((stored(&e) - e0 - e.external_work) / scale);
+        self.cum_defect += e.residual;
+        m.max_gain = m.max_gain.max((stored(&e) - self.e0 - e.external_work) / scale);
         m.final_energy = e;
         m.scale = scale;
     }
-    if m.steps_completed > 0 {
-        m.fp_mean = fp_sum as f64 / m.steps_completed as f64;
-        m.drift = cum_defect / m.scale;
+    fn finish(self, m: &mut Measured) {
+        if m.steps_completed > 0 {
+            m.fp_mean = self.fp_sum as f64 / m.steps_completed as f64;
+            m.drift = self.cum_defect / m.scale;
+        }
     }
-    out
 }
 
 /// One row of the map.
@@ -737,32 +758,16 @@ pub fn measure_point(pd: &Path, energy_conserving: bool) -> Result<Measured> {
             residual: terms[8][r],
         };
         if !h.rows.is_empty() {
-            let e0 = stored(&energy(0));
+            let mut tally = Tally::new(stored(&energy(0)));
             m.final_energy = energy(0);
-            let (mut fp_sum, mut cum_defect) = (0usize, 0.0f64);
             for r in 1..h.rows.len() {
                 if terms.iter().any(|t| !t[r].is_finite()) {
                     non_finite = true;
                     break;
                 }
-                let e = energy(r);
-                m.steps_completed += 1;
-                fp_sum += fp[r] as usize;
-                m.fp_max = m.fp_max.max(fp[r] as usize);
-                m.fp_capped_steps += usize::from(converged[r] == 0.0);
-                m.newton_total += newton[r] as usize;
-                m.newton_max = m.newton_max.max(newton[r] as usize);
-                let scale = terms[9][r].max(f64::MIN_POSITIVE);
-                m.max_defect = m.max_defect.max(e.residual.abs() / scale);
-                cum_defect += e.residual;
-                m.max_gain = m.max_gain.max((stored(&e) - e0 - e.external_work) / scale);
-                m.final_energy = e;
-                m.scale = scale;
+                tally.step(&mut m, energy(r), terms[9][r], fp[r] as usize, converged[r] != 0.0, newton[r] as usize);
             }
-            if m.steps_completed > 0 {
-                m.fp_mean = fp_sum as f64 / m.steps_completed as f64;
-                m.drift = cum_defect / m.scale;
-            }
+            tally.finish(&mut m);
         }
     }
     let failed = summary.get("status").and_then(|s| s.as_str()) == Some("failed");
