@@ -149,8 +149,10 @@ pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
         mesh_bytes: 16.0 * nodes as f64 + 24.0 * triangles as f64 + 8.0 * 8.0 * n,
         operator_bytes: OPERATORS * row_entries * n * SPARSE_ENTRY,
         factor_bytes: factor_entries * SPARSE_ENTRY,
-        // the dense W and one Newton matrix, and the responses G = A_k⁻¹ Hᵀ where they are kept
-        contact_bytes: 2.0 * m * m * 8.0 + Some(8.0 * n * m).filter(|g| *g <= crate::defaults::RESPONSES_BYTES).unwrap_or(0.0),
+        // the dense W and one Newton matrix, W⁻¹ where the velocity form may keep it (from
+        // GEMV_FROM unknowns), and the responses G = A_k⁻¹ Hᵀ where they are kept
+        contact_bytes: (if m >= crate::defaults::GEMV_FROM as f64 { 3.0 } else { 2.0 }) * m * m * 8.0
+            + Some(8.0 * n * m).filter(|g| *g <= crate::defaults::RESPONSES_BYTES).unwrap_or(0.0),
     })
 }
 
