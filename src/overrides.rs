@@ -8,7 +8,9 @@
 //! (`contact.friction.law`, `domain.cells[1]`, `loads.traction[0].value`); a key that holds a dot
 //! is quoted (`"a.b".c`). Values are TOML (`1e-5`, `[64, 32]`, `"penalty"`, `true`,
 //! `{ theta = 2.0, zeta = 1.5 }`); a value that is not TOML is taken as a string, so
-//! `--set contact.friction.law=constant` works as the contract writes it.
+//! `--set contact.friction.law=constant` works as the contract writes it. A table given for a
+//! key that holds a table is merged into it key by key (`--set 'solver={relaxation=0.5}'` keeps
+//! the scene's other solver keys).
 
 use crate::error::{Error, Result};
 
@@ -67,7 +69,13 @@ fn set_at(root: &mut toml::Value, parents: &[Segment], last: &Segment, value: &t
     }
     match (last, here) {
         (Segment::Key(k), toml::Value::Table(t)) => {
-            t.insert(k.clone(), value.clone());
+            match (t.get_mut(k), value) {
+                // a table into a table: merged key by key (the other keys of the scene's table stay)
+                (Some(toml::Value::Table(old)), toml::Value::Table(new)) => merge(old, new),
+                _ => {
+                    t.insert(k.clone(), value.clone());
+                }
+            }
             Ok(())
         }
         (Segment::Index(i), toml::Value::Array(a)) => {
@@ -78,6 +86,18 @@ fn set_at(root: &mut toml::Value, parents: &[Segment], last: &Segment, value: &t
         }
         (Segment::Key(_), other) => Err(format!("{} is a {}, not a table", shown(&at), other.type_str())),
         (Segment::Index(_), other) => Err(format!("{} is a {}, not an array", shown(&at), other.type_str())),
+    }
+}
+
+/// `new` merged into `old`: tables key by key, anything else replaced.
+fn merge(old: &mut toml::Table, new: &toml::Table) {
+    for (k, v) in new {
+        match (old.get_mut(k), v) {
+            (Some(toml::Value::Table(o)), toml::Value::Table(n)) => merge(o, n),
+            _ => {
+                old.insert(k.clone(), v.clone());
+            }
+        }
     }
 }
 
@@ -100,7 +120,7 @@ pub fn parse_value(text: &str) -> toml::Value {
 
 /// `a.b[2].c` → [Key a, Key b, Index 2, Key c]; `"a.b".c` keeps the quoted key whole.
 pub fn parse_path(key: &str) -> Result<Vec<Segment>> {
-    let bad = |m: &str| Error::scene("--set", format!("`{key}` is not a key path: {m}"));
+    let bad = |m: &str| Error::scene(key, format!("is not a key path: {m}"));
     let mut out = Vec::new();
     let mut chars = key.chars().peekable();
     loop {
@@ -132,7 +152,14 @@ pub fn parse_path(key: &str) -> Result<Vec<Segment>> {
         // indices
         while chars.peek() == Some(&'[') {
             chars.next();
-            let digits: String = chars.by_ref().take_while(|&c| c != ']').collect();
+            let mut digits = String::new();
+            loop {
+                match chars.next() {
+                    Some(']') => break,
+                    Some(c) => digits.push(c),
+                    None => return Err(bad("an unclosed [")),
+                }
+            }
             let i = digits.trim().parse::<usize>().map_err(|_| bad("an index is a whole number in [ ]"))?;
             out.push(Segment::Index(i));
         }
@@ -172,4 +199,38 @@ fn join(at: &str, seg: &Segment) -> String {
 
 fn shown(at: &str) -> String {
     if at.is_empty() { "the scene".into() } else { format!("`{at}`") }
+}
+
+/// The leaf overrides of a table of overrides (a sweep's `[set]`, one value of a `sets` axis):
+/// a key whose value is a table — an unquoted dotted key (`solver.relaxation = 1` in TOML is the
+/// table `solver = { relaxation = 1 }`) or an inline table — becomes one override per leaf, so
+/// each names exactly the keys it sets.
+pub fn leaves(table: &toml::Table) -> Result<Vec<Override>> {
+    let mut out = Vec::new();
+    for (k, v) in table {
+        let key = if k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.' || c == '[' || c == ']') { k.clone() } else { format!("\"{k}\"") };
+        push_leaves(&key, v, &mut out)?;
+    }
+    Ok(out)
+}
+
+fn push_leaves(key: &str, v: &toml::Value, out: &mut Vec<Override>) -> Result<()> {
+    match v {
+        toml::Value::Table(t) if !t.is_empty() => {
+            for (k, sub) in t {
+                push_leaves(&format!("{key}.{k}"), sub, out)?;
+            }
+            Ok(())
+        }
+        _ => {
+            out.push(Override::new(key, v.clone())?);
+            Ok(())
+        }
+    }
+}
+
+/// Whether one key path is the other or lies below it (`contact.friction` and
+/// `contact.friction.decay`): two overrides that touch the same value.
+pub fn overlap(a: &[Segment], b: &[Segment]) -> bool {
+    a.iter().zip(b).all(|(x, y)| x == y)
 }

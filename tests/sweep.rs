@@ -230,7 +230,62 @@ fn a_bad_point_refuses_the_sweep_before_anything_runs() {
     let e = bad("z.toml", "name = \"z\"\nmode = \"zip\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-3, 5e-4]\n[[axis]]\nkey = \"contact.compliance\"\nvalues = [1.0]\n");
     assert!(e.contains("\"zip\" needs axes of one length"), "{e}");
     let e = bad("s.toml", "name = \"s\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-3]\n[set]\n\"time.step\" = 5e-4\n");
-    assert!(e.contains("time.step is also in [set]"), "{e}");
+    assert!(e.contains("time.step and time.step of [set] set the same value"), "{e}");
+    // two axes, or an axis and a key below it in [set], touching one value
+    let e = bad("a.toml", "name = \"a\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-3]\n[[axis]]\nname = \"v\"\nsets = [{ \"time.step\" = 2e-3 }]\n");
+    assert!(e.contains("time.step and time.step of axis[0]"), "{e}");
+    let e = bad("f.toml", "name = \"f\"\n[[axis]]\nkey = \"contact.friction\"\nvalues = [{ decay = 5.0 }, { decay = 10.0 }]\n[set]\n\"contact.friction.decay\" = 5.0\n");
+    assert!(e.contains("contact.friction and contact.friction.decay of [set] set the same value"), "{e}");
+    // name and labels go with `sets`; the columns of sweep.csv are taken; an empty set says nothing
+    let e = bad("n.toml", "name = \"n\"\n[[axis]]\nkey = \"time.step\"\nname = \"k\"\nvalues = [1e-3]\n");
+    assert!(e.contains("axis[0]") && e.contains("`name` and `labels` go with `sets`"), "{e}");
+    let e = bad("r.toml", "name = \"r\"\n[[axis]]\nname = \"status\"\nsets = [{ \"time.step\" = 1e-3 }]\n");
+    assert!(e.contains("\"status\" is a column of sweep.csv already"), "{e}");
+    let e = bad("e.toml", "name = \"e\"\n[[axis]]\nname = \"x\"\nsets = [{}]\n");
+    assert!(e.contains("axis[0].sets[0]") && e.contains("is empty"), "{e}");
+    // the checks of building the problem: a gap below the body puts u^0 beyond the bound
+    let e = bad("g.toml", "name = \"g\"\n[[axis]]\nkey = \"contact.gap\"\nvalues = [\"0\", \"-0.1\"]\n");
+    assert!(e.contains("point p001 (contact.gap = -0.1)"), "{e}");
+    // `--set` on a value an axis sets
+    let f = dir.join("six.toml");
+    std::fs::copy(six_points(), &f).expect("copy");
+    let e = Plan::from_file(&f, &[Override::parse("time.step=1e-3").expect("override")]).expect_err("refused").to_string();
+    assert!(e.contains("of --set set the same value"), "{e}");
+    assert!(Override::parse("domain.cells[1=0").is_err(), "an unclosed index");
+}
+
+/// A table in `[set]` (an unquoted dotted key is one in TOML) is merged into the scene's table:
+/// the base's other keys of that table stay.
+#[test]
+fn a_table_in_set_is_merged_into_the_scene() {
+    let dir = tmp("sweep_merge");
+    let f = dir.join("m.toml");
+    std::fs::write(&f, "name = \"m\"\n[set]\nsolver.relaxation = 0.5\n").expect("write");
+    let plan = Plan::from_file(&f, &[]).expect("plan");
+    let scene = Scene::from_toml(&plan.points[0].scene_text, "point").expect("scene");
+    assert_eq!(scene.solver.relaxation, 0.5);
+    assert_eq!(scene.solver.mass, dyncontact::scene::MassKind::Lumped, "the base's other solver keys stay");
+    assert!(plan.points[0].scene_text.contains("inner = \"newton\""), "{}", plan.points[0].scene_text);
+}
+
+/// When the axes change, a point whose scene was run before keeps its run: its folder moves to
+/// its new id and only the new point runs.
+#[test]
+fn points_moved_by_a_changed_axis_keep_their_runs() {
+    let dir = tmp("sweep_moved");
+    let write = |values: &str| {
+        let f = dir.join("k.toml");
+        std::fs::write(&f, format!("name = \"k\"\n[[axis]]\nkey = \"time.step\"\nvalues = {values}\n[set]\n\"domain.cells\" = [8, 4]\n\"time.end\" = 0.02\n")).expect("write");
+        Plan::from_file(&f, &[]).expect("plan")
+    };
+    let out = dir.join("out");
+    let first = write("[1e-3, 5e-4]");
+    assert!(run_sweep(&first, &out, 2).iter().all(|o| *o == Outcome::Completed));
+    let history = std::fs::read(out.join("points/p001/history.csv")).expect("history");
+    let second = write("[2e-3, 1e-3, 5e-4]");
+    let outcomes = run_sweep(&second, &out, 2);
+    assert_eq!(outcomes, vec![Outcome::Completed, Outcome::Skipped, Outcome::Skipped]);
+    assert_eq!(std::fs::read(out.join("points/p002/history.csv")).expect("moved history"), history, "k = 5e-4 moved from p001 to p002");
 }
 
 /// `dyncontact sweep` from the command line: `--plan-only` writes the folder (a scene per point,

@@ -122,14 +122,11 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
             }
         }
     }
-    Ok(Row {
-        point: p.id.clone(),
-        axes,
-        status: text("status"),
-        wall_time_s: number("wall_time_s"),
-        figures: FIGURES.iter().map(|f| figures.remove(f).unwrap_or_default()).collect(),
-        reason: text("failure"),
-    })
+    let status = text("status");
+    // an interrupted point runs again from its start: its message (with a resume path that
+    // names this folder) is not its reason
+    let reason = if status == "interrupted" { "interrupted: runs again when the sweep runs again".to_string() } else { text("failure") };
+    Ok(Row { point: p.id.clone(), axes, status, wall_time_s: number("wall_time_s"), figures: FIGURES.iter().map(|f| figures.remove(f).unwrap_or_default()).collect(), reason })
 }
 
 /// A point's history.csv: its header and rows (numbers as written).

@@ -53,6 +53,29 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
         b.set_position((n - todo.len()) as u64);
         b
     });
+    // points too large for this machine (its free memory measured once, before any point runs)
+    // are refused as `run` refuses them, before anything starts
+    let available = crate::resources::available_memory();
+    let todo: Vec<usize> = todo
+        .into_iter()
+        .filter(|&i| {
+            let pd = Plan::point_dir(dir, &plan.points[i].id);
+            let fits = Scene::from_toml(&plan.points[i].scene_text, "scene.toml")
+                .and_then(|s| s.validate())
+                .and_then(|m| crate::resources::check_fits(&crate::resources::estimate(&m, &pd)?, available));
+            match fits {
+                Ok(()) => true,
+                Err(e) => {
+                    let _ = super::clear_outputs(&pd);
+                    let _ = write_failed_start(&pd, &plan.points[i].id, &e);
+                    if let Ok(mut slot) = outcomes[i].lock() {
+                        *slot = Outcome::Failed(e.to_string());
+                    }
+                    false
+                }
+            }
+        })
+        .collect();
     let next = AtomicUsize::new(0);
     let stopped = || opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
     // each point's numerics run sequentially: the parallelism is across points
@@ -66,7 +89,15 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
                 let k = next.fetch_add(1, Ordering::SeqCst);
                 let Some(&i) = todo.get(k) else { break };
                 let p = &plan.points[i];
-                let outcome = run_point(&Plan::point_dir(dir, &p.id), &p.scene_text, opts.interrupt.clone());
+                let pd = Plan::point_dir(dir, &p.id);
+                // a panic in one point (none is known: every failure path returns an error) is that
+                // point's failure, not the sweep's
+                let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_point(&pd, &p.scene_text, opts.interrupt.clone())))
+                    .unwrap_or_else(|_| {
+                        let reason = "the run panicked (a defect of dyncontact: please report it with this point's scene.toml)".to_string();
+                        let _ = write_failed_start(&pd, &p.id, &Error::Output(reason.clone()));
+                        Outcome::Failed(reason)
+                    });
                 if let Some(b) = &bar {
                     b.inc(1);
                     if let Outcome::Failed(reason) = &outcome {
@@ -85,16 +116,16 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
     Ok(outcomes.into_iter().map(|m| m.into_inner().unwrap_or(Outcome::NotRun)).collect())
 }
 
-/// One point: its scene read, validated and run into `pd` (a failure before the run starts
-/// writes summary.json saying why).
+/// One point: its folder cleared (but its scene.toml), its scene read, validated and run into
+/// `pd` (a failure before the run starts writes summary.json saying why). The memory check of
+/// `run` is left out: it measures the memory free now, which the other points running take.
 fn run_point(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> Outcome {
-    let name = Scene::from_toml(text, "scene.toml").map(|s| s.name).unwrap_or_default();
-    let problem = Scene::from_toml(text, &pd.join("scene.toml").display().to_string())
-        .and_then(|s| s.validate())
-        .and_then(|model| {
-            crate::resources::check_fits(&crate::resources::estimate(&model, pd)?, crate::resources::available_memory())?;
-            Problem::new(model, pd)
-        });
+    if let Err(e) = super::clear_outputs(pd) {
+        return Outcome::Failed(e.to_string());
+    }
+    let scene = Scene::from_toml(text, &pd.join("scene.toml").display().to_string());
+    let name = scene.as_ref().map(|s| s.name.clone()).unwrap_or_default();
+    let problem = scene.and_then(|s| s.validate()).and_then(|model| Problem::new(model, pd));
     let problem = match problem {
         Ok(p) => p,
         Err(e) => {

@@ -4,7 +4,7 @@
 //! (`dyncontact run points/<id>/scene.toml --out points/<id>`; a point that fails still leaves
 //! its summary.json, which says why, so the others go on and the collector records it), one
 //! collects. config.yaml names the binary and each point's resources: `mem_mb` from `check`'s
-//! memory estimate and a conservative `runtime` in minutes.
+//! memory estimate (×1.5 + 100 MB of headroom) and a conservative `runtime` in minutes.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -23,6 +23,9 @@ pub fn snakefile(plan: &Plan) -> String {
 configfile: "config.yaml"
 
 POINTS = list(config["points"])
+
+# the collector and the target run where Snakemake runs, not as cluster jobs
+localrules: all, collect
 
 
 rule all:
