@@ -115,6 +115,7 @@ fn n4_unfrozen_newton_beyond_ck_is_reported() {
 #[test]
 fn n4_unfrozen_newton_agrees_with_f1_in_3d() {
     let mut coarse = fixture("academic3d");
+    coarse.domain.cells = Some(vec![8, 4, 4]); // the fixture itself is 24×12×8 (velocity form)
     coarse.time.end = 0.4;
     let mut finer = fixture("academic3d");
     finer.domain.cells = Some(vec![12, 8, 4]);
