@@ -3,9 +3,10 @@
 //! run with GetFEM (Debian's python3-getfem, installed with apt when missing).
 //!
 //! Steps:
-//! 1. a Python venv at `target/crosscheck-venv` with `xtask/crosscheck/requirements.txt`
+//! 1. [`prepare`]: a Python venv at `<target>/crosscheck-venv` with `xtask/crosscheck/requirements.txt`
 //!    (pip runs only when the requirements changed since the last install: a marker file in the
-//!    venv holds a hash of their text);
+//!    venv holds a hash of their text), and python3-getfem for Debian's Python. `verify` runs it
+//!    on a thread while cargo builds: both wait mostly on the network;
 //! 2. for each `fixtures/scenes/crosscheck_*.toml`: `dyncontact export-operators` writes M, K, C
 //!    and f(0) on all DOFs, and `check_operators.py` reassembles them with scikit-fem and
 //!    compares entry by entry (relative tolerance 1e-12; the reasoning is in the script). The
@@ -16,17 +17,18 @@
 //!    `fixtures/reference/{box3d,holed_block}_*.mtx` (tests/crosscheck.rs compares dyncontact's);
 //! 4. short `dyncontact run`s of [`RUN_SCENES`] (2-D and 3-D), whose `series.pvd` and frames
 //!    `check_frames.py` reads with meshio;
-//! 5. the GetFEM dynamic-contact checks, and the sweeps' Snakemake path (src/workflow.rs).
+//! 5. the GetFEM dynamic-contact checks (`getfem/*.py`: every GetFEM step converged, a bound at
+//!    each refinement level), and the sweeps' Snakemake path (src/workflow.rs).
 //!
-//! The solver is the binary `target/debug/dyncontact`, built only if it is missing: `cargo run`
-//! from here would rebuild dependencies with other features than `cargo test` uses (cargo's
-//! feature unification differs between the two). After changing the solver, rebuild it (`cargo build -p dyncontact --bin
-//! dyncontact`, or `cargo test`, which builds it too).
+//! The solver is the `dyncontact` binary of the test build (`cargo test --workspace --no-run`,
+//! which `verify` has just run): never a binary left over from an earlier build.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Command;
 use std::time::Instant;
+
+use crate::process::{exec, fresh_dir, rel, spawn};
 
 /// The scenes whose `run` output is read back with meshio (short runs, see the scene files): a
 /// 2-D one and a 3-D one.
@@ -34,24 +36,41 @@ const RUN_SCENES: [&str; 2] = ["crosscheck_strain", "cantilever3d"];
 /// Marker in the venv: hash of the requirements text last installed successfully.
 const MARKER: &str = "requirements.hash";
 
-/// Run the cross-check from the workspace root. Ok: a report to print. Err: what failed (with the
-/// report so far, so the measured differences are visible).
-pub fn run(root: &Path) -> Result<String, String> {
-    let start = Instant::now();
-    let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), |d| root.join(d));
-    let scripts = root.join("xtask").join("crosscheck");
-    let mut report = String::from("crosscheck: dyncontact vs scikit-fem 12 / meshio\n");
+/// What [`prepare`] made ready: the venv's Python and how the setup went (for the report).
+pub struct Prepared {
+    python: PathBuf,
+    lines: String,
+}
 
+/// The Python side of the cross-check, ready to run: the venv with the pinned requirements and
+/// Debian's python3-getfem. Takes no solver binary, so it can run while cargo builds.
+pub fn prepare(root: &Path, target: &Path) -> Result<Prepared, String> {
     let t = Instant::now();
-    let (python, pip_ran) = ensure_venv(&target.join("crosscheck-venv"), &scripts.join("requirements.txt"))?;
+    let (python, pip_ran) = ensure_venv(&target.join("crosscheck-venv"), &root.join("xtask").join("crosscheck").join("requirements.txt"))?;
+    let mut lines = String::new();
     let _ = writeln!(
-        report,
+        lines,
         "  venv {}: {} ({:.1} s)",
         rel(root, &python),
         if pip_ran { "requirements installed" } else { "requirements unchanged, pip skipped" },
         t.elapsed().as_secs_f64()
     );
-    let bin = ensure_binary(root, &target)?;
+    let t = Instant::now();
+    let getfem = ensure_getfem()?;
+    let _ = writeln!(lines, "  GetFEM for {GETFEM_PYTHON}: {getfem} ({:.1} s)", t.elapsed().as_secs_f64());
+    Ok(Prepared { python, lines })
+}
+
+/// Run the cross-check from the workspace root with the solver `bin` and what [`prepare`] made
+/// ready. Ok: a report to print. Err: what failed (with the report so far, so the measured
+/// differences are visible).
+pub fn run(root: &Path, target: &Path, bin: &Path, prepared: &Prepared) -> Result<String, String> {
+    let start = Instant::now();
+    let scripts = root.join("xtask").join("crosscheck");
+    let python = &prepared.python;
+    let mut report = String::from("crosscheck: dyncontact vs scikit-fem 12 / meshio / GetFEM / Snakemake\n");
+    report.push_str(&prepared.lines);
+    let _ = writeln!(report, "  solver {}", rel(root, bin));
 
     let scenes = crosscheck_scenes(root)?;
     let out_root = target.join("crosscheck");
@@ -64,8 +83,8 @@ pub fn run(root: &Path) -> Result<String, String> {
         let t = Instant::now();
         let out = fresh_dir(&out_root.join(&name))?;
         let result = checked(
-            Command::new(&bin).current_dir(root).arg("export-operators").arg(scene).arg("--out").arg(&out),
-            python_cmd(&python, root)
+            Command::new(bin).current_dir(root).arg("export-operators").arg(scene).arg("--out").arg(&out),
+            python_cmd(python, root)
                 .arg(scripts.join("check_operators.py"))
                 .arg(&out)
                 .arg("--reference")
@@ -78,12 +97,12 @@ pub fn run(root: &Path) -> Result<String, String> {
     // the 3-D box: scikit-fem's operators as references for tests/crosscheck.rs (the Rust side
     // has no scene path for 3-D yet, so the comparison is the Rust test's)
     let t = Instant::now();
-    let result = spawn(python_cmd(&python, root).current_dir(&scripts).arg("solid_operators.py").arg(reference.join("box3d")));
+    let result = spawn(python_cmd(python, root).current_dir(&scripts).arg("solid_operators.py").arg(reference.join("box3d")));
     let _ = writeln!(report, "  3-D box operators with scikit-fem ({:.1} s)", t.elapsed().as_secs_f64());
     record(&mut report, &mut failures, "3-D box operators", result);
     let t = Instant::now();
     let msh = root.join("fixtures").join("meshes").join("holed_block.msh");
-    let result = spawn(python_cmd(&python, root).current_dir(&scripts).arg("solid_operators.py").arg(reference.join("holed_block")).arg(&msh));
+    let result = spawn(python_cmd(python, root).current_dir(&scripts).arg("solid_operators.py").arg(reference.join("holed_block")).arg(&msh));
     let _ = writeln!(report, "  3-D Gmsh mesh operators with scikit-fem ({:.1} s)", t.elapsed().as_secs_f64());
     record(&mut report, &mut failures, "3-D Gmsh mesh operators", result);
 
@@ -92,22 +111,37 @@ pub fn run(root: &Path) -> Result<String, String> {
         let scene = root.join("fixtures").join("scenes").join(format!("{run_scene}.toml"));
         let out = fresh_dir(&out_root.join(format!("run_{run_scene}")))?;
         let result = checked(
-            Command::new(&bin).current_dir(root).arg("run").arg(&scene).arg("--out").arg(&out),
-            python_cmd(&python, root).arg(scripts.join("check_frames.py")).arg(&out),
+            Command::new(bin).current_dir(root).arg("run").arg(&scene).arg("--out").arg(&out),
+            python_cmd(python, root).arg(scripts.join("check_frames.py")).arg(&out),
         );
         let _ = writeln!(report, "  frames of `dyncontact run {}` ({:.1} s)", rel(root, &scene), t.elapsed().as_secs_f64());
         record(&mut report, &mut failures, &format!("frames of {run_scene}"), result);
     }
 
-    for (which, what) in [("bar_impact", "B.1 on the singular mass"), ("bar_friction", "oblique impact, Signorini–Coulomb and compliance + Coulomb")] {
-        let t = Instant::now();
-        let result = getfem_check(root, &bin, &scripts.join("getfem"), &out_root.join("getfem"), which);
-        let _ = writeln!(report, "  GetFEM: dynamic contact, {what} ({:.1} s)", t.elapsed().as_secs_f64());
-        record(&mut report, &mut failures, &format!("GetFEM dynamic contact ({which})"), result);
+    // the three GetFEM comparisons are independent single-threaded processes: run side by side
+    let t = Instant::now();
+    let getfem_dir = scripts.join("getfem");
+    let results: Vec<_> = std::thread::scope(|scope| {
+        let handles: Vec<_> = GETFEM_CHECKS
+            .iter()
+            .map(|c| {
+                let (dir, out) = (&getfem_dir, out_root.join("getfem"));
+                scope.spawn(move || {
+                    let t = Instant::now();
+                    (getfem_check(root, bin, dir, &out, c), t.elapsed().as_secs_f64())
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap_or_else(|_| (Err("the GetFEM check's thread panicked".into()), 0.0))).collect()
+    });
+    let _ = writeln!(report, "  GetFEM: dynamic contact, {} comparisons side by side ({:.1} s)", GETFEM_CHECKS.len(), t.elapsed().as_secs_f64());
+    for (c, (result, seconds)) in GETFEM_CHECKS.iter().zip(results) {
+        let _ = writeln!(report, "  GetFEM: {} ({seconds:.1} s)", c.what);
+        record(&mut report, &mut failures, &format!("GetFEM dynamic contact ({})", c.what), result);
     }
 
     let t = Instant::now();
-    let result = super::workflow::check(root, &bin, &python, &out_root.join("workflow"));
+    let result = super::workflow::check(root, bin, python, &out_root.join("workflow"));
     let _ = writeln!(report, "  sweeps: in-process against Snakemake, and the stability map's job lists ({:.1} s)", t.elapsed().as_secs_f64());
     record(&mut report, &mut failures, "sweeps with Snakemake", result);
 
@@ -133,37 +167,67 @@ pub fn run(root: &Path) -> Result<String, String> {
 /// Debian's Python, which has GetFEM (python3-getfem); the cross-check venv's Python does not.
 const GETFEM_PYTHON: &str = "/usr/bin/python3";
 
-/// The GetFEM cross-checks of the dynamic contact solve, each a script that runs dyncontact and
-/// GetFEM on the same bar and compares them: `getfem/bar_impact.py` (B.1, frictionless Signorini)
-/// and `getfem/bar_friction.py` (the oblique impact: Signorini–Coulomb and normal compliance +
-/// Coulomb in GetFEM's weak-form language). Installs Debian's python3-getfem with apt when it is
-/// missing (CI runs as root). `which` is the script's stem; the scene is `<stem>` + `_singular`
-/// for B.1 and `<stem>` for the friction case.
-fn getfem_check(root: &Path, bin: &Path, dir: &Path, out: &Path, which: &str) -> Result<(bool, String), String> {
-    let has_getfem = || Command::new(GETFEM_PYTHON).args(["-c", "import getfem"]).stdout(Stdio::null()).stderr(Stdio::null()).status().is_ok_and(|s| s.success());
-    if !has_getfem() {
-        exec(Command::new("apt-get").args(["update", "-qq"]))
-            .and_then(|()| exec(Command::new("apt-get").args(["install", "-y", "-qq", "python3-getfem"])))
-            .map_err(|e| format!("python3-getfem is missing and `apt-get install python3-getfem` failed (run it as root): {e}"))?;
-        if !has_getfem() {
-            return Err(format!("python3-getfem was installed but `{GETFEM_PYTHON} -c 'import getfem'` still fails"));
+/// Debian's Python for the GetFEM scripts, isolated from the caller's environment as far as it
+/// can be while keeping Debian's packages: `-E` ignores PYTHONPATH and the other PYTHON*
+/// variables, `-s` the user's site-packages. OpenBLAS runs on one thread, so its sums are
+/// taken in the same order whatever the number of cores.
+fn getfem_python() -> Command {
+    let mut c = Command::new(GETFEM_PYTHON);
+    c.args(["-E", "-s"]).env("PYTHONDONTWRITEBYTECODE", "1").env("PYTHONUNBUFFERED", "1").env("OPENBLAS_NUM_THREADS", "1");
+    c
+}
+
+/// python3-getfem importable by [`getfem_python`], installed with apt when it is missing (CI runs
+/// as root). Ok: the package's version, whether apt ran, and the numpy GetFEM's Python imports.
+fn ensure_getfem() -> Result<String, String> {
+    let probe = || match spawn(getfem_python().args(["-c", "import getfem, numpy; print(f'numpy {numpy.__version__} from {numpy.__file__}')"])) {
+        Ok((true, text)) => Ok(text.trim().to_string()),
+        Ok((false, text)) | Err(text) => Err(text),
+    };
+    let (numpy, how) = match probe() {
+        Ok(numpy) => (numpy, "present"),
+        Err(_) => {
+            exec(Command::new("apt-get").args(["update", "-qq"]))
+                .and_then(|()| exec(Command::new("apt-get").args(["install", "-y", "-qq", "python3-getfem"])))
+                .map_err(|e| format!("python3-getfem is missing and `apt-get install python3-getfem` failed (run it as root): {e}"))?;
+            let numpy = probe().map_err(|e| format!("python3-getfem was installed but `{GETFEM_PYTHON} -E -s -c 'import getfem'` still fails: {e}"))?;
+            (numpy, "installed with apt")
         }
+    };
+    let version = match spawn(Command::new("dpkg-query").args(["-W", "-f", "${Version}", "python3-getfem"])) {
+        Ok((true, v)) => v,
+        _ => "(version unknown)".into(),
+    };
+    Ok(format!("python3-getfem {version} {how}, {numpy}"))
+}
+
+/// One GetFEM comparison: a script of `xtask/crosscheck/getfem`, its scene there and its case.
+struct GetfemCheck {
+    script: &'static str,
+    scene: &'static str,
+    case: Option<&'static str>,
+    what: &'static str,
+}
+
+/// The GetFEM cross-checks of the dynamic contact solve, each a script that runs dyncontact and
+/// GetFEM on the same bar and compares them: `bar_impact.py` (B.1, frictionless Signorini) and
+/// `bar_friction.py` (the oblique impact: Signorini–Coulomb, and normal compliance + Coulomb in
+/// GetFEM's weak-form language).
+const GETFEM_CHECKS: [GetfemCheck; 3] = [
+    GetfemCheck { script: "bar_impact.py", scene: "bar_impact_singular.toml", case: None, what: "B.1 on the singular mass" },
+    GetfemCheck { script: "bar_friction.py", scene: "bar_friction.toml", case: Some("signorini-coulomb"), what: "oblique impact, Signorini–Coulomb" },
+    GetfemCheck { script: "bar_friction.py", scene: "bar_friction.toml", case: Some("compliance-coulomb"), what: "oblique impact, compliance + Coulomb" },
+];
+
+fn getfem_check(root: &Path, bin: &Path, dir: &Path, out: &Path, check: &GetfemCheck) -> Result<(bool, String), String> {
+    let folder = format!("{}{}", check.script.trim_end_matches(".py"), check.case.map(|c| format!("-{c}")).unwrap_or_default());
+    let out = fresh_dir(&out.join(folder))?;
+    let mut cmd = getfem_python();
+    cmd.current_dir(root).arg(dir.join(check.script)).arg("--dyncontact").arg(bin).arg("--scene").arg(dir.join(check.scene)).arg("--out").arg(&out);
+    if let Some(case) = check.case {
+        cmd.args(["--case", case]);
     }
-    let scene = if which == "bar_impact" { "bar_impact_singular.toml".to_string() } else { format!("{which}.toml") };
-    let out = fresh_dir(&out.join(which))?;
-    spawn(
-        Command::new(GETFEM_PYTHON)
-            .current_dir(root)
-            .env("PYTHONDONTWRITEBYTECODE", "1")
-            .env("PYTHONUNBUFFERED", "1")
-            .arg(dir.join(format!("{which}.py")))
-            .arg("--dyncontact")
-            .arg(bin)
-            .arg("--scene")
-            .arg(dir.join(scene))
-            .arg("--out")
-            .arg(&out),
-    )
+    spawn(&mut cmd)
 }
 
 /// The venv's python, creating the venv and installing the requirements when needed. Returns
@@ -196,25 +260,6 @@ fn ensure_venv(venv: &Path, requirements: &Path) -> Result<(PathBuf, bool), Stri
     Ok((python, true))
 }
 
-/// `target/debug/dyncontact`, built with `cargo build -p dyncontact --bin dyncontact` if missing.
-fn ensure_binary(root: &Path, target: &Path) -> Result<PathBuf, String> {
-    let bin = target.join("debug").join(format!("dyncontact{}", std::env::consts::EXE_SUFFIX));
-    if !bin.exists() {
-        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-        // cargo's progress goes straight to the terminal: a first build takes minutes
-        let status = Command::new(cargo)
-            .args(["build", "-p", "dyncontact", "--bin", "dyncontact"])
-            .current_dir(root)
-            .stdin(Stdio::null())
-            .status()
-            .map_err(|e| format!("cannot run cargo: {e}"))?;
-        if !status.success() || !bin.exists() {
-            return Err(format!("`cargo build -p dyncontact --bin dyncontact` failed ({status}) or did not produce {}", bin.display()));
-        }
-    }
-    Ok(bin)
-}
-
 /// `fixtures/scenes/crosscheck_*.toml`, sorted.
 fn crosscheck_scenes(root: &Path) -> Result<Vec<PathBuf>, String> {
     let dir = root.join("fixtures").join("scenes");
@@ -237,12 +282,6 @@ fn python_cmd(python: &Path, root: &Path) -> Command {
     c
 }
 
-/// Run to completion with captured output; Err (with the end of the output) unless it exits with 0.
-fn exec(cmd: &mut Command) -> Result<(), String> {
-    let (ok, text) = spawn(cmd)?;
-    if ok { Ok(()) } else { Err(text) }
-}
-
 /// Run dyncontact, then (if it succeeded) a check script on its output. Ok((the script passed,
 /// its output)); Err when dyncontact failed or a program could not start.
 fn checked(dyncontact: &mut Command, script: &mut Command) -> Result<(bool, String), String> {
@@ -263,30 +302,6 @@ fn record(report: &mut String, failures: &mut Vec<String>, label: &str, result: 
     }
 }
 
-/// Run to completion with captured output: Ok((exited with 0, stdout + stderr, or on failure the
-/// command line and the end of its output)); Err only when the program could not start.
-pub fn spawn(cmd: &mut Command) -> Result<(bool, String), String> {
-    // the command line for messages, with paths shown relative to the working directory
-    let cwd = cmd.get_current_dir().map(Path::to_path_buf);
-    let short = |a: &std::ffi::OsStr| match &cwd {
-        Some(d) => rel(d, Path::new(a)),
-        None => a.to_string_lossy().into_owned(),
-    };
-    let shown = std::iter::once(short(cmd.get_program())).chain(cmd.get_args().map(short)).collect::<Vec<_>>().join(" ");
-    let out = cmd.stdin(Stdio::null()).output().map_err(|e| format!("cannot start `{shown}`: {e}"))?;
-    let mut text = String::from_utf8_lossy(&out.stdout).into_owned();
-    text.push_str(&String::from_utf8_lossy(&out.stderr));
-    let ok = out.status.success();
-    if !ok {
-        // keep the end of a long log (pip, a Python traceback)
-        let lines: Vec<&str> = text.lines().collect();
-        let tail = lines[lines.len().saturating_sub(40)..].join("\n");
-        let code = out.status.code().map_or_else(|| out.status.to_string(), |c| format!("code {c}"));
-        text = format!("`{shown}` exited with {code}:\n{tail}");
-    }
-    Ok((ok, text))
-}
-
 /// Script output into the report, indented, without the scripts' own "N passed, N failed" line.
 fn push_lines(report: &mut String, text: &str) {
     for line in text.lines().filter(|l| !l.trim().is_empty() && !l.contains(" passed, ")) {
@@ -294,22 +309,10 @@ fn push_lines(report: &mut String, text: &str) {
     }
 }
 
-/// An empty directory (removed first if it exists: stale frames would spoil the frame count).
-pub fn fresh_dir(dir: &Path) -> Result<PathBuf, String> {
-    if dir.exists() {
-        std::fs::remove_dir_all(dir).map_err(|e| format!("remove {}: {e}", dir.display()))?;
-    }
-    std::fs::create_dir_all(dir).map_err(|e| format!("create {}: {e}", dir.display()))?;
-    Ok(dir.to_path_buf())
-}
-
 fn stem(p: &Path) -> String {
     p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
 }
 
-fn rel(root: &Path, p: &Path) -> String {
-    p.strip_prefix(root).unwrap_or(p).display().to_string()
-}
 
 /// FNV-1a, 64 bit: a hash that stays the same across Rust versions (unlike `DefaultHasher`).
 fn fnv1a(bytes: &[u8]) -> u64 {

@@ -2,7 +2,9 @@
 //!
 //! `verify` is the project's test command. It
 //! 1. builds every test target (`cargo test --workspace --no-run`) and runs each test binary
-//!    directly, recording which test passed (so a test is tied to its file);
+//!    directly, as many at a time as the machine has cores, recording which test passed (so a
+//!    test is tied to its file); meanwhile a thread prepares the cross-check's Python (venv, pip,
+//!    GetFEM), which waits mostly on the network;
 //! 2. checks the equation trace (spec/equations.toml): every `implemented` ID names code anchors
 //!    that exist — a function whose doc comment starts with `/// (ID)` — and at least one test
 //!    that exists and passed in this run; every ID cited in a doc comment under src/ or tests/
@@ -12,11 +14,14 @@
 //! 4. writes target/verify/trace.md and exits non-zero on any failure.
 
 mod crosscheck;
+mod process;
 mod workflow;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode, Stdio};
+use std::sync::Mutex;
+use std::time::Instant;
 
 use serde::Deserialize;
 
@@ -45,16 +50,36 @@ fn root() -> PathBuf {
     here.parent().map(Path::to_path_buf).unwrap_or(here)
 }
 
+/// Cargo's target directory as cargo itself resolves it (CARGO_TARGET_DIR, `build.target-dir`,
+/// or `<root>/target`): where the tests write their measurements and verify its reports.
+fn target_dir(root: &Path) -> Result<PathBuf, String> {
+    let out = Command::new(env!("CARGO"))
+        .args(["metadata", "--format-version", "1", "--no-deps"])
+        .current_dir(root)
+        .stderr(Stdio::inherit())
+        .output()
+        .map_err(|e| format!("cannot run cargo metadata: {e}"))?;
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).map_err(|e| format!("cargo metadata: {e}"))?;
+    v["target_directory"].as_str().map(PathBuf::from).ok_or_else(|| "cargo metadata names no target_directory".into())
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let root = root();
+    let target = match target_dir(&root) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("xtask: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
     let result = match args.first().map(String::as_str) {
-        Some("verify") => verify(&root, args.iter().any(|a| a == "--no-crosscheck")),
-        Some("crosscheck") => crosscheck::run(&root).map(|r| println!("{r}")),
+        Some("verify") => verify(&root, &target, args.iter().any(|a| a == "--no-crosscheck")),
+        Some("crosscheck") => crosscheck_only(&root, &target),
         Some("trace") => trace_only(&root),
-        Some("bench") => study(&root, "bench", &args[1..]),
-        Some("stability") => study(&root, "stability", &args[1..]),
-        Some("bound-at") => study(&root, "bound-at", &args[1..]),
+        Some("bench") => study(&root, &target, "bench", &args[1..]),
+        Some("stability") => study(&root, &target, "stability", &args[1..]),
+        Some("bound-at") => study(&root, &target, "bound-at", &args[1..]),
         _ => Err(
             "usage: cargo xtask <verify [--no-crosscheck] | crosscheck | trace | bench [--quick] | stability [--quick] | bound-at [--quick]>"
                 .to_string(),
@@ -71,7 +96,7 @@ fn main() -> ExitCode {
 
 /// `bench` and `stability`: build the release binary (numerics at full speed) and run its
 /// `study` subcommand, writing under target/<what>.
-fn study(root: &Path, what: &str, extra: &[String]) -> Result<(), String> {
+fn study(root: &Path, target: &Path, what: &str, extra: &[String]) -> Result<(), String> {
     let st = Command::new(env!("CARGO"))
         .args(["build", "--release", "-p", "dyncontact", "--bin", "dyncontact"])
         .current_dir(root)
@@ -80,8 +105,8 @@ fn study(root: &Path, what: &str, extra: &[String]) -> Result<(), String> {
     if !st.success() {
         return Err("the release build failed".into());
     }
-    let out = root.join("target").join(what.replace('-', "_"));
-    let st = Command::new(root.join("target/release/dyncontact"))
+    let out = target.join(what.replace('-', "_"));
+    let st = Command::new(target.join("release").join(format!("dyncontact{}", std::env::consts::EXE_SUFFIX)))
         .args(["study", what, "--out"])
         .arg(&out)
         .args(extra)
@@ -97,7 +122,15 @@ struct TestBinary {
     exe: PathBuf,
 }
 
-fn build_tests(root: &Path) -> Result<Vec<TestBinary>, String> {
+/// What `cargo test --workspace --no-run` built: the test binaries, and the `dyncontact` binary
+/// that the CLI tests run and the cross-check uses (the one built with these tests, never an
+/// older one left in the target directory).
+struct Build {
+    tests: Vec<TestBinary>,
+    dyncontact: PathBuf,
+}
+
+fn build_tests(root: &Path) -> Result<Build, String> {
     let out = Command::new(env!("CARGO"))
         .args(["test", "--workspace", "--no-run", "--message-format=json-render-diagnostics"])
         .current_dir(root)
@@ -107,45 +140,92 @@ fn build_tests(root: &Path) -> Result<Vec<TestBinary>, String> {
     if !out.status.success() {
         return Err("building the tests failed".into());
     }
-    let mut bins = Vec::new();
+    let (mut tests, mut dyncontact) = (Vec::new(), None);
     for line in String::from_utf8_lossy(&out.stdout).lines() {
         let Ok(v) = serde_json::from_str::<serde_json::Value>(line) else { continue };
-        if v["reason"] != "compiler-artifact" || v["profile"]["test"] != true {
+        if v["reason"] != "compiler-artifact" {
             continue;
         }
-        let (Some(exe), Some(src)) = (v["executable"].as_str(), v["target"]["src_path"].as_str()) else { continue };
+        let Some(exe) = v["executable"].as_str() else { continue };
+        if v["profile"]["test"] != true {
+            let is_bin = v["target"]["kind"].as_array().is_some_and(|k| k.iter().any(|k| k == "bin"));
+            if is_bin && v["target"]["name"] == "dyncontact" {
+                dyncontact = Some(PathBuf::from(exe));
+            }
+            continue;
+        }
+        let Some(src) = v["target"]["src_path"].as_str() else { continue };
         let src = Path::new(src).strip_prefix(root).map(|p| p.to_string_lossy().to_string()).unwrap_or_else(|_| src.to_string());
-        bins.push(TestBinary { src, exe: PathBuf::from(exe) });
+        tests.push(TestBinary { src, exe: PathBuf::from(exe) });
     }
-    Ok(bins)
+    let dyncontact = dyncontact.ok_or("`cargo test --workspace --no-run` reported no `dyncontact` binary")?;
+    Ok(Build { tests, dyncontact })
 }
 
 /// Outcome of every test: (source file of the target, libtest name) → passed.
 type Outcomes = BTreeMap<(String, String), bool>;
 
-fn run_tests(root: &Path, bins: &[TestBinary]) -> Result<Outcomes, String> {
+/// One test binary run to its end: its output, whether it exited with 0, its wall time.
+struct BinaryRun {
+    stdout: String,
+    ok: bool,
+    seconds: f64,
+}
+
+fn run_binary(root: &Path, b: &TestBinary) -> Result<BinaryRun, String> {
+    let t = Instant::now();
+    let out = Command::new(&b.exe)
+        .current_dir(root)
+        .env("CI", "true")
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| format!("cannot run {}: {e}", b.exe.display()))?;
+    let mut stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    stdout.push_str(&String::from_utf8_lossy(&out.stderr));
+    Ok(BinaryRun { stdout, ok: out.status.success(), seconds: t.elapsed().as_secs_f64() })
+}
+
+/// Run every test binary, `jobs` at a time (each binary runs its own tests on its threads too);
+/// a binary's output is printed whole when it ends.
+fn run_tests(root: &Path, bins: &[TestBinary], jobs: usize) -> Result<Outcomes, String> {
+    let next = Mutex::new(0usize);
+    let runs: Mutex<Vec<Option<Result<BinaryRun, String>>>> = Mutex::new((0..bins.len()).map(|_| None).collect());
+    let print = Mutex::new(());
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.max(1) {
+            scope.spawn(|| {
+                loop {
+                    let i = {
+                        let mut n = next.lock().unwrap_or_else(|e| e.into_inner());
+                        let i = *n;
+                        *n += 1;
+                        i
+                    };
+                    let Some(b) = bins.get(i) else { break };
+                    let run = run_binary(root, b);
+                    if let Ok(r) = &run {
+                        let _guard = print.lock().unwrap_or_else(|e| e.into_inner());
+                        let name = b.exe.file_name().map(|f| f.to_string_lossy().to_string()).unwrap_or_default();
+                        println!("== {} ({name}, {:.1} s)\n{}", b.src, r.seconds, r.stdout.trim_end());
+                    }
+                    runs.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(run);
+                }
+            });
+        }
+    });
     let mut outcomes = Outcomes::new();
     let mut failed_bins = Vec::new();
-    for b in bins {
-        println!("== running {} ({})", b.src, b.exe.file_name().map(|f| f.to_string_lossy().to_string()).unwrap_or_default());
-        let out = Command::new(&b.exe)
-            .current_dir(root)
-            .env("CI", "true")
-            .stderr(Stdio::inherit())
-            .output()
-            .map_err(|e| format!("cannot run {}: {e}", b.exe.display()))?;
-        let text = String::from_utf8_lossy(&out.stdout);
-        print!("{text}");
-        for line in text.lines() {
+    for (b, run) in bins.iter().zip(runs.into_inner().unwrap_or_else(|e| e.into_inner())) {
+        let run = run.ok_or_else(|| format!("{} did not run", b.src))??;
+        for line in run.stdout.lines() {
             // "test NAME ... ok" | "... FAILED" | "... ignored"
             let Some(rest) = line.strip_prefix("test ") else { continue };
             let Some((name, result)) = rest.rsplit_once(" ... ") else { continue };
-            let passed = result.trim() == "ok";
             if result.trim() == "ok" || result.trim() == "FAILED" {
-                outcomes.insert((b.src.clone(), name.trim().to_string()), passed);
+                outcomes.insert((b.src.clone(), name.trim().to_string()), result.trim() == "ok");
             }
         }
-        if !out.status.success() {
+        if !run.ok {
             failed_bins.push(b.src.clone());
         }
     }
@@ -357,8 +437,8 @@ fn check_trace(root: &Path, outcomes: Option<&Outcomes>) -> Result<TraceResult, 
     Ok(TraceResult { markdown: md, failures, open })
 }
 
-fn write_report(root: &Path, name: &str, text: &str) -> Result<PathBuf, String> {
-    let dir = root.join("target/verify");
+fn write_report(target: &Path, name: &str, text: &str) -> Result<PathBuf, String> {
+    let dir = target.join("verify");
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let p = dir.join(name);
     std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))?;
@@ -371,9 +451,9 @@ fn trace_only(root: &Path) -> Result<(), String> {
     if t.failures.is_empty() { Ok(()) } else { Err(t.failures.join("\n")) }
 }
 
-/// The measurements the tests recorded (target/verify/measurements.jsonl).
-fn measurements(root: &Path) -> Vec<serde_json::Value> {
-    std::fs::read_to_string(root.join("target/verify/measurements.jsonl"))
+/// The measurements the tests recorded (<target>/verify/measurements.jsonl).
+fn measurements(target: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(target.join("verify").join("measurements.jsonl"))
         .unwrap_or_default()
         .lines()
         .filter_map(|l| serde_json::from_str(l).ok())
@@ -382,8 +462,8 @@ fn measurements(root: &Path) -> Vec<serde_json::Value> {
 
 /// target/verify/report.md: the trace, every measured number with its expectation, the largest
 /// (E.1) residual, the twins' agreement and the snapshot status.
-fn report(root: &Path, trace: &TraceResult, outcomes: &Outcomes, crosscheck: &str) -> String {
-    let m = measurements(root);
+fn report(target: &Path, trace: &TraceResult, outcomes: &Outcomes, crosscheck: &str) -> String {
+    let m = measurements(target);
     let mut r = String::from("# dyncontact verification report\n\n");
     let passed = outcomes.values().filter(|p| **p).count();
     r.push_str(&format!("{passed} tests passed, {} failed.\n\n", outcomes.len() - passed));
@@ -414,41 +494,57 @@ fn report(root: &Path, trace: &TraceResult, outcomes: &Outcomes, crosscheck: &st
     r
 }
 
-fn verify(root: &Path, skip_crosscheck: bool) -> Result<(), String> {
-    let start = std::time::Instant::now();
-    let bins = build_tests(root)?;
-    let _ = std::fs::remove_file(root.join("target/verify/measurements.jsonl"));
-    let outcomes = run_tests(root, &bins)?;
-    let passed = outcomes.values().filter(|p| **p).count();
-    println!("\n== {passed} tests passed in {} binaries", bins.len());
-    let trace = check_trace(root, Some(&outcomes))?;
-    println!("\n{}", trace.markdown);
-    let path = write_report(root, "trace.md", &trace.markdown)?;
-    println!("trace written to {}", path.display());
-    let mut failures = trace.failures.clone();
-    let mut cross = String::from("skipped (--no-crosscheck)");
-    if skip_crosscheck {
-        println!("cross-check skipped (--no-crosscheck)");
-    } else {
-        match crosscheck::run(root) {
-            Ok(r) => {
-                println!("\n== cross-check\n{r}");
-                cross = r;
-            }
-            Err(e) => {
-                cross = format!("FAILED: {e}");
-                failures.push(format!("cross-check: {e}"));
+/// `cargo xtask crosscheck`: the test build (a no-op when verify has just built it) for the
+/// solver binary, then the cross-check.
+fn crosscheck_only(root: &Path, target: &Path) -> Result<(), String> {
+    let prepared = crosscheck::prepare(root, target)?;
+    let build = build_tests(root)?;
+    crosscheck::run(root, target, &build.dyncontact, &prepared).map(|r| println!("{r}"))
+}
+
+fn verify(root: &Path, target: &Path, skip_crosscheck: bool) -> Result<(), String> {
+    let start = Instant::now();
+    std::thread::scope(|scope| {
+        let prepared = (!skip_crosscheck).then(|| scope.spawn(|| crosscheck::prepare(root, target)));
+        let build = build_tests(root)?;
+        println!("== built in {:.1} s", start.elapsed().as_secs_f64());
+        let _ = std::fs::remove_file(target.join("verify").join("measurements.jsonl"));
+        let jobs = std::thread::available_parallelism().map_or(2, usize::from);
+        let t = Instant::now();
+        let outcomes = run_tests(root, &build.tests, jobs)?;
+        let passed = outcomes.values().filter(|p| **p).count();
+        println!("\n== {passed} tests passed in {} binaries ({:.1} s, {jobs} at a time)", build.tests.len(), t.elapsed().as_secs_f64());
+        let trace = check_trace(root, Some(&outcomes))?;
+        println!("\n{}", trace.markdown);
+        let path = write_report(target, "trace.md", &trace.markdown)?;
+        println!("trace written to {}", path.display());
+        let mut failures = trace.failures.clone();
+        let mut cross = String::from("skipped (--no-crosscheck)");
+        match prepared.map(|h| h.join().unwrap_or_else(|_| Err("the cross-check's setup panicked".into()))) {
+            None => println!("cross-check skipped (--no-crosscheck)"),
+            Some(prepared) => {
+                let t = Instant::now();
+                match prepared.and_then(|p| crosscheck::run(root, target, &build.dyncontact, &p)) {
+                    Ok(r) => {
+                        println!("\n== cross-check ({:.1} s after the tests)\n{r}", t.elapsed().as_secs_f64());
+                        cross = r;
+                    }
+                    Err(e) => {
+                        cross = format!("FAILED: {e}");
+                        failures.push(format!("cross-check: {e}"));
+                    }
+                }
             }
         }
-    }
-    let rp = write_report(root, "report.md", &report(root, &trace, &outcomes, &cross))?;
-    println!("report written to {}", rp.display());
-    println!("\n{} open (planned) IDs", trace.open.len());
-    println!("verify took {:.1} s", start.elapsed().as_secs_f64());
-    if failures.is_empty() {
-        println!("verify: OK");
-        Ok(())
-    } else {
-        Err(format!("verify failed:\n  {}", failures.join("\n  ")))
-    }
+        let rp = write_report(target, "report.md", &report(target, &trace, &outcomes, &cross))?;
+        println!("report written to {}", rp.display());
+        println!("\n{} open (planned) IDs", trace.open.len());
+        println!("verify took {:.1} s", start.elapsed().as_secs_f64());
+        if failures.is_empty() {
+            println!("verify: OK");
+            Ok(())
+        } else {
+            Err(format!("verify failed:\n  {}", failures.join("\n  ")))
+        }
+    })
 }

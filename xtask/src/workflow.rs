@@ -12,16 +12,18 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::process::Command;
 
+use crate::process::{fresh_dir, spawn};
+
 /// The checks above; Ok((all passed, the report lines)), Err when a program could not start.
 pub fn check(root: &Path, bin: &Path, python: &Path, out_root: &Path) -> Result<(bool, String), String> {
     let snakemake = python.with_file_name(if cfg!(windows) { "snakemake.exe" } else { "snakemake" });
     let mut report = String::new();
     let mut ok = true;
     let sweep = root.join("fixtures/sweeps/six_points.toml");
-    let inproc = super::crosscheck::fresh_dir(&out_root.join("sweep-inprocess"))?;
-    let snake = super::crosscheck::fresh_dir(&out_root.join("sweep-snakemake"))?;
+    let inproc = fresh_dir(&out_root.join("sweep-inprocess"))?;
+    let snake = fresh_dir(&out_root.join("sweep-snakemake"))?;
     let run = |cmd: &mut Command| -> Result<String, String> {
-        match super::crosscheck::spawn(cmd)? {
+        match spawn(cmd)? {
             (true, text) => Ok(text),
             (false, text) => Err(text),
         }
@@ -42,7 +44,7 @@ pub fn check(root: &Path, bin: &Path, python: &Path, out_root: &Path) -> Result<
         }
     }
     for name in ["stability_academic", "stability_impact"] {
-        let dir = super::crosscheck::fresh_dir(&out_root.join(format!("plan-{name}")))?;
+        let dir = fresh_dir(&out_root.join(format!("plan-{name}")))?;
         run(Command::new(bin).current_dir(root).arg("sweep").arg(root.join(format!("fixtures/sweeps/{name}.toml"))).arg("--out").arg(&dir).arg("--plan-only"))?;
         let points = std::fs::read_dir(dir.join("points")).map_err(|e| format!("{}: {e}", dir.display()))?.count();
         let dry = run(Command::new(&snakemake).current_dir(&dir).args(["-n", "all"]))?;
