@@ -20,7 +20,7 @@
 //! 5. the GetFEM dynamic-contact checks (`getfem/*.py`: every GetFEM step converged, a bound at
 //!    each refinement level), and the sweeps' Snakemake path (src/workflow.rs).
 //!
-//! The solver is the `dyncontact` binary of the test build (`cargo test --workspace --no-run`,
+//! The solver is the `dyncontact` binary of the test build (`cargo test -p dyncontact --no-run`,
 //! which `verify` has just run): never a binary left over from an earlier build.
 
 use std::fmt::Write as _;

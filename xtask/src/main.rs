@@ -1,7 +1,8 @@
 //! Project tasks: `cargo xtask verify | crosscheck | trace | bench | stability | bound-at`.
 //!
 //! `verify` is the project's test command. It
-//! 1. builds every test target (`cargo test --workspace --no-run`) and runs each test binary
+//! 1. builds every test target (`cargo test -p dyncontact --no-run`: xtask has no tests, and its
+//!    test harness would build criterion, a dev-dependency of its benches) and runs each test binary
 //!    directly, as many at a time as the machine has cores, recording which test passed (so a
 //!    test is tied to its file); meanwhile a thread prepares the cross-check's Python (venv, pip,
 //!    GetFEM), which waits mostly on the network;
@@ -122,7 +123,7 @@ struct TestBinary {
     exe: PathBuf,
 }
 
-/// What `cargo test --workspace --no-run` built: the test binaries, and the `dyncontact` binary
+/// What `cargo test -p dyncontact --no-run` built: the test binaries, and the `dyncontact` binary
 /// that the CLI tests run and the cross-check uses (the one built with these tests, never an
 /// older one left in the target directory).
 struct Build {
@@ -132,7 +133,7 @@ struct Build {
 
 fn build_tests(root: &Path) -> Result<Build, String> {
     let out = Command::new(env!("CARGO"))
-        .args(["test", "--workspace", "--no-run", "--message-format=json-render-diagnostics"])
+        .args(["test", "-p", "dyncontact", "--no-run", "--message-format=json-render-diagnostics"])
         .current_dir(root)
         .stderr(Stdio::inherit())
         .output()
@@ -158,7 +159,7 @@ fn build_tests(root: &Path) -> Result<Build, String> {
         let src = Path::new(src).strip_prefix(root).map(|p| p.to_string_lossy().to_string()).unwrap_or_else(|_| src.to_string());
         tests.push(TestBinary { src, exe: PathBuf::from(exe) });
     }
-    let dyncontact = dyncontact.ok_or("`cargo test --workspace --no-run` reported no `dyncontact` binary")?;
+    let dyncontact = dyncontact.ok_or("`cargo test -p dyncontact --no-run` reported no `dyncontact` binary")?;
     Ok(Build { tests, dyncontact })
 }
 
