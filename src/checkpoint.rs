@@ -2,12 +2,21 @@
 //! a step — u, v, the multipliers λ and friction forces t that warm-start the next step, the
 //! energy totals and the run's counters — stored with every f64 as its exact bit pattern, so a
 //! resumed run reproduces an uninterrupted one bit for bit on the same machine.
+//!
+//! A checkpoint names the run it belongs to (the `run_id` of its folder's summary.json) and
+//! the inputs it was computed from (their fingerprint), and carries a checksum of everything
+//! else in it: an edited, truncated or foreign checkpoint is refused when read, as is one with a
+//! value that is not finite. That it agrees with the folder's history.csv, contact.csv and
+//! frames is checked when the folder is reopened (output/resume.rs).
 
 use serde::{Deserialize, Serialize};
 
 use crate::energy::EnergyTerms;
-use crate::simulation::State;
 use crate::error::{Error, Result};
+use crate::simulation::State;
+
+/// The checkpoint format this version writes and reads.
+const FORMAT: u32 = 4;
 
 /// Bits of an f64 vector (JSON numbers would round-trip through decimal text).
 fn bits(x: &[f64]) -> Vec<u64> {
@@ -30,14 +39,20 @@ pub struct Counters {
     pub first_cap: Option<usize>,
     pub max_abs_energy_residual: u64,
     pub max_relative_energy_residual: u64,
+    #[serde(default)]
+    pub energy_guard_exceeded_steps: usize,
 }
 
 /// What a checkpoint stores.
 #[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Checkpoint {
     pub format: u32,
-    /// identifies the scene (FNV-1a of its parsed form): a checkpoint resumes only its scene
-    pub scene_hash: String,
+    /// the run this checkpoint belongs to (summary.json's `run_id` in the same folder)
+    pub run_id: String,
+    /// the fingerprint of the inputs (crate::fingerprint::inputs): a checkpoint resumes only a
+    /// run of the same scene and mesh
+    pub inputs: String,
     pub step: usize,
     u: Vec<u64>,
     v: Vec<u64>,
@@ -54,24 +69,17 @@ pub struct Checkpoint {
     /// with it, so the resumed run rebuilds it
     #[serde(default)]
     pub factor: Option<crate::step::delassus::FactorKey>,
-}
-
-/// FNV-1a 64 of a text, as hex.
-pub fn fingerprint(text: &str) -> String {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in text.bytes() {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    format!("{h:016x}")
+    /// FNV-1a of the checkpoint's JSON with this field empty
+    pub checksum: String,
 }
 
 impl Checkpoint {
-    pub fn new(scene_hash: String, s: &State, counters: Counters, factor: Option<crate::step::delassus::FactorKey>) -> Checkpoint {
+    pub fn new(run_id: &str, inputs: &str, s: &State, counters: Counters, factor: Option<crate::step::delassus::FactorKey>) -> Checkpoint {
         let e = &s.energy;
-        Checkpoint {
-            format: 3,
-            scene_hash,
+        let mut cp = Checkpoint {
+            format: FORMAT,
+            run_id: run_id.to_string(),
+            inputs: inputs.to_string(),
             step: s.n,
             u: bits(&s.u),
             v: bits(&s.v),
@@ -87,7 +95,28 @@ impl Checkpoint {
             stick: s.stick.clone(),
             counters,
             factor,
-        }
+            checksum: String::new(),
+        };
+        cp.checksum = cp.sum();
+        cp
+    }
+
+    /// The checksum of everything but the checksum.
+    fn sum(&self) -> String {
+        let mut bare = self.clone();
+        bare.checksum.clear();
+        crate::fingerprint::text(&serde_json::to_string(&bare).unwrap_or_default())
+    }
+
+    /// The first stored number that is not finite, by name.
+    fn non_finite(&self) -> Option<String> {
+        let bad = |name: &str, x: &[u64]| x.iter().position(|b| !f64::from_bits(*b).is_finite()).map(|i| format!("{name}[{i}]"));
+        bad("u", &self.u)
+            .or_else(|| bad("v", &self.v))
+            .or_else(|| bad("lambda", &self.lambda))
+            .or_else(|| bad("t_fric", &self.t_fric))
+            .or_else(|| bad("energy", &self.energy))
+            .or_else(|| bad("energy_scale", &[self.energy_scale]))
     }
 
     pub fn state(&self) -> State {
@@ -121,15 +150,80 @@ impl Checkpoint {
         crate::output::fs::write_atomic(&dir.join("checkpoint.json"), text.as_bytes())
     }
 
-    /// Read `dir/checkpoint.json`.
+    /// Read `dir/checkpoint.json`, checked: this version's format, the checksum, every value
+    /// finite. Any defect is a folder error naming the file and what is wrong.
     pub fn read(dir: &std::path::Path) -> Result<Checkpoint> {
         let p = dir.join("checkpoint.json");
-        let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, e))?;
-        let cp: Checkpoint = serde_json::from_str(&text)
-            .map_err(|e| Error::Output(format!("{}: not a dyncontact checkpoint ({e})", p.display())))?;
-        if !(2..=3).contains(&cp.format) {
-            return Err(Error::Output(format!("{}: checkpoint format {} is not supported", p.display(), cp.format)));
+        let refuse = |m: String| Error::folder(&p, m);
+        let text = std::fs::read_to_string(&p).map_err(|e| refuse(format!("cannot be read ({e}): there is nothing to resume from")))?;
+        let format = serde_json::from_str::<serde_json::Value>(&text).ok().and_then(|v| v.get("format")?.as_u64());
+        if format.is_some_and(|f| f != u64::from(FORMAT)) {
+            return Err(refuse(format!(
+                "checkpoint format {} was written by another version of dyncontact (this one reads format {FORMAT}): run the scene again",
+                format.unwrap_or(0)
+            )));
+        }
+        let cp: Checkpoint = serde_json::from_str(&text).map_err(|e| refuse(format!("not a dyncontact checkpoint ({e})")))?;
+        if cp.checksum != cp.sum() {
+            return Err(refuse("its checksum does not match its contents: the file was changed or damaged after it was written".into()));
+        }
+        if let Some(what) = cp.non_finite() {
+            return Err(refuse(format!("{what} is not finite: a checkpoint holds only finite values")));
         }
         Ok(cp)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simulation::State;
+
+    fn state(u0: f64) -> State {
+        State {
+            n: 7,
+            u: vec![u0, 2.0],
+            v: vec![0.5, -0.5],
+            lambda: vec![0.0],
+            t_fric: vec![0.0],
+            energy: EnergyTerms::default(),
+            energy_scale: 1.0,
+            active: vec![false],
+            stick: vec![true],
+        }
+    }
+
+    fn dir(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("dyncontact-checkpoint-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).expect("dir");
+        d
+    }
+
+    /// (issue 22) A checkpoint reads back to the state it was written from, bit for bit.
+    #[test]
+    fn a_checkpoint_round_trips() {
+        let d = dir("roundtrip");
+        Checkpoint::new("run", "inputs", &state(1.25), Counters::default(), None).write(&d).expect("write");
+        let cp = Checkpoint::read(&d).expect("read");
+        assert_eq!((cp.run_id.as_str(), cp.inputs.as_str(), cp.step), ("run", "inputs", 7));
+        assert_eq!(cp.state(), state(1.25));
+    }
+
+    /// (issue 22) A checkpoint with a value that is not finite is refused even when its checksum
+    /// is right (it was written so), naming the value; one whose bytes changed is refused by
+    /// its checksum.
+    #[test]
+    fn non_finite_and_changed_checkpoints_are_refused() {
+        let d = dir("nonfinite");
+        Checkpoint::new("run", "inputs", &state(f64::NAN), Counters::default(), None).write(&d).expect("write");
+        let e = Checkpoint::read(&d).expect_err("refused").to_string();
+        assert!(e.contains("u[0] is not finite"), "{e}");
+        Checkpoint::new("run", "inputs", &state(1.25), Counters::default(), None).write(&d).expect("write");
+        let p = d.join("checkpoint.json");
+        let text = std::fs::read_to_string(&p).expect("read");
+        std::fs::write(&p, text.replacen("\"run_id\":\"run\"", "\"run_id\":\"other\"", 1)).expect("edit");
+        let e = Checkpoint::read(&d).expect_err("refused").to_string();
+        assert!(e.contains("checksum"), "{e}");
     }
 }

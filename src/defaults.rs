@@ -11,6 +11,15 @@ pub const MAX_ITERATIONS: usize = 50;
 pub const RELAXATION: f64 = 1.0;
 /// The most time steps a scene may ask for (time.end / time.step).
 pub const MAX_STEPS: usize = 100_000_000;
+/// `solver.energy_residual_limit`: a midpoint step whose (E.1) residual exceeds this fraction of
+/// the energy scale ends the run (or, with `energy_residual_action = "warn"`, is reported). The
+/// identity holds to the solver tolerances: measured ≤ 5e-13 on every fixture (conic twin: the
+/// same order), so 1e-6 is 10⁶ above round-off and far below a broken step (a friction coefficient
+/// of 1e20 gave 0.2, of 1e300 gave 1.0).
+pub const ENERGY_RESIDUAL_LIMIT: f64 = 1e-6;
+/// The largest friction coefficient a scene may give: no pair of materials comes near it (rubber
+/// on clean glass: ~4), and a coefficient of 1e20 turns the step into round-off.
+pub const MAX_FRICTION_COEFFICIENT: f64 = 100.0;
 /// `output.every`: a frame every this many steps.
 pub const OUTPUT_EVERY: usize = 10;
 

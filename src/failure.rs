@@ -94,6 +94,10 @@ pub enum StepFailureCause {
     Contact(ContactFailure),
     /// a NaN or an infinity appeared in the new velocity or displacement (entry of the free DOFs)
     NonFinite { entry: usize },
+    /// (E.1) The step's energy residual exceeded `solver.energy_residual_limit` of the energy
+    /// scale (midpoint scheme, where the balance is an identity): the step's equations were not
+    /// solved, whatever the solvers reported
+    EnergyBalance { relative: f64, limit: f64 },
 }
 
 /// The full report of a failed step: where, and why.
@@ -168,6 +172,10 @@ impl StepFailureCause {
                 "a smaller time.step, solver.relaxation < 1, a larger contact.penalty, or more solver.max_newton_iterations"
             }
             StepFailureCause::NonFinite { .. } => "check the load expressions and use a smaller time.step",
+            StepFailureCause::EnergyBalance { .. } => {
+                "check the scene's magnitudes (friction coefficients, compliances, loads) and use a smaller time.step; \
+                 solver.energy_residual_action = \"warn\" lets the run go on"
+            }
         }
     }
 }
@@ -187,6 +195,11 @@ impl fmt::Display for StepFailureCause {
             StepFailureCause::NonFinite { entry } => write!(
                 f,
                 "a non-finite value appeared in the solution (entry {entry}); the loads or the step produced NaN or infinity"
+            ),
+            StepFailureCause::EnergyBalance { relative, limit } => write!(
+                f,
+                "the energy balance (E.1) fails by {relative:.3e} of the energy scale (solver.energy_residual_limit = {limit:e}): \
+                 the step's equations are not solved to the solvers' tolerance"
             ),
         }
     }

@@ -16,7 +16,8 @@
 //! - [`simulation`]: the time loop (`Simulation::steps`, the one loop every caller drives)
 //! - [`failure`]: why a solver or a run stopped (enums), and their messages; [`defaults`]: every tuning constant
 //! - [`output`]: history.csv, contact.csv, summary.json, VTU frames, SVG charts
-//! - [`run`], [`checkpoint`]: a run with its outputs, checkpoints and resume; [`resources`]: memory and cost estimates
+//! - [`run`], [`checkpoint`]: a run with its outputs, checkpoints and resume; [`resources`]: memory and cost estimates;
+//!   [`fingerprint`]: of the inputs a run reads (the scene and its mesh file)
 //! - [`sweep`]: many runs of one scene (axes, `[set]`), in parallel here or as Snakemake jobs; sweep.csv
 //! - [`studies`]: the ε-study, the stability map, the benchmarks (on the public API only)
 //! - [`linalg`]: thin wrappers over faer; [`reference`]: closed forms; [`variational`]: V.1/V.2 checks
@@ -27,6 +28,7 @@ pub mod energy;
 pub mod error;
 pub mod failure;
 pub mod fem;
+pub mod fingerprint;
 pub mod linalg;
 pub mod mesh;
 pub mod model;

@@ -13,6 +13,7 @@ use dyncontact::overrides::Override;
 use dyncontact::problem::Problem;
 use dyncontact::run::{run, RunOptions};
 use dyncontact::scene::Scene;
+use dyncontact::error::exit;
 use dyncontact::{resources, studies, Error};
 
 #[derive(Parser)]
@@ -76,6 +77,9 @@ enum Command {
         /// validate every point and write the folder (scenes, Snakefile), without running
         #[arg(long)]
         plan_only: bool,
+        /// allow --jobs above the number of cores (each point runs on one core)
+        #[arg(long)]
+        oversubscribe: bool,
         /// override a key of every point, after the sweep's own (repeatable)
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -96,6 +100,12 @@ enum SweepAction {
     Collect {
         /// the sweep's output folder
         dir: PathBuf,
+    },
+    /// Run one point of a sweep folder (DIR/points/<id>) from its scene.toml, as the sweep does
+    /// (the Snakefile's rule); writes DIR/points/<id>.done when the outcome is final.
+    Point {
+        /// the point's folder, DIR/points/<id>
+        point: PathBuf,
     },
 }
 
@@ -188,16 +198,47 @@ fn load(scene: Option<&Path>, set: &[String]) -> Result<(Scene, PathBuf), Error>
     }
 }
 
+/// SIGINT and SIGTERM as flags: `stop` is set by either (a run or a sweep stops at the end of
+/// its step, writes a checkpoint and says so), `term` only by SIGTERM (for the exit code).
+/// Installed before anything is read, so a signal during a long setup is not lost.
+struct Signals {
+    stop: Arc<AtomicBool>,
+    term: Arc<AtomicBool>,
+}
+
+impl Signals {
+    fn install() -> Signals {
+        use signal_hook::consts::{SIGINT, SIGTERM};
+        let (stop, term) = (Arc::new(AtomicBool::new(false)), Arc::new(AtomicBool::new(false)));
+        // a second signal while the step finishes is ignored: the step completes and the files stay valid
+        for (sig, flag) in [(SIGINT, &stop), (SIGTERM, &stop), (SIGTERM, &term)] {
+            if let Err(e) = signal_hook::flag::register(sig, Arc::clone(flag)) {
+                esay!("warning: cannot handle signal {sig} ({e}): it will end the process without a summary");
+            }
+        }
+        Signals { stop, term }
+    }
+}
+
 fn main() -> ExitCode {
     // faer's default (a rayon pool over every core) costs more than it gains on the small dense
     // Newton matrices of the contact solve and gains nothing on 2 cores for the sparse factor:
     // measured on the academic scene 2.35 s → 1.80 s (contact solve 1.75 s → 1.09 s) with
     // identical outputs, and at 1024×512 cells the factorization 7.0 s → 6.5 s.
     faer::set_global_parallelism(faer::Par::Seq);
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // --help and --version print to stdout and succeed; a wrong command line is a usage error
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { exit::USAGE } else { exit::OK });
+        }
+    };
+    let signals = Signals::install();
+    let stop = &signals.stop;
     let result = match &cli.command {
         Command::Run { scene, out, checkpoint_every, resume, stop_after, set } => {
-            cmd_run(scene.as_deref(), set, out.as_deref(), *checkpoint_every, resume.as_deref(), *stop_after)
+            cmd_run(scene.as_deref(), set, out.as_deref(), *checkpoint_every, resume.as_deref(), *stop_after, stop)
         }
         Command::Study { study: StudyKind::Penalty { scene, eps, out, jobs } } => cmd_penalty(scene.as_deref(), eps.as_deref(), out.as_deref(), *jobs),
         Command::Study { study: StudyKind::Bench { out, quick, floor_only, bookkeeping_only } } => {
@@ -220,18 +261,21 @@ fn main() -> ExitCode {
         }),
         Command::Check { scene, set } => cmd_check(scene, set),
         Command::Sweep { action: Some(SweepAction::Collect { dir }), .. } => cmd_collect(dir),
-        Command::Sweep { action: None, sweep: Some(file), out, jobs, plan_only, set } => cmd_sweep(file, out.as_deref(), *jobs, *plan_only, set),
+        Command::Sweep { action: Some(SweepAction::Point { point }), .. } => {
+            faer::set_global_parallelism(faer::Par::Seq);
+            dyncontact::sweep::runner::run_one(point, Some(Arc::clone(stop))).map(|o| say!("{}: {o:?}", point.display()))
+        }
+        Command::Sweep { action: None, sweep: Some(file), out, jobs, plan_only, set, oversubscribe } => {
+            cmd_sweep(file, out.as_deref(), *jobs, *plan_only, *oversubscribe, set, stop)
+        }
         Command::Sweep { action: None, sweep: None, .. } => Err(Error::scene("sweep", "give a sweep file (dyncontact sweep SWEEP.toml) or `collect DIR`")),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             esay!("error: {e}");
-            match e {
-                Error::Interrupted { .. } | Error::SweepInterrupted { .. } => ExitCode::from(130),
-                e if e.is_solver_failure() => ExitCode::from(2),
-                _ => ExitCode::from(1),
-            }
+            let code = e.exit_code();
+            ExitCode::from(if code == exit::INTERRUPTED && signals.term.load(Ordering::SeqCst) { exit::TERMINATED } else { code })
         }
     }
 }
@@ -244,12 +288,17 @@ fn cmd_run(
     checkpoint_every: Option<usize>,
     resume: Option<&Path>,
     stop_after: Option<usize>,
+    stop: &Arc<AtomicBool>,
 ) -> Result<(), Error> {
     let (s, dir) = load(scene, set)?;
     let out = resume.or(out).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&s.name));
     let prepared = s.validate().and_then(|model| {
         // refuse before anything large is built
-        resources::check_fits(&resources::estimate(&model, &dir)?, resources::available_memory())?;
+        let estimate = resources::estimate(&model, &dir)?;
+        resources::check_fits(&estimate, resources::available_memory())?;
+        if resume.is_none() {
+            resources::check_disk(&estimate, &out)?;
+        }
         Problem::new(model, &dir)
     });
     let problem = match prepared {
@@ -262,17 +311,13 @@ fn cmd_run(
             return Err(e);
         }
     };
-    let interrupt = Arc::new(AtomicBool::new(false));
-    let flag = interrupt.clone();
-    // a second Ctrl-C while the step finishes is ignored: the step completes and the files stay valid
-    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
     let opts = RunOptions {
         out: out.clone(),
         progress: std::io::stdout().is_terminal(),
         checkpoint_every,
         resume: resume.is_some(),
         stop_after,
-        interrupt: Some(interrupt),
+        interrupt: Some(Arc::clone(stop)),
     };
     let summary = run(&problem, &opts)?;
     say!(
@@ -299,7 +344,7 @@ fn cmd_penalty(scene: Option<&Path>, eps: Option<&[f64]>, out: Option<&Path>, jo
     let base = match scene {
         None => dyncontact::sweep::Base { text: dyncontact::scene::DEFAULT_SCENE.to_string(), label: "<embedded academic scene>".into(), dir: PathBuf::from(".") },
         Some(p) => dyncontact::sweep::Base {
-            text: std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?,
+            text: std::fs::read_to_string(p).map_err(|e| Error::read(p, e))?,
             label: p.display().to_string(),
             dir: p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")),
         },
@@ -321,21 +366,27 @@ fn cmd_penalty(scene: Option<&Path>, eps: Option<&[f64]>, out: Option<&Path>, jo
 
 /// `dyncontact sweep`: validate every point, lay the folder out, run the points here (skipping
 /// those completed with the same scene), collect sweep.csv and the charts.
-fn cmd_sweep(file: &Path, out: Option<&Path>, jobs: Option<usize>, plan_only: bool, set: &[String]) -> Result<(), Error> {
+fn cmd_sweep(file: &Path, out: Option<&Path>, jobs: Option<usize>, plan_only: bool, oversubscribe: bool, set: &[String], stop: &Arc<AtomicBool>) -> Result<(), Error> {
     use dyncontact::sweep::{collect, runner, Plan};
     let extra = set.iter().map(|a| Override::parse(a)).collect::<Result<Vec<_>, Error>>()?;
+    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let jobs = jobs.unwrap_or(cores).max(1);
+    if jobs > cores && !oversubscribe {
+        return Err(Error::scene(
+            "--jobs",
+            format!("{jobs} points at once on {cores} cores: each point runs on one core, so more would share the cores and multiply the memory; give --oversubscribe to run them anyway"),
+        ));
+    }
     let plan = Plan::from_file(file, &extra)?;
     let dir = out.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&plan.name));
+    let _lock = dyncontact::sweep::lock(&dir)?;
     let done = plan.write(&dir)?;
     say!("sweep {}: {} points ({} already completed), folder {}", plan.name, plan.points.len(), done.iter().filter(|d| **d).count(), dir.display());
     if plan_only {
         say!("plan only: every point validated; run them with `dyncontact sweep {}` or with Snakemake in {}", file.display(), dir.display());
         return Ok(());
     }
-    let interrupt = Arc::new(AtomicBool::new(false));
-    let flag = interrupt.clone();
-    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
-    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)).max(1);
+    let interrupt = Arc::clone(stop);
     let opts = runner::RunnerOptions { jobs, progress: std::io::stdout().is_terminal(), interrupt: Some(interrupt.clone()) };
     let outcomes = runner::run_points(&plan, &dir, &done, &opts)?;
     let (_, rows) = collect::collect(&dir)?;
@@ -349,21 +400,41 @@ fn cmd_sweep(file: &Path, out: Option<&Path>, jobs: Option<usize>, plan_only: bo
         let finished = rows.iter().filter(|r| r.status == "completed" || r.status == "failed").count();
         return Err(Error::SweepInterrupted { finished, total: rows.len() });
     }
-    Ok(())
+    refuse_corrupt(&dir, &rows)
 }
 
-/// `dyncontact sweep collect DIR`.
+/// `dyncontact sweep collect DIR`: exits 4 when a point's files do not agree (`corrupt` in
+/// sweep.csv, with the reason).
 fn cmd_collect(dir: &Path) -> Result<(), Error> {
+    let _lock = dyncontact::sweep::lock(dir)?;
     let (_, rows) = dyncontact::sweep::collect::collect(dir)?;
     report_rows(&rows);
     say!("written {}", dir.join("sweep.csv").display());
-    Ok(())
+    refuse_corrupt(dir, &rows)
+}
+
+/// Err (a folder error) naming the corrupt points, if any.
+fn refuse_corrupt(dir: &Path, rows: &[dyncontact::sweep::collect::Row]) -> Result<(), Error> {
+    let corrupt: Vec<String> = rows.iter().filter(|r| r.status == "corrupt").map(|r| format!("{}: {}", r.point, r.reason)).collect();
+    if corrupt.is_empty() {
+        return Ok(());
+    }
+    Err(Error::folder(dir, format!("{} points are corrupt (sweep.csv says why; no figure of theirs is reported): {}", corrupt.len(), corrupt.join("; "))))
 }
 
 /// The counts of a collected sweep by status.
 fn report_rows(rows: &[dyncontact::sweep::collect::Row]) {
     let count = |s: &str| rows.iter().filter(|r| r.status == s).count();
-    say!("{} points: {} completed, {} failed, {} interrupted, {} missing", rows.len(), count("completed"), count("failed"), count("interrupted"), count("missing"));
+    say!(
+        "{} points: {} completed, {} failed, {} interrupted, {} running, {} missing, {} corrupt",
+        rows.len(),
+        count("completed"),
+        count("failed"),
+        count("interrupted"),
+        count("running"),
+        count("missing"),
+        count("corrupt")
+    );
 }
 
 /// `dyncontact check`: validate, build the problem, and print the model it switches on.
@@ -388,6 +459,9 @@ fn cmd_check(scene: &Path, set: &[String]) -> Result<(), Error> {
     }
     for w in info.warnings() {
         esay!("warning: {w}");
+    }
+    if let Err(e) = resources::check_disk(&estimate, &PathBuf::from("out").join(&problem.model.name)) {
+        esay!("warning: `run` into out/{} would refuse it: {e}", problem.model.name);
     }
     Ok(())
 }

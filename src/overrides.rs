@@ -36,6 +36,10 @@ impl Override {
         let Some((key, value)) = arg.split_once('=') else {
             return Err(Error::scene("--set", format!("`{arg}` is not KEY=VALUE (e.g. --set contact.penalty=1e-5)")));
         };
+        if value.contains(['\n', '\r']) {
+            // TOML would read the first line as the value and the rest as other keys, dropped here
+            return Err(Error::scene(key.trim(), "the --set value holds a line break: give it on one line"));
+        }
         Override::new(key.trim(), parse_value(value.trim()))
     }
 

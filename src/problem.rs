@@ -4,7 +4,7 @@
 //! A `Problem` is built only from a validated [`Model`] (see `Scene::validate`); the
 //! mesh-dependent checks (side names, the clamped set, u^0 ∈ K^h) are made here.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::fem::{Dofs, LoadVector};
@@ -33,6 +33,8 @@ pub struct Problem {
     /// k and N
     pub k: f64,
     pub steps: usize,
+    /// the fingerprint of everything the run reads: the model and the mesh file's bytes
+    pub inputs_fingerprint: String,
 }
 
 impl Problem {
@@ -44,6 +46,8 @@ impl Problem {
     /// Build from a validated model; `scene_dir` resolves a relative Gmsh path.
     pub fn new(mut model: Model, scene_dir: &Path) -> Result<Problem> {
         let mesh = build_mesh(&model.domain, scene_dir)?;
+        // of the model as validated (before the mesh sets its dimension), as a sweep computes it
+        let inputs_fingerprint = crate::fingerprint::inputs(&model, scene_dir)?;
         match_dimension(&mut model, &mesh)?;
         check_sides(&model, &mesh)?;
         let material = Material::new(&model.material, model.plane);
@@ -62,7 +66,7 @@ impl Problem {
             check_initial_admissible(c, &mesh, &u0)?;
         }
         let (steps, k) = (model.time.steps, model.time.step);
-        Ok(Problem { model, mesh, material, dofs, loads, u0, v0, contact, k, steps })
+        Ok(Problem { model, mesh, material, dofs, loads, u0, v0, contact, k, steps, inputs_fingerprint })
     }
 
     /// The time of step n.
@@ -162,10 +166,10 @@ fn check_initial_admissible(c: &ContactModel, mesh: &Geometry, u0: &[f64]) -> Re
         return Err(Error::scene(
             "initial.displacement",
             format!(
-                "the initial state penetrates beyond the bound: u_ν − gap = {:.6e} > g = {g} at node {} {}; \
+                "the initial state penetrates beyond the bound: u_ν − gap = {:.6e} > g = {g} at {} {}; \
                  u0 must satisfy the constraint (S.0)",
                 d0[i],
-                c.nodes[i],
+                mesh.node_name(c.nodes[i]),
                 at(mesh, c.nodes[i])
             ),
         ));
@@ -183,8 +187,8 @@ fn build_mesh(domain: &Domain, scene_dir: &Path) -> Result<Geometry> {
     let mesh = match domain {
         Domain::Rectangle { size, cells } => Geometry::Plane(Mesh::rectangle(size[0], size[1], cells[0], cells[1])),
         Domain::Box { size, cells } => Geometry::Solid(SolidMesh::cuboid(*size, *cells)),
-        Domain::Gmsh { file } => {
-            let path: PathBuf = if Path::new(file).is_absolute() { file.into() } else { scene_dir.join(file) };
+        Domain::Gmsh { .. } => {
+            let path = domain.mesh_path(scene_dir).unwrap_or_default();
             if !path.exists() {
                 return Err(Error::scene("domain.file", format!("mesh file {:?} does not exist", path.display().to_string())));
             }
@@ -206,7 +210,7 @@ pub fn initial_data(mesh: &Geometry, dofs: &Dofs, u0: &VecExpr, v0: &VecExpr) ->
                 let vals = v[..d].iter().map(|c| c.to_string()).collect::<Vec<_>>().join(", ");
                 return Err(Error::Expression {
                     path: path.into(),
-                    message: format!("evaluates to ({vals}) at node {k} {}; initial data must be finite", at(mesh, k)),
+                    message: format!("evaluates to ({vals}) at {} {}; initial data must be finite", mesh.node_name(k), at(mesh, k)),
                 });
             }
         }
@@ -226,7 +230,7 @@ fn build_contact(c: &ContactParams, sides: &[String], mesh: &Geometry, dofs: &Do
         let p = mesh.point(v);
         let g = c.gap.eval3(p[0], p[1], p[2], 0.0);
         if !g.is_finite() {
-            return Err(Error::scene("contact.gap", format!("evaluates to {g} at node {v} {}", at(mesh, v))));
+            return Err(Error::scene("contact.gap", format!("evaluates to {g} at {} {}", mesh.node_name(v), at(mesh, v))));
         }
         gap.push(g);
     }
@@ -257,7 +261,7 @@ fn build_contact(c: &ContactParams, sides: &[String], mesh: &Geometry, dofs: &Do
         for comp in 0..d {
             match dofs.map[d * v + comp] {
                 Some(i) => node_dofs.push(i),
-                None => return Err(Error::scene("boundary.contact", format!("contact node {v} has a clamped DOF"))),
+                None => return Err(Error::scene("boundary.contact", format!("contact {} has a clamped DOF", mesh.node_name(v)))),
             }
         }
     }

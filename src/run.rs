@@ -1,21 +1,27 @@
 //! `dyncontact run`: the time loop with outputs, progress, checkpoints, interruption, and a
 //! summary that says how the run ended.
 //!
-//! However it ends, the folder stays valid: history.csv holds every completed step,
-//! series.pvd lists exactly the frames on disk, and summary.json says `completed`, `failed`
-//! (with the step, time, residuals and a suggestion) or `interrupted` (with where it stopped;
-//! a checkpoint of that step is written so `--resume` continues from it).
+//! A run owns its folder (output/folder.rs): it locks it, refuses a folder holding files that
+//! are not a run's, writes summary.json with status `running` before anything else and only
+//! then replaces an earlier run's files. However it ends, the folder stays valid: history.csv
+//! holds every completed step, series.pvd lists exactly the frames on disk, and summary.json says
+//! `completed`, `failed` (with the step, time, residuals and a suggestion; also when an output
+//! could not be written) or `interrupted` (with where it stopped; a checkpoint of that step is
+//! written so `--resume` continues from it). A run killed outright leaves `running`.
+//!
+//! A resumed run proves first that the folder's files belong together (output/resume.rs): the
+//! checkpoint's checksum and run, its inputs, the history row of its step, the frames.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-use crate::checkpoint::{fingerprint, Checkpoint, Counters};
+use crate::checkpoint::{Checkpoint, Counters};
 use crate::error::{Error, Result};
 use crate::failure::RunStatus;
 use crate::output::summary::Timing;
-use crate::output::{ModelInfo, Summary, Writer};
+use crate::output::{folder, write_atomic, ModelInfo, Summary, Writer};
 use crate::problem::Problem;
 use crate::simulation::{Settings, Simulation, StepRecord};
 
@@ -42,10 +48,16 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Summary> {
 }
 
 /// summary.json of a run that could not start — its scene, mesh or operators were refused —
-/// in an output folder that exists (a sweep's point folder): `"status": "failed"` with the
-/// reason and its kind, so every point of a sweep is read the same way.
-pub fn write_failed_start(out: &std::path::Path, scene: &str, e: &Error) -> Result<()> {
+/// in an output folder that holds no earlier run (a sweep's point folder, or a new folder):
+/// `"status": "failed"` with the reason and its kind, so every point of a sweep is read the same
+/// way. A folder holding an earlier run (or anything else) is left as it is: a run that did not
+/// start damages nothing.
+pub fn write_failed_start(out: &Path, scene: &str, e: &Error) -> Result<()> {
+    if !out.is_dir() || !matches!(folder::check_fresh(out), Ok(false)) {
+        return Ok(());
+    }
     let json = serde_json::json!({
+        "version": env!("CARGO_PKG_VERSION"),
         "scene": scene,
         "status": "failed",
         "failure": e.to_string(),
@@ -53,7 +65,7 @@ pub fn write_failed_start(out: &std::path::Path, scene: &str, e: &Error) -> Resu
         "steps_completed": 0,
     });
     let text = serde_json::to_string_pretty(&json).map_err(|e| Error::Output(format!("summary.json: {e}")))?;
-    crate::output::write_atomic(&out.join("summary.json"), text.as_bytes())
+    write_atomic(&out.join("summary.json"), text.as_bytes())
 }
 
 /// The run's counters in the form a checkpoint stores.
@@ -67,6 +79,7 @@ fn counters(s: &Summary, first_cap: Option<usize>) -> Counters {
         first_cap,
         max_abs_energy_residual: s.max_abs_energy_residual.to_bits(),
         max_relative_energy_residual: s.max_relative_energy_residual.to_bits(),
+        energy_guard_exceeded_steps: s.energy_guard_exceeded_steps,
     }
 }
 
@@ -79,6 +92,7 @@ fn restore_counters(summary: &mut Summary, c: &Counters) {
     summary.unfrozen_fallbacks = c.unfrozen_fallbacks;
     summary.max_abs_energy_residual = f64::from_bits(c.max_abs_energy_residual);
     summary.max_relative_energy_residual = f64::from_bits(c.max_relative_energy_residual);
+    summary.energy_guard_exceeded_steps = c.energy_guard_exceeded_steps;
 }
 
 /// Add one step's iterations, timings and (E.1) residual to the summary.
@@ -92,6 +106,7 @@ fn tally(summary: &mut Summary, first_cap: &mut Option<usize>, rec: &StepRecord)
         first_cap.get_or_insert(rec.step);
     }
     summary.unfrozen_fallbacks += usize::from(r.fallback.is_some());
+    summary.energy_guard_exceeded_steps += usize::from(rec.energy_guard_exceeded);
     let res = rec.energy.residual.abs();
     summary.max_abs_energy_residual = summary.max_abs_energy_residual.max(res);
     if rec.energy_scale > 0.0 {
@@ -106,14 +121,23 @@ fn tally(summary: &mut Summary, first_cap: &mut Option<usize>, rec: &StepRecord)
     summary.timing.balance_s += rec.timing.balance;
 }
 
+/// A new run's identity: the time, the process and the folder, hashed.
+fn new_run_id(out: &Path) -> String {
+    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_nanos()).unwrap_or(0);
+    crate::fingerprint::text(&format!("{now} {} {}", std::process::id(), out.display()))
+}
+
 /// The summary of a run that is starting.
-fn new_summary(problem: &Problem, sim: &Simulation, start: Instant) -> Summary {
+fn new_summary(problem: &Problem, sim: &Simulation, start: Instant, run_id: String) -> Summary {
     let info = ModelInfo::of(problem);
     let t = sim.setup_timing;
     Summary {
+        version: env!("CARGO_PKG_VERSION").to_string(),
         scene: problem.model.name.clone(),
         description: problem.model.description.clone(),
         status: RunStatus::Running,
+        run_id,
+        inputs_fingerprint: problem.inputs_fingerprint.clone(),
         failure: None,
         failure_kind: None,
         warnings: info.warnings(),
@@ -121,6 +145,7 @@ fn new_summary(problem: &Problem, sim: &Simulation, start: Instant) -> Summary {
         steps_completed: 0,
         final_time: 0.0,
         wall_time_s: 0.0,
+        peak_memory_mb: None,
         timing: Timing {
             setup_s: start.elapsed().as_secs_f64(),
             assembly_s: t.assembly,
@@ -143,35 +168,32 @@ fn new_summary(problem: &Problem, sim: &Simulation, start: Instant) -> Summary {
         unfrozen_fallbacks: 0,
         max_abs_energy_residual: 0.0,
         max_relative_energy_residual: 0.0,
+        energy_guard_exceeded_steps: 0,
     }
 }
 
-/// Where the run writes: a new folder, or the folder of a checkpoint to resume (the state and
-/// the counters are restored from it).
-fn open_writer(
-    problem: &Problem,
-    sim: &mut Simulation,
-    opts: &RunOptions,
-    scene_hash: &str,
-    summary: &mut Summary,
-    first_cap: &mut Option<usize>,
-) -> Result<Writer> {
-    if !opts.resume {
-        let mut w = Writer::create(&opts.out, problem)?;
-        w.record(&sim.initial_record(), problem, &sim.state, problem.steps == 0)?;
-        return Ok(w);
+/// A fresh run takes its folder: summary.json says `running`, the earlier run's files go, the
+/// CSV files start with the state at t = 0.
+fn start_fresh(problem: &Problem, sim: &Simulation, opts: &RunOptions, summary: &mut Summary, replaced: bool) -> Result<Writer> {
+    write_summary(&opts.out, summary)?;
+    folder::clear(&opts.out)?;
+    if replaced {
+        summary.warnings.push(format!("{} held an earlier run's outputs: they were replaced", opts.out.display()));
     }
-    let cp = Checkpoint::read(&opts.out)?;
-    if cp.scene_hash != scene_hash {
-        return Err(Error::Output(format!(
-            "{}: the checkpoint was written for a different scene (or another version of it); resume needs the same scene",
-            opts.out.join("checkpoint.json").display()
-        )));
-    }
+    let mut w = Writer::create(&opts.out, problem)?;
+    w.record(&sim.initial_record(), problem, &sim.state, problem.steps == 0)?;
+    Ok(w)
+}
+
+/// A resumed run: the checkpoint (read and checked: checksum, finite values) must belong to the
+/// folder's run and inputs, the folder's files must agree with it; then the state and counters
+/// are restored and the files cut back to its step.
+fn start_resumed(problem: &Problem, sim: &mut Simulation, opts: &RunOptions, cp: &Checkpoint, summary: &mut Summary, first_cap: &mut Option<usize>) -> Result<Writer> {
+    crate::output::resume::check(&opts.out, problem, cp)?;
     sim.restore(cp.state())?;
     if let (Some(key), Some(w)) = (&cp.factor, sim.delassus.as_ref()) {
         sim.delassus_factors.restore(w, key).ok_or_else(|| {
-            Error::Output(format!("{}: the checkpoint's contact factorization does not fit this scene", opts.out.join("checkpoint.json").display()))
+            Error::folder(opts.out.join("checkpoint.json"), "the checkpoint's contact factorization does not fit this scene")
         })?;
     }
     restore_counters(summary, &cp.counters);
@@ -179,7 +201,38 @@ fn open_writer(
     summary.final_time = problem.time(cp.step);
     *first_cap = cp.counters.first_cap;
     summary.warnings.push(format!("resumed from the checkpoint of step {}", cp.step));
+    write_summary(&opts.out, summary)?;
     Writer::reopen(&opts.out, problem, cp.step)
+}
+
+/// The identity a resumed run keeps: the checkpoint's run, which must be the run whose
+/// summary.json is in the folder. Read before anything is built, so a folder that cannot be
+/// resumed is refused at once.
+fn resumable(out: &Path, problem: &Problem) -> Result<Checkpoint> {
+    let cp = Checkpoint::read(out)?;
+    let sp = out.join("summary.json");
+    let refuse = |m: String| Error::folder(out, m);
+    let summary: serde_json::Value = std::fs::read_to_string(&sp)
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .ok_or_else(|| refuse("summary.json is missing or unreadable: the folder's run cannot be identified, so its checkpoint is not resumed".into()))?;
+    let run_id = summary.get("run_id").and_then(|v| v.as_str()).unwrap_or("");
+    if run_id != cp.run_id {
+        return Err(refuse(format!(
+            "checkpoint.json belongs to another run (run {}) than summary.json (run {:?}): the files were not written by one run",
+            cp.run_id, run_id
+        )));
+    }
+    if summary.get("status").and_then(|v| v.as_str()) == Some("completed") {
+        return Err(refuse(format!("the run is completed ({} steps): there is nothing to resume", summary["steps_completed"])));
+    }
+    if cp.inputs != problem.inputs_fingerprint {
+        return Err(refuse(
+            "checkpoint.json was written for other inputs (the scene or a file it reads, such as its mesh, changed since): resume needs the same scene and mesh"
+                .into(),
+        ));
+    }
+    Ok(cp)
 }
 
 fn progress_bar(opts: &RunOptions, steps: usize, at: usize) -> Option<indicatif::ProgressBar> {
@@ -193,46 +246,115 @@ fn progress_bar(opts: &RunOptions, steps: usize, at: usize) -> Option<indicatif:
     })
 }
 
+/// summary.json, atomically (through a temporary file and a rename).
+fn write_summary(out: &Path, summary: &Summary) -> Result<()> {
+    let json = serde_json::to_string_pretty(summary).map_err(|e| Error::Output(format!("summary.json: {e}")))?;
+    write_atomic(&out.join("summary.json"), json.as_bytes())
+}
+
+/// How the loop ended when it did not complete.
+enum Stop {
+    Interrupted { step: usize, time: f64 },
+    Failed(Error),
+}
+
 /// As [`run`] with explicit solver settings.
 pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Result<Summary> {
     let start = Instant::now();
-    let scene_hash = fingerprint(&format!("{:?}", problem.model));
+    let _lock = folder::lock_run(&opts.out)?;
+    // everything that can refuse the folder, before anything in it changes
+    let (checkpoint, replaced) = if opts.resume { (Some(resumable(&opts.out, problem)?), false) } else { (None, folder::check_fresh(&opts.out)?) };
     let mut sim = match Simulation::with_settings(problem, settings) {
         Ok(sim) => sim,
         Err(e) => {
-            if opts.out.is_dir() && !opts.resume {
+            if !opts.resume {
                 write_failed_start(&opts.out, &problem.model.name, &e)?;
             }
             return Err(e);
         }
     };
-    let mut summary = new_summary(problem, &sim, start);
+    let run_id = checkpoint.as_ref().map_or_else(|| new_run_id(&opts.out), |cp| cp.run_id.clone());
+    let mut summary = new_summary(problem, &sim, start, run_id);
     let mut first_cap: Option<usize> = None;
-    let mut writer = open_writer(problem, &mut sim, opts, &scene_hash, &mut summary, &mut first_cap)?;
-    let bar = progress_bar(opts, problem.steps, sim.state.n);
-    let stop_now =
-        |n: usize| opts.stop_after.is_some_and(|s| n >= s) || opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
-    let finish_timing = |summary: &mut Summary| {
-        summary.wall_time_s = start.elapsed().as_secs_f64();
-        summary.timing.total_s = summary.wall_time_s;
+    let mut writer = match &checkpoint {
+        Some(cp) => start_resumed(problem, &mut sim, opts, cp, &mut summary, &mut first_cap)?,
+        None => start_fresh(problem, &sim, opts, &mut summary, replaced)?,
     };
+    let bar = progress_bar(opts, problem.steps, sim.state.n);
+    let ended = steps_loop(problem, &mut sim, opts, &mut writer, &mut summary, &mut first_cap, bar.as_ref());
+    summary.wall_time_s = start.elapsed().as_secs_f64();
+    summary.timing.total_s = summary.wall_time_s;
+    summary.peak_memory_mb = crate::resources::peak_memory().map(|b| b / 1e6);
+    match ended {
+        Ok(()) => {
+            if let Some(b) = &bar {
+                b.finish();
+            }
+            finish_warnings(problem, &mut summary, first_cap);
+            summary.status = RunStatus::Completed;
+            writer.finish(&summary, problem, &sim.state)?;
+            Ok(summary)
+        }
+        Err(stop) => {
+            let e = match stop {
+                Stop::Interrupted { step, time } => {
+                    summary.status = RunStatus::Interrupted;
+                    summary.failure = Some(format!(
+                        "stopped after step {step} (t = {time}); checkpoint.json holds that step: continue with --resume {}",
+                        opts.out.display()
+                    ));
+                    Error::Interrupted { step, time }
+                }
+                Stop::Failed(e) => {
+                    summary.status = RunStatus::Failed;
+                    summary.failure = Some(e.to_string());
+                    e
+                }
+            };
+            summary.failure_kind = Some(e.kind().to_string());
+            if let Some(b) = &bar {
+                b.abandon_with_message(if summary.status == RunStatus::Interrupted { "interrupted" } else { "failed" });
+            }
+            // the summary says how the run ended whenever it can be written at all (a full disk)
+            let written = if summary.status == RunStatus::Interrupted { writer.finish(&summary, problem, &sim.state) } else { writer.write_summary(&summary) };
+            if let Err(w) = written {
+                writer.write_summary_in_place(&summary);
+                if matches!(e, Error::Interrupted { .. }) {
+                    return Err(w);
+                }
+            }
+            Err(e)
+        }
+    }
+}
+
+/// The steps of the run, each recorded (and checkpointed when asked); Err when it stops early.
+fn steps_loop(
+    problem: &Problem,
+    sim: &mut Simulation,
+    opts: &RunOptions,
+    writer: &mut Writer,
+    summary: &mut Summary,
+    first_cap: &mut Option<usize>,
+    bar: Option<&indicatif::ProgressBar>,
+) -> std::result::Result<(), Stop> {
+    let interrupted = || opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
+    let stop_now = |n: usize| opts.stop_after.is_some_and(|s| n >= s) || interrupted();
+    let checkpoint = |sim: &Simulation, summary: &Summary, first_cap: Option<usize>, writer: &mut Writer| -> Result<()> {
+        // the frames up to this step are on disk before a checkpoint says they are
+        writer.wait()?;
+        let factor = sim.delassus_factors.key();
+        Checkpoint::new(&summary.run_id, &problem.inputs_fingerprint, &sim.state, counters(summary, first_cap), factor).write(&opts.out)
+    };
+    // a signal during the setup stops the run before its first step
+    if interrupted() && sim.state.n < problem.steps {
+        checkpoint(sim, summary, *first_cap, writer).map_err(Stop::Failed)?;
+        return Err(Stop::Interrupted { step: sim.state.n, time: problem.time(sim.state.n) });
+    }
     let mut steps = sim.steps();
     while let Some(rec) = steps.next() {
-        let rec = match rec {
-            Ok(r) => r,
-            Err(e) => {
-                summary.status = RunStatus::Failed;
-                summary.failure = Some(e.to_string());
-                summary.failure_kind = Some(e.kind().to_string());
-                finish_timing(&mut summary);
-                writer.write_summary(&summary)?;
-                if let Some(b) = &bar {
-                    b.abandon_with_message("failed");
-                }
-                return Err(e);
-            }
-        };
-        tally(&mut summary, &mut first_cap, &rec);
+        let rec = rec.map_err(Stop::Failed)?;
+        tally(summary, first_cap, &rec);
         let counts = steps.simulation().delassus_factors.all_counts();
         (summary.contact_factorizations, summary.contact_factor_reuses) = (counts.factorizations, counts.reuses);
         (summary.contact_pcg_solves, summary.contact_pcg_iterations) = (counts.pcg_solves, counts.pcg_iterations);
@@ -241,35 +363,23 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
         let t_out = Instant::now();
         let last = state.n == problem.steps;
         let stopping = !last && stop_now(state.n);
-        writer.record(&rec, problem, state, last)?;
+        writer.record(&rec, problem, state, last).map_err(Stop::Failed)?;
         if opts.checkpoint_every.is_some_and(|c| c > 0 && state.n % c == 0) || stopping {
-            let factor = steps.simulation().delassus_factors.key();
-            Checkpoint::new(scene_hash.clone(), state, counters(&summary, first_cap), factor).write(&opts.out)?;
+            checkpoint(steps.simulation(), summary, *first_cap, writer).map_err(Stop::Failed)?;
         }
         summary.timing.output_s += t_out.elapsed().as_secs_f64();
-        if let Some(b) = &bar {
+        if let Some(b) = bar {
             b.inc(1);
         }
         if stopping {
-            summary.status = RunStatus::Interrupted;
-            summary.failure_kind = Some("interrupted".to_string());
-            summary.failure = Some(format!(
-                "stopped after step {} (t = {}); checkpoint.json holds that step: continue with --resume {}",
-                state.n,
-                rec.t,
-                opts.out.display()
-            ));
-            finish_timing(&mut summary);
-            writer.finish(&summary, problem, state)?;
-            if let Some(b) = &bar {
-                b.abandon_with_message("interrupted");
-            }
-            return Err(Error::Interrupted { step: state.n, time: rec.t });
+            return Err(Stop::Interrupted { step: state.n, time: rec.t });
         }
     }
-    if let Some(b) = &bar {
-        b.finish();
-    }
+    Ok(())
+}
+
+/// The warnings a completed run adds: (F.1) cap hits, (E.1) guard hits.
+fn finish_warnings(problem: &Problem, summary: &mut Summary, first_cap: Option<usize>) {
     if summary.fixed_point_cap_hits > 0 {
         summary.warnings.push(format!(
             "the fixed point (F.1) hit max_fixed_point_iterations = {} on {} steps (first at step {}); those steps use the last \
@@ -279,8 +389,11 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
             first_cap.unwrap_or(0)
         ));
     }
-    summary.status = RunStatus::Completed;
-    finish_timing(&mut summary);
-    writer.finish(&summary, problem, &sim.state)?;
-    Ok(summary)
+    if summary.energy_guard_exceeded_steps > 0 {
+        summary.warnings.push(format!(
+            "the energy balance (E.1) failed by more than solver.energy_residual_limit = {:e} of the energy scale on {} steps \
+             (largest {:.3e}): their equations are not solved to the solvers' tolerance",
+            problem.model.solver.energy_residual_limit, summary.energy_guard_exceeded_steps, summary.max_relative_energy_residual
+        ));
+    }
 }

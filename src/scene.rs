@@ -14,7 +14,7 @@ use crate::defaults;
 use crate::error::{Error, Result};
 use crate::model::expr::{Expr, VecExpr};
 pub use crate::model::kinds::{
-    Bound, BoundAt, DomainKind, EnforcementKind, FrictionBound, FrictionLaw, ContactSolve, FixedPointAcceleration, InnerSolver, MassKind, Plane, SchemeKind,
+    Bound, BoundAt, DomainKind, EnforcementKind, FrictionBound, FrictionLaw, ContactSolve, EnergyResidualAction, FixedPointAcceleration, InnerSolver, MassKind, Plane, SchemeKind,
 };
 use crate::model::kinds;
 use crate::model::laws::FrictionCoefficient;
@@ -285,6 +285,16 @@ pub struct Solver {
     /// "anderson" | "none": how (F.1) updates S
     #[serde(default)]
     pub fixed_point_acceleration: FixedPointAcceleration,
+    /// the (E.1) guard of a midpoint run: a step whose residual exceeds this fraction of the
+    /// energy scale ends the run ("fail") or is reported ("warn")
+    #[serde(default = "d_e1_limit")]
+    pub energy_residual_limit: f64,
+    #[serde(default)]
+    pub energy_residual_action: EnergyResidualAction,
+}
+
+fn d_e1_limit() -> f64 {
+    defaults::ENERGY_RESIDUAL_LIMIT
 }
 
 fn d_newton_tol() -> f64 {
@@ -313,6 +323,8 @@ impl Default for Solver {
             persistency: false,
             contact_solve: ContactSolve::Auto,
             fixed_point_acceleration: FixedPointAcceleration::Anderson,
+            energy_residual_limit: d_e1_limit(),
+            energy_residual_action: EnergyResidualAction::Fail,
         }
     }
 }
@@ -372,7 +384,7 @@ impl Scene {
 
     /// Read and parse a scene file.
     pub fn from_file(path: &std::path::Path) -> Result<Scene> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
         Scene::from_toml(&text, &path.display().to_string())
     }
 
@@ -389,7 +401,7 @@ impl Scene {
 
     /// Read a scene file with `--set` overrides.
     pub fn from_file_with(path: &std::path::Path, overrides: &[crate::overrides::Override]) -> Result<Scene> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
         Scene::from_toml_with(&text, &path.display().to_string(), overrides)
     }
 
@@ -403,9 +415,8 @@ impl Scene {
     /// Check ranges and combinations and build the typed [`Model`]: every error names its key
     /// path, every expression is parsed here once, and nothing downstream re-checks a value.
     pub fn validate(&self) -> Result<Model> {
-        if self.name.trim().is_empty() || self.name.contains(['/', '\\']) || self.name == "." || self.name == ".." {
-            return Err(Error::scene("name", format!("must be a non-empty folder name without slashes, got {:?}", self.name)));
-        }
+        check_name("name", &self.name)?;
+        check_text("description", &self.description)?;
         let domain = self.validate_domain()?;
         self.validate_boundary()?;
         let material = self.validate_material()?;
@@ -543,7 +554,7 @@ impl Scene {
         };
         for (i, s) in size.iter().enumerate() {
             if !(s.is_finite() && *s > 0.0) {
-                return e(&format!("domain.size[{i}]"), format!("must be > 0, got {s}"));
+                return e(&format!("domain.size[{i}]"), format!("must be a finite number > 0, got {s}"));
             }
         }
         let Some(cells) = &d.cells else {
@@ -622,10 +633,10 @@ impl Scene {
         let e = |p: &str, m: String| Err(Error::scene(p, m));
         let m = &self.material;
         if !(m.density.is_finite() && m.density > 0.0) {
-            return e("material.density", format!("must be > 0, got {}", m.density));
+            return e("material.density", format!("must be a finite number > 0, got {}", m.density));
         }
         if !(m.young.is_finite() && m.young > 0.0) {
-            return e("material.young", format!("must be > 0, got {}", m.young));
+            return e("material.young", format!("must be a finite number > 0, got {}", m.young));
         }
         if !(m.poisson.is_finite() && m.poisson > -1.0 && m.poisson < 0.5) {
             return e("material.poisson", format!("must be in (-1, 0.5), got {}", m.poisson));
@@ -687,10 +698,10 @@ impl Scene {
         let e = |p: &str, m: String| Err(Error::scene(p, m));
         let t = &self.time;
         if !(t.end.is_finite() && t.end > 0.0) {
-            return e("time.end", format!("must be > 0, got {}", t.end));
+            return e("time.end", format!("must be a finite number > 0, got {}", t.end));
         }
         if !(t.step.is_finite() && t.step > 0.0) {
-            return e("time.step", format!("must be > 0, got {}", t.step));
+            return e("time.step", format!("must be a finite number > 0, got {}", t.step));
         }
         if t.step > t.end * (1.0 + 1e-12) {
             return e("time.step", format!("must be <= time.end = {}, got {}", t.end, t.step));
@@ -732,6 +743,9 @@ impl Scene {
         if !(s.relaxation.is_finite() && s.relaxation > 0.0 && s.relaxation <= 1.0) {
             return e("solver.relaxation", format!("must be in (0, 1], got {}", s.relaxation));
         }
+        if !(s.energy_residual_limit.is_finite() && s.energy_residual_limit > 0.0) {
+            return e("solver.energy_residual_limit", format!("must be a finite number > 0 (a fraction of the energy scale), got {}", s.energy_residual_limit));
+        }
         if s.persistency && s.mass == MassKind::Consistent {
             return e(
                 "solver.persistency",
@@ -754,6 +768,8 @@ impl Scene {
             persistency: s.persistency,
             contact_solve: s.contact_solve,
             fixed_point_acceleration: s.fixed_point_acceleration,
+            energy_residual_limit: s.energy_residual_limit,
+            energy_residual_action: s.energy_residual_action,
         })
     }
 
@@ -774,7 +790,7 @@ impl Scene {
                 return e("contact.penalty", "missing: enforcement = \"penalty\" needs penalty = ε > 0".into());
             }
             (EnforcementKind::Penalty, Some(eps)) if !(eps.is_finite() && eps > 0.0) => {
-                return e("contact.penalty", format!("must be > 0, got {eps}"));
+                return e("contact.penalty", format!("must be a finite number > 0, got {eps}"));
             }
             (EnforcementKind::Exact, Some(_)) => {
                 return e("contact.penalty", "only used with enforcement = \"penalty\"; remove it or set enforcement = \"penalty\"".into());
@@ -849,6 +865,10 @@ fn validate_friction(f: &Friction) -> Result<Option<FrictionCoefficient>> {
         match v {
             None => Err(Error::scene(format!("{p}.{key}"), format!("missing: law = \"{}\" needs it", format!("{:?}", f.law).to_lowercase()))),
             Some(x) if !(x.is_finite() && x >= 0.0) => Err(Error::scene(format!("{p}.{key}"), format!("must be >= 0, got {x}"))),
+            Some(x) if key != "decay" && x > defaults::MAX_FRICTION_COEFFICIENT => Err(Error::scene(
+                format!("{p}.{key}"),
+                format!("a friction coefficient must be at most {}, got {x}", defaults::MAX_FRICTION_COEFFICIENT),
+            )),
             Some(x) => Ok(x),
         }
     };
@@ -914,6 +934,9 @@ fn validate_table(pts: &[[f64; 2]]) -> Result<()> {
         if *mu < 0.0 {
             return e(&format!("{p}.points[{i}][1]"), format!("μ must be >= 0, got {mu}"));
         }
+        if *mu > defaults::MAX_FRICTION_COEFFICIENT {
+            return e(&format!("{p}.points[{i}][1]"), format!("a friction coefficient must be at most {}, got {mu}", defaults::MAX_FRICTION_COEFFICIENT));
+        }
         if i > 0 && *r <= pts[i - 1][0] {
             return e(
                 &format!("{p}.points[{i}][0]"),
@@ -922,6 +945,27 @@ fn validate_table(pts: &[[f64; 2]]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// A name that becomes a folder (`out/<name>`) and reaches generated files (the Snakefile, CSV,
+/// SVG): 1 to 100 characters from letters, digits and `_ - . +`, not starting with `.` or `-`.
+pub fn check_name(key: &str, name: &str) -> Result<()> {
+    let ok_char = |c: char| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.' | '+');
+    if name.is_empty() || name.len() > 100 || !name.chars().all(ok_char) || name.starts_with(['.', '-']) {
+        return Err(Error::scene(
+            key,
+            format!("must be 1 to 100 letters, digits or _ - . + (not starting with . or -): it names a folder and files; got {name:?}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Free text (a description, a label): any character but control characters other than tab.
+pub fn check_text(key: &str, text: &str) -> Result<()> {
+    match text.chars().find(|c| c.is_control() && *c != '\t') {
+        Some(c) => Err(Error::scene(key, format!("holds the control character {:?}: give plain text on one line", c))),
+        None => Ok(()),
+    }
 }
 
 pub fn one_paragraph(s: &str) -> String {

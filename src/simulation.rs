@@ -16,7 +16,7 @@ use crate::failure::{ContactFailure, SolverFailure, StepFailureCause};
 use crate::fem::Operators;
 use crate::linalg;
 use crate::model::contact::ContactModel;
-use crate::model::kinds::{BoundAt, FixedPointAcceleration, FrictionBound, InnerSolver, SchemeKind};
+use crate::model::kinds::{BoundAt, EnergyResidualAction, FixedPointAcceleration, FrictionBound, InnerSolver, SchemeKind};
 use crate::problem::Problem;
 use crate::scheme::{ContactKinematics, StateProducts, StepOperator};
 use crate::step::conic::ConicSettings;
@@ -116,6 +116,9 @@ pub struct StepRecord {
     pub report: StepReport,
     pub nodes: Vec<NodeRecord>,
     pub timing: StepTiming,
+    /// (E.1) the step's relative residual exceeded `solver.energy_residual_limit` and the scene
+    /// asked for a warning instead of a failure
+    pub energy_guard_exceeded: bool,
 }
 
 impl StepRecord {
@@ -138,6 +141,7 @@ impl StepRecord {
             report: StepReport::default(),
             nodes: Vec::new(),
             timing: StepTiming::default(),
+            energy_guard_exceeded: false,
         }
     }
 }
@@ -147,6 +151,17 @@ impl StepRecord {
 pub struct Settings {
     pub inner: Inner,
     pub fixed_point: FixedPointSettings,
+    /// (E.1) as a run-time guard: Some for the midpoint scheme, where the balance is an identity
+    /// of the step's equations (the other schemes' residual is their own energy error)
+    pub energy_guard: Option<EnergyGuard>,
+}
+
+/// The (E.1) guard: a step whose relative residual exceeds `limit` fails, or with `warn_only`
+/// is flagged in its record.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnergyGuard {
+    pub limit: f64,
+    pub warn_only: bool,
 }
 
 impl Settings {
@@ -170,6 +185,10 @@ impl Settings {
                 relaxation: s.relaxation,
                 anderson: s.fixed_point_acceleration == FixedPointAcceleration::Anderson,
             },
+            energy_guard: (p.model.time.scheme == SchemeKind::Midpoint).then_some(EnergyGuard {
+                limit: s.energy_residual_limit,
+                warn_only: s.energy_residual_action == EnergyResidualAction::Warn,
+            }),
         }
     }
 }
@@ -337,6 +356,11 @@ impl<'p> Simulation<'p> {
     pub fn step(&mut self) -> Result<StepRecord> {
         let clock = Instant::now();
         let (mut v_new, f) = self.free_velocity();
+        if let Some(entry) = f.iter().position(|x| !x.is_finite()) {
+            // name the load and where it is not finite (an expression like 1/(t − t0))
+            let t = self.stepper.load_time(self.problem.time(self.state.n));
+            return Err(self.problem.loads.check_finite(t).err().unwrap_or_else(|| self.failure(StepFailureCause::NonFinite { entry })));
+        }
         let mut timing = StepTiming { free_solve: clock.elapsed().as_secs_f64(), ..StepTiming::default() };
         let contact = match self.contact_solve(&v_new) {
             Some(Ok(cs)) => Some(cs),
@@ -353,7 +377,7 @@ impl<'p> Simulation<'p> {
         if let Some(entry) = u_new.iter().chain(&v_new).position(|x| !x.is_finite()) {
             return Err(self.failure(StepFailureCause::NonFinite { entry }));
         }
-        Ok(self.balance(u_new, v_new, &f, contact, timing))
+        self.balance(u_new, v_new, &f, contact, timing)
     }
 
     /// The contact solve of the step for the free velocity `v_free` (None without contact).
@@ -391,9 +415,9 @@ impl<'p> Simulation<'p> {
         }
     }
 
-    /// (E.1) terms of the step, (R.2) persistency, the contact records; then the state moves
-    /// to t_{n+1}.
-    fn balance(&mut self, u_new: Vec<f64>, mut v_new: Vec<f64>, f: &[f64], contact: Option<ContactStep>, timing: StepTiming) -> StepRecord {
+    /// (E.1) terms of the step, (R.2) persistency, the contact records; the energy guard; then
+    /// the state moves to t_{n+1} (a step that fails the guard leaves it at t_n).
+    fn balance(&mut self, u_new: Vec<f64>, mut v_new: Vec<f64>, f: &[f64], contact: Option<ContactStep>, timing: StepTiming) -> Result<StepRecord> {
         let clock = Instant::now();
         let mut p_new = StateProducts::of(&self.ops, &u_new, &v_new);
         let t_products = clock.elapsed().as_secs_f64();
@@ -419,8 +443,20 @@ impl<'p> Simulation<'p> {
             self.state.t_fric.clone_from(&cs.sol.t);
             rec.report = cs.report.clone();
         }
-        self.state.energy = self.state.energy.advance(&se);
-        self.state.energy_scale = self.state.energy_scale.max(self.state.energy.scale());
+        let energy = self.state.energy.advance(&se);
+        let scale = self.state.energy_scale.max(energy.scale());
+        if let Some(guard) = self.settings.energy_guard {
+            let relative = if scale > 0.0 { energy.residual.abs() / scale } else { energy.residual.abs() };
+            // NaN fails too
+            if !(relative <= guard.limit) {
+                if !guard.warn_only {
+                    return Err(self.failure(StepFailureCause::EnergyBalance { relative, limit: guard.limit }));
+                }
+                rec.energy_guard_exceeded = true;
+            }
+        }
+        self.state.energy = energy;
+        self.state.energy_scale = scale;
         self.state.u = u_new;
         self.state.v = v_new;
         self.state.n += 1;
@@ -428,7 +464,7 @@ impl<'p> Simulation<'p> {
         rec.energy = self.state.energy;
         rec.energy_scale = self.state.energy_scale;
         rec.timing.balance = clock.elapsed().as_secs_f64();
-        rec
+        Ok(rec)
     }
 
     /// The contact terms of (E.1) (compliance energy, friction and constraint dissipation),

@@ -311,7 +311,7 @@ fn malformed_meshes_are_rejected_with_clear_messages() {
         ("2nd-order triangle", with_tri(&["9 9 0 1 2 3 4 5 1"]), "element 9 is second order (type 9)"),
         ("2nd-order line", with_tri(&["9 8 1 1 1 2 5"]), "Mesh.ElementOrder = 1"),
         ("hexahedron", with_tri(&["9 5 0 1 2 3 4 5 1 2 3"]), "element 9 is a 3-D element of type 5 (hexahedron, prism or pyramid)"),
-        ("a flat tetrahedron among triangles", with_tri(&["9 4 0 1 2 3 5"]), "tetrahedron 0 (nodes [0, 1, 2, 4]) has zero (degenerate) volume"),
+        ("a flat tetrahedron among triangles", with_tri(&["9 4 0 1 2 3 5"]), "tetrahedron 9 (nodes 1, 2, 3, 5) has zero (degenerate) volume"),
         ("unknown element type", with_tri(&["9 16 0 1 2 3 4 1 2 3 4"]), "element 9 has type 16"),
         ("too few nodes", with_tri(&["9 2 0 1 2"]), "element 9 lists 2 nodes, type 2 needs 3"),
         (
@@ -412,4 +412,45 @@ fn scene_text(file: &str, dirichlet: &str) -> String {
         "[domain]\nkind = \"gmsh\"\nfile = \"{file}\"\n[boundary]\ndirichlet = [\"{dirichlet}\"]\n\
          [material]\ndensity = 1.0\nyoung = 1000.0\npoisson = 0.3\n[time]\nend = 0.01\nstep = 0.001\n"
     )
+}
+
+/// Two tetrahedra (element tags 11 and 12) on the shared face 1-2-3; `apex` is the second one's
+/// fourth node (below the face: a consistent mesh; above it: folded through the face).
+fn two_tets(apex: &str, swap_all: bool) -> String {
+    let (t1, t2) = if swap_all { ("1 2 4 3", "1 2 3 5") } else { ("1 2 3 4", "1 3 2 5") };
+    format!(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 {apex}\n$EndNodes\n\
+         $Elements\n2\n11 4 0 {t1}\n12 4 0 {t2}\n$EndElements\n"
+    )
+}
+
+/// (issue 22) A 3-D mesh folded by one moved node — the second tetrahedron's apex pushed
+/// through the shared face, so the two have opposite orientations — is refused naming the
+/// inverted tetrahedron by its tag in the file, as the 2-D reader refuses a fold; the same mesh
+/// unfolded is accepted in either consistent orientation (all clockwise is flipped, volume 1/3).
+#[test]
+fn folded_3d_mesh_is_refused_naming_the_tetrahedron() {
+    use dyncontact::mesh::gmsh::parse_any;
+    use dyncontact::mesh::Geometry;
+    for swap_all in [false, true] {
+        let Geometry::Solid(m) = parse_any(&two_tets("0 0 -1", swap_all), "two.msh").expect("a consistent mesh") else { panic!("3-D") };
+        // every tetrahedron positive after reading; volume 1/6 + 1/6 (exact in binary: round-off only)
+        assert!((0..2).all(|t| m.signed_volume(t) > 0.0));
+        assert!((m.volume() - 1.0 / 3.0).abs() < 1e-15, "volume {}", m.volume());
+    }
+    let e = parse_any(&two_tets("0.2 0.2 0.5", false), "folded.msh").expect_err("a folded mesh is refused").to_string();
+    println!("{e}");
+    assert!(e.contains("folded.msh") && e.contains("tetrahedron 12 is inverted") && e.contains("folds"), "{e}");
+}
+
+/// (issue 22, minor) Mesh messages name nodes and cells by their tags in the file, not by the
+/// reader's 0-based indices: a flat tetrahedron (its apex in the plane of its base) of a file
+/// whose node tags start at 101 is reported as "tetrahedron 12 (nodes 101, 103, 102, 105)" (the file's element tag 9 was reported as "tetrahedron 0 (nodes [0, 1, 2, 4])" before).
+#[test]
+fn mesh_messages_name_the_file_tags() {
+    let text = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n101 0 0 0\n102 1 0 0\n103 0 1 0\n104 0 0 1\n105 0.3 0.3 0\n$EndNodes\n\
+                $Elements\n2\n11 4 0 101 102 103 104\n12 4 0 101 103 102 105\n$EndElements\n";
+    let e = dyncontact::mesh::gmsh::parse_any(text, "flat.msh").expect_err("a flat tetrahedron").to_string();
+    println!("{e}");
+    assert!(e.contains("tetrahedron 12 (nodes 101, 103, 102, 105) has zero (degenerate) volume"), "{e}");
 }

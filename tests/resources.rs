@@ -2,9 +2,9 @@
 //! step without building a large problem, and `run` refuses a scene whose estimate exceeds the
 //! memory available, naming the estimate and suggesting a coarser mesh (exit 1).
 //!
-//! The estimate was compared with the measured peak resident memory of `run` (release, this
-//! machine): 256×128 cells, 156 MiB estimated against 166 MiB measured; 1024×512 cells, 2.7 GiB
-//! against 2.47 GiB.
+//! The estimate is calibrated against the measured peak resident memory of `run` (summary.json
+//! `peak_memory_mb`, VmHWM): eleven runs from 12 MB to 1 GB, estimate ÷ peak 0.91–1.17
+//! (src/resources.rs); three of them are checked here, each in a process of its own.
 
 use std::path::Path;
 use std::process::Command;
@@ -59,4 +59,39 @@ fn cli_refuses_oversize_scene_before_building_it() {
     assert!(check.status.success(), "{err}");
     assert!(out.contains("memory (est.)") && out.contains("GiB"), "{out}");
     assert!(err.contains("`run` would refuse it"), "{err}");
+}
+
+/// (issue 22) The memory estimate is within ±30% of the peak a run measures (summary.json
+/// `peak_memory_mb`, the process's VmHWM) on three scenes: 2-D with contact (128 × 64 cells),
+/// 3-D with friction on the disk (academic3d at 16 × 8 × 6) and the 2-D Hertz contact — it was
+/// about half the peak before it counted the assembly's triplet lists and the process baseline
+/// (145.6 MiB estimated against 306 MiB measured). ±30%: the calibration's own spread is
+/// 0.91–1.17, and the allocator's behaviour varies between machines.
+#[test]
+fn memory_estimate_is_within_30_percent_of_the_measured_peak() {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("memory_estimate");
+    let fixture = |n: &str| std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes").join(format!("{n}.toml"));
+    let cases: [(&str, &[&str]); 3] = [
+        ("academic", &["domain.cells=[128,64]", "time.end=0.05"]),
+        ("academic3d", &["domain.cells=[16,8,6]", "time.end=0.02"]),
+        ("hertz", &["time.end=0.01"]),
+    ];
+    for (name, sets) in cases {
+        let overrides: Vec<dyncontact::overrides::Override> = sets.iter().map(|s| dyncontact::overrides::Override::parse(s).expect("override")).collect();
+        let scene = Scene::from_file_with(&fixture(name), &overrides).expect("scene");
+        let est = estimate(&scene.validate().expect("valid"), &fixture(name).parent().expect("dir").to_path_buf()).expect("estimate").total() / 1e6;
+        let out = dir.join(name);
+        let _ = std::fs::remove_dir_all(&out);
+        let mut cmd = Command::new(BIN);
+        cmd.arg("run").arg(fixture(name)).arg("--out").arg(&out);
+        for s in sets {
+            cmd.args(["--set", s]);
+        }
+        let o = cmd.output().expect("run");
+        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+        let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+        let peak = summary["peak_memory_mb"].as_f64().expect("the peak is measured on Linux");
+        println!("{name}: estimated {est:.1} MB, measured peak {peak:.1} MB, ratio {:.2}", est / peak);
+        assert!((0.7..=1.3).contains(&(est / peak)), "{name}: estimate {est:.1} MB against a measured peak of {peak:.1} MB");
+    }
 }

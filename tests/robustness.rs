@@ -71,9 +71,10 @@ fn forced_newton_failure_exits_2_with_valid_files() {
 }
 
 /// A load that becomes infinite mid-run (1/(t − 0.0105) at the midpoint of step 11) stops the
-/// run with exit code 2 before any non-finite value reaches a file.
+/// run at that step as bad input (exit 1) naming the load's key, the point and the time — it is
+/// checked every step before anything is solved — and no non-finite value reaches a file.
 #[test]
-fn forced_non_finite_load_exits_2_without_nan_in_files() {
+fn forced_non_finite_load_is_refused_naming_the_key() {
     let dir = tmp("fail_nan");
     let scene = dir.join("scene.toml");
     let text = fixture_text("impact_friction").replace("body = [\"0\", \"-20\"]", "body = [\"0\", \"-20 + 1/(t - 0.0105)\"]").replace("step = 5.0e-4", "step = 1.0e-3");
@@ -82,10 +83,11 @@ fn forced_non_finite_load_exits_2_without_nan_in_files() {
     let o = run(&[], &scene, &out);
     let err = String::from_utf8_lossy(&o.stderr);
     println!("{err}");
-    assert_eq!(o.status.code(), Some(2), "exit code");
-    assert!(err.contains("non-finite"), "{err}");
+    assert_eq!(o.status.code(), Some(1), "exit code");
+    assert!(err.contains("loads.body") && err.contains("t = 0.0105") && err.contains("inf"), "{err}");
     let s = summary(&out);
     assert_eq!(s["status"], "failed");
+    assert_eq!(s["failure_kind"], "input");
     assert_eq!(s["steps_completed"], 10);
     check_files_valid(&out, 10);
     for f in ["history.csv", "contact.csv"] {
@@ -141,7 +143,8 @@ fn resume_case(name: &str, text: &str, stop: usize) {
     assert!(frames > 10);
 }
 
-/// A checkpoint resumes only the scene that wrote it.
+/// A checkpoint resumes only the scene that wrote it: another scene is refused as a folder
+/// error (exit 4) naming the inputs.
 #[test]
 fn resume_refuses_another_scene() {
     let dir = tmp("resume_other");
@@ -151,8 +154,8 @@ fn resume_refuses_another_scene() {
     let out = dir.join("out");
     assert_eq!(run(&["--stop-after", "20"], &s1, &out).status.code(), Some(130));
     let o = Command::new(BIN).arg("run").arg(&s2).arg("--resume").arg(&out).output().expect("spawn");
-    assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("different scene"));
+    assert_eq!(o.status.code(), Some(4));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("other inputs"), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
 /// SIGINT stops the run at the end of the current step: exit 130, summary "interrupted" with

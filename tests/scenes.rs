@@ -163,10 +163,17 @@ fn cases() -> Vec<Case> {
             "invalid type: boolean `true`, expected a number or a string",
         ),
         // ---- name and domain ----
-        case("name with a slash", edit("name = \"academic\"", "name = \"a/b\""), "name", "without slashes"),
+        case("name with a slash", edit("name = \"academic\"", "name = \"a/b\""), "name", "letters, digits"),
+        // names reach folders and generated files (issue 22): a newline would have put code in a Snakefile
+        case("name with a newline", edit("name = \"academic\"", "name = \"a\\nb\""), "name", "letters, digits"),
+        case("name with a shell character", edit("name = \"academic\"", "name = \"a$(touch x)\""), "name", "letters, digits"),
+        case("description with a control character", edit("description = \"Ex-A", "description = \"\\u0007Ex-A"), "description", "control character"),
+        // friction coefficients bounded (a coefficient of 1e300 completed with (E.1) off by 1.0)
+        case("static friction 1e300", edit("static = 0.6", "static = 1e300"), "contact.friction.static", "at most 100"),
+        case("energy residual limit 0", edit("[solver]", "[solver]\nenergy_residual_limit = 0"), "solver.energy_residual_limit", "must be a finite number > 0"),
         case("missing rectangle size", edit("size = [2.0, 1.0]\n", ""), "domain.size", "missing"),
         case("missing rectangle cells", edit("cells = [32, 16]\n", ""), "domain.cells", "missing"),
-        case("zero length", edit("size = [2.0, 1.0]", "size = [2.0, 0.0]"), "domain.size[1]", "must be > 0"),
+        case("zero length", edit("size = [2.0, 1.0]", "size = [2.0, 0.0]"), "domain.size[1]", "must be a finite number > 0"),
         case("zero cells", edit("cells = [32, 16]", "cells = [0, 16]"), "domain.cells[0]", "must be >= 1"),
         case(
             "gmsh without file",
@@ -177,9 +184,9 @@ fn cases() -> Vec<Case> {
         case("gmsh with rectangle size", edit("kind = \"rectangle\"", "kind = \"gmsh\"\nfile = \"m.msh\""), "domain.size", "remove it"),
         case("rectangle with a mesh file", after("[domain]", "file = \"m.msh\""), "domain.file", "only used with kind = \"gmsh\""),
         // ---- material ----
-        case("negative density", edit("density = 1.0", "density = -1.0"), "material.density", "must be > 0, got -1"),
-        case("NaN density", edit("density = 1.0", "density = nan"), "material.density", "must be > 0, got NaN"),
-        case("zero Young modulus", edit("young = 1000.0", "young = 0.0"), "material.young", "must be > 0, got 0"),
+        case("negative density", edit("density = 1.0", "density = -1.0"), "material.density", "must be a finite number > 0, got -1"),
+        case("NaN density", edit("density = 1.0", "density = nan"), "material.density", "must be a finite number > 0, got NaN"),
+        case("zero Young modulus", edit("young = 1000.0", "young = 0.0"), "material.young", "must be a finite number > 0, got 0"),
         case("Poisson ratio 0.5", edit("poisson = 0.3", "poisson = 0.5"), "material.poisson", "must be in (-1, 0.5), got 0.5"),
         case("Poisson ratio -1", edit("poisson = 0.3", "poisson = -1.0"), "material.poisson", "must be in (-1, 0.5), got -1"),
         case("negative viscosity", edit("theta = 2.0", "theta = -2.0"), "material.viscosity.theta", "must be >= 0, got -2"),
@@ -247,7 +254,7 @@ fn cases() -> Vec<Case> {
             "zero penalty",
             edit("enforcement = \"exact\"", "enforcement = \"penalty\"\npenalty = 0.0"),
             "contact.penalty",
-            "must be > 0",
+            "must be a finite number > 0",
         ),
         case(
             "penalty with an infinite bound",
@@ -324,8 +331,8 @@ fn cases() -> Vec<Case> {
             "the first slip rate must be 0",
         ),
         // ---- time ----
-        case("zero end time", edit("end = 1.0", "end = 0.0"), "time.end", "must be > 0"),
-        case("negative step", edit("step = 5.0e-4", "step = -5.0e-4"), "time.step", "must be > 0"),
+        case("zero end time", edit("end = 1.0", "end = 0.0"), "time.end", "must be a finite number > 0"),
+        case("negative step", edit("step = 5.0e-4", "step = -5.0e-4"), "time.step", "must be a finite number > 0"),
         case("step longer than the run", edit("step = 5.0e-4", "step = 2.0"), "time.step", "must be <= time.end"),
         case("end not a whole number of steps", edit("step = 5.0e-4", "step = 0.3"), "time.step", "not a whole number of steps"),
         case("too many steps", edit("step = 5.0e-4", "step = 1.0e-9"), "time.step", "too many steps (1000000000), at most 100000000"),

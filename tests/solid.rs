@@ -237,13 +237,13 @@ fn solid_mesh_errors_name_the_defect() {
 
     // two tetrahedra sharing only the edge (0, 1)
     let nodes = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
-    let mut bowtie = SolidMesh { nodes, tets: vec![[0, 1, 2, 3], [0, 1, 4, 5]], sides: Vec::new(), source: "bowtie".into() };
+    let mut bowtie = SolidMesh { nodes, tets: vec![[0, 1, 2, 3], [0, 1, 4, 5]], sides: Vec::new(), source: "bowtie".into(), tags: None };
     let faces: Vec<[usize; 3]> = bowtie.boundary_faces().into_iter().filter(|f| f.contains(&0) && f.contains(&1)).collect();
     assert_eq!(faces.len(), 4);
     bowtie.sides.push(Surface { name: "contact".into(), faces });
     bowtie.check().expect("each tetrahedron is valid");
     let e = bowtie.side_nodes(&["contact".to_string()], &[]).expect_err("non-manifold").to_string();
-    assert!(e.contains("edge (0, 1)") && e.contains("not a manifold"), "{e}");
+    assert!(e.contains("the edge between node 0 and node 1") && e.contains("not a manifold"), "{e}");
 }
 
 /// The degree-5 tetrahedron rule of the 3-D error norms integrates every monomial

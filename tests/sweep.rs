@@ -221,7 +221,7 @@ fn a_bad_point_refuses_the_sweep_before_anything_runs() {
     };
     let e = bad("p.toml", "name = \"p\"\n[[axis]]\nkey = \"contact.penalty\"\nvalues = [1e-3, -1.0]\n[set]\n\"contact.enforcement\" = \"penalty\"\n");
     println!("{e}");
-    assert!(e.contains("point p001 (contact.penalty = -1)") && e.contains("contact.penalty: must be > 0"), "{e}");
+    assert!(e.contains("point p001 (contact.penalty = -1)") && e.contains("contact.penalty: must be a finite number > 0"), "{e}");
     assert!(!dir.join("out").exists());
     let e = bad("k.toml", "name = \"k\"\n[[axis]]\nkey = \"time.stepp\"\nvalues = [1e-3]\n");
     assert!(e.contains("point p000 (time.stepp = 0.001)") && e.contains("unknown field `stepp`"), "{e}");

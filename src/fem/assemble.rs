@@ -166,7 +166,7 @@ pub fn assemble_solid(mesh: &SolidMesh, mat: &Material, mass: MassKind) -> Resul
     let (mut tm, mut tk, mut tc) = (Vec::with_capacity(cap), Vec::with_capacity(cap), Vec::with_capacity(cap));
     for (t, tet) in mesh.tets.iter().enumerate() {
         let x = tet.map(|v| mesh.nodes[v]);
-        let degenerate = || Error::mesh(&mesh.source, format!("tetrahedron {t} (nodes {tet:?}) is degenerate"));
+        let degenerate = || Error::mesh(&mesh.source, format!("{} is degenerate", crate::mesh::cell_name(mesh.tags.as_ref(), "tetrahedron", t)));
         let volume = tet::gradients(x).ok_or_else(degenerate)?.1.abs();
         let ke = tet::operator_matrix(x, &db).ok_or_else(degenerate)?;
         let ce = tet::operator_matrix(x, &da).ok_or_else(degenerate)?;
@@ -316,8 +316,9 @@ pub fn modified_masses(mesh: &Geometry, mat: &Material, dofs: &Dofs, contact_nod
                 Error::scene(
                     "solver.mass",
                     format!(
-                        "\"modified\": contact node {i} at {} has too few free neighbours within two edges to move its mass \
+                        "\"modified\": contact {} at {} has too few free neighbours within two edges to move its mass \
                          while keeping the centre of mass; refine the mesh near the contact side or use mass = \"lumped\"",
+                        mesh.node_name(i),
                         at(i)
                     ),
                 )
@@ -347,8 +348,9 @@ pub fn modified_masses(mesh: &Geometry, mat: &Material, dofs: &Dofs, contact_nod
                     return Err(Error::scene(
                         "solver.mass",
                         format!(
-                            "\"modified\": the mass of contact node {i} at {} cannot be moved to its free neighbours within two edges \
+                            "\"modified\": the mass of contact {} at {} cannot be moved to its free neighbours within two edges \
                              keeping the centre of mass and every mass positive; refine the mesh near the contact side or use mass = \"lumped\"",
+                            mesh.node_name(i),
                             at(i)
                         ),
                     ));
@@ -361,8 +363,9 @@ pub fn modified_masses(mesh: &Geometry, mat: &Material, dofs: &Dofs, contact_nod
         return Err(Error::scene(
             "solver.mass",
             format!(
-                "\"modified\": redistributing the contact nodes' mass leaves node {j} at {} with mass {:.3e} <= 0; \
+                "\"modified\": redistributing the contact nodes' mass leaves {} at {} with mass {:.3e} <= 0; \
                  refine the mesh near the contact side or use mass = \"lumped\"",
+                mesh.node_name(j),
                 at(j),
                 mass[j]
             ),

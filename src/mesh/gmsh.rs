@@ -20,12 +20,31 @@ pub fn read(path: &Path) -> Result<Mesh> {
 }
 
 /// Read a `.msh` file of either dimension: tetrahedra make a 3-D mesh, else triangles a 2-D one.
+/// Its first line is checked before the rest is read: a large file that is not a mesh is
+/// refused without being loaded.
 pub fn read_any(path: &Path) -> Result<Geometry> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    check_first_line(path)?;
+    let bytes = std::fs::read(path).map_err(|e| Error::read(path, e))?;
     // A binary .msh is not UTF-8; decode lossily so that its ASCII header is still read and
     // the "binary files are not supported" message is given instead of an encoding error.
     let text = String::from_utf8_lossy(&bytes);
     parse_any(&text, &path.display().to_string())
+}
+
+/// A Gmsh file starts with `$MeshFormat` (after blank lines): read at most 4 KiB to see it.
+fn check_first_line(path: &Path) -> Result<()> {
+    use std::io::Read as _;
+    let mut head = Vec::with_capacity(4096);
+    std::fs::File::open(path).and_then(|f| f.take(4096).read_to_end(&mut head)).map_err(|e| Error::read(path, e))?;
+    let text = String::from_utf8_lossy(&head);
+    let Some((n, first)) = text.lines().enumerate().find(|(_, l)| !l.trim().is_empty()) else {
+        return Err(Error::mesh(path.display().to_string(), "is empty (or starts with 4 KiB of blank lines): not a Gmsh mesh"));
+    };
+    if first.trim() != "$MeshFormat" {
+        let shown: String = first.trim().chars().take(40).collect();
+        return Err(Error::mesh(path.display().to_string(), format!("line {}: a Gmsh mesh starts with $MeshFormat, found {shown:?}", n + 1)));
+    }
+    Ok(())
 }
 
 struct Cursor<'a> {
@@ -371,7 +390,7 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
             }
         }
     }
-    let mut mesh = Mesh { nodes, triangles, sides, source: file.to_string() };
+    let mut mesh = Mesh { nodes, triangles, sides, source: file.to_string(), tags: Some(super::Tags { nodes: raw.node_order.clone(), cells: tags.clone() }) };
     orient(&mut mesh, &tags, file)?;
     check_duplicates(&mesh, &raw.node_order, file)?;
     check_unreferenced(&mesh, &raw.node_order, file)?;
@@ -412,14 +431,40 @@ fn build_solid(raw: Raw, file: &str) -> Result<SolidMesh> {
             }
         }
     }
-    let mut mesh = SolidMesh { nodes, tets, sides, source: file.to_string() };
-    for t in 0..mesh.tets.len() {
-        if mesh.signed_volume(t) < 0.0 {
-            mesh.tets[t].swap(2, 3);
-        }
-    }
+    let tags: Vec<i64> = raw.tets.iter().map(|(tag, _)| *tag).collect();
+    let mut mesh = SolidMesh { nodes, tets, sides, source: file.to_string(), tags: Some(super::Tags { nodes: raw.node_order.clone(), cells: tags.clone() }) };
+    orient_solid(&mut mesh, &tags, file)?;
     mesh.check()?;
     Ok(mesh)
+}
+
+/// Orientation in 3-D, as in 2-D ([`orient`]): every tetrahedron of one sign is a consistent
+/// mesh (all negative ones get two vertices swapped); a mix means that the mesh folds over
+/// itself (a node moved through a face) and is refused, naming a tetrahedron of the minority by
+/// its tag in the file. Degenerate ones are left to `SolidMesh::check`.
+fn orient_solid(mesh: &mut SolidMesh, tags: &[i64], file: &str) -> Result<()> {
+    let signs: Vec<f64> = (0..mesh.tets.len()).map(|t| mesh.signed_volume(t)).collect();
+    let negative = signs.iter().filter(|v| **v < 0.0).count();
+    let positive = signs.iter().filter(|v| **v > 0.0).count();
+    if negative > 0 && positive > 0 {
+        let t = if negative <= positive { signs.iter().position(|v| *v < 0.0) } else { signs.iter().position(|v| *v > 0.0) }.unwrap_or(0);
+        return Err(Error::mesh(
+            file,
+            format!(
+                "tetrahedron {} is inverted: {} of {} tetrahedra have the other orientation; the mesh folds over itself \
+                 (a node moved through a face) or has inconsistent orientation — regenerate it",
+                tags[t],
+                negative.min(positive),
+                signs.len()
+            ),
+        ));
+    }
+    if negative > 0 {
+        for t in mesh.tets.iter_mut() {
+            t.swap(2, 3);
+        }
+    }
+    Ok(())
 }
 
 /// Orientation: all clockwise (surface normal −z) is flipped; a mix means a folded mesh.

@@ -24,6 +24,37 @@ pub struct Mesh {
     pub sides: Vec<Side>,
     /// where the mesh came from, for messages
     pub source: String,
+    /// the file's node and element tags (a Gmsh mesh): messages name nodes and cells by them
+    pub tags: Option<Tags>,
+}
+
+/// A mesh file's tags of the nodes and cells, in the mesh's order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tags {
+    pub nodes: Vec<i64>,
+    pub cells: Vec<i64>,
+}
+
+/// "node 17" for a message: the file's tag when the mesh was read from a file, else the index.
+pub fn node_name(tags: Option<&Tags>, v: usize) -> String {
+    match tags.and_then(|t| t.nodes.get(v)) {
+        Some(tag) => format!("node {tag}"),
+        None => format!("node {v}"),
+    }
+}
+
+/// "triangle 5" / "tetrahedron 5" (`one`) for a message, by the file's tag where there is one.
+pub fn cell_name(tags: Option<&Tags>, one: &str, t: usize) -> String {
+    match tags.and_then(|g| g.cells.get(t)) {
+        Some(tag) => format!("{one} {tag}"),
+        None => format!("{one} {t}"),
+    }
+}
+
+/// The nodes of a cell or an edge by name: "nodes 3, 8, 9".
+fn node_list(tags: Option<&Tags>, vs: &[usize]) -> String {
+    let names: Vec<String> = vs.iter().map(|&v| node_name(tags, v).trim_start_matches("node ").to_string()).collect();
+    format!("nodes {}", names.join(", "))
 }
 
 /// Nodes of a set of sides with outward nodal normals and boundary weights.
@@ -66,7 +97,7 @@ impl Mesh {
             Side { name: "top".into(), edges: top },
             Side { name: "left".into(), edges: left },
         ];
-        Mesh { nodes, triangles, sides, source: format!("rectangle {lx}x{ly}, {nx}x{ny} cells") }
+        Mesh { nodes, triangles, sides, source: format!("rectangle {lx}x{ly}, {nx}x{ny} cells"), tags: None }
     }
 
     pub fn side(&self, name: &str) -> Option<&Side> {
@@ -80,7 +111,7 @@ impl Mesh {
     /// The side names for messages: comma-separated, control characters escaped (a physical
     /// name read from a file may hold any character but a newline).
     pub fn side_list(&self) -> String {
-        self.sides.iter().map(|s| s.name.escape_debug().to_string()).collect::<Vec<_>>().join(", ")
+        side_names(self.sides.iter().map(|s| s.name.as_str()))
     }
 
     /// Signed area of triangle `t` (positive when counterclockwise).
@@ -108,7 +139,8 @@ impl Mesh {
                     return Err(Error::mesh(
                         &self.source,
                         format!(
-                            "edge ({a}, {b}) of side {:?} is {} — a side edge must be on the boundary of exactly one triangle",
+                            "the edge ({}) of side {:?} is {} — a side edge must be on the boundary of exactly one triangle",
+                            node_list(self.tags.as_ref(), &[a, b]),
                             side.name,
                             if tris.is_empty() { "not an edge of any triangle".to_string() } else { format!("shared by {} triangles (interior)", tris.len()) }
                         ),
@@ -168,7 +200,7 @@ impl Mesh {
             if !(norm > 1e-12 * w) {
                 return Err(Error::mesh(
                     &self.source,
-                    format!("node {v} sits where adjacent side edges have opposite normals; its nodal normal is undefined"),
+                    format!("{} sits where adjacent side edges have opposite normals; its nodal normal is undefined", node_name(self.tags.as_ref(), v)),
                 ));
             }
             out.nodes.push(v);
@@ -197,7 +229,7 @@ impl Mesh {
     /// every node used by a triangle, side edges on the boundary.
     pub fn check(&self) -> Result<()> {
         let names = CellNames { one: "triangle", many: "triangles", measure: "area", zero: "zero" };
-        check_cells(&self.source, self.nodes.len(), &self.triangles, |t| self.signed_area(t), self.bbox_diameter().powi(2), &names)?;
+        check_cells(&self.source, self.nodes.len(), &self.triangles, |t| self.signed_area(t), self.bbox_diameter().powi(2), &names, self.tags.as_ref())?;
         for s in &self.sides {
             self.edge_geometry(s)?;
         }
@@ -236,32 +268,34 @@ pub(crate) fn check_cells<const N: usize>(
     measure: impl Fn(usize) -> f64,
     scale: f64,
     names: &CellNames,
+    tags: Option<&Tags>,
 ) -> Result<()> {
     let CellNames { one, many, measure: what, zero } = names;
+    let cell = |t: usize| cell_name(tags, one, t);
     if cells.is_empty() {
         return Err(Error::mesh(source, format!("has no {many}")));
     }
     let mut used = vec![false; n];
-    for (t, cell) in cells.iter().enumerate() {
-        for &v in cell {
+    for (t, c) in cells.iter().enumerate() {
+        for &v in c {
             if v >= n {
-                return Err(Error::mesh(source, format!("{one} {t} refers to node {v}, but there are {n} nodes")));
+                return Err(Error::mesh(source, format!("{} refers to node {v}, but there are {n} nodes", cell(t))));
             }
             used[v] = true;
         }
         let a = measure(t);
         if !a.is_finite() {
-            return Err(Error::mesh(source, format!("the {what} of {one} {t} overflows: the coordinates are too large; give them in metres")));
+            return Err(Error::mesh(source, format!("the {what} of {} overflows: the coordinates are too large; give them in metres", cell(t))));
         }
         if !(a > 1e-14 * scale) {
             return Err(Error::mesh(
                 source,
-                format!("{one} {t} (nodes {cell:?}) has {} {what} {a:.3e}; fix or remove it", if a < 0.0 { "negative (inverted)" } else { zero }),
+                format!("{} ({}) has {} {what} {a:.3e}; fix or remove it", cell(t), node_list(tags, c), if a < 0.0 { "negative (inverted)" } else { zero }),
             ));
         }
     }
     if let Some(v) = used.iter().position(|u| !u) {
-        return Err(Error::mesh(source, format!("node {v} is not a vertex of any {one}; remove unreferenced nodes")));
+        return Err(Error::mesh(source, format!("{} is not a vertex of any {one}; remove unreferenced nodes", node_name(tags, v))));
     }
     Ok(())
 }
@@ -338,12 +372,19 @@ impl Geometry {
             Geometry::Solid(m) => m.side(name).is_some(),
         }
     }
+    /// "node 17" for a message: the file's tag for a Gmsh mesh, else the index.
+    pub fn node_name(&self, v: usize) -> String {
+        match self {
+            Geometry::Plane(m) => node_name(m.tags.as_ref(), v),
+            Geometry::Solid(m) => node_name(m.tags.as_ref(), v),
+        }
+    }
+
     pub fn side_list(&self) -> String {
-        let names: Vec<&str> = match self {
-            Geometry::Plane(m) => m.sides.iter().map(|s| s.name.as_str()).collect(),
-            Geometry::Solid(m) => m.sides.iter().map(|s| s.name.as_str()).collect(),
-        };
-        names.iter().map(|s| s.escape_debug().to_string()).collect::<Vec<_>>().join(", ")
+        match self {
+            Geometry::Plane(m) => m.side_list(),
+            Geometry::Solid(m) => side_names(m.sides.iter().map(|s| s.name.as_str())),
+        }
     }
     pub fn nodes_on(&self, names: &[String]) -> Result<Vec<bool>> {
         match self {
@@ -377,4 +418,11 @@ impl Geometry {
             Geometry::Solid(m) => m.bbox_diameter(),
         }
     }
+}
+
+/// The sides of a mesh for a message: "a, b, c", or a sentence when there are none (a Gmsh
+/// file without physical groups).
+pub fn side_names<'a>(names: impl Iterator<Item = &'a str>) -> String {
+    let list: Vec<String> = names.map(|s| s.escape_debug().to_string()).collect();
+    if list.is_empty() { "no named sides (the mesh file defines no physical groups)".into() } else { list.join(", ") }
 }

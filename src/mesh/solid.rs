@@ -22,6 +22,8 @@ pub struct SolidMesh {
     pub sides: Vec<Surface>,
     /// where the mesh came from, for messages
     pub source: String,
+    /// the file's node and element tags (a Gmsh mesh): messages name nodes and cells by them
+    pub tags: Option<super::Tags>,
 }
 
 /// Nodes of a set of surfaces with outward nodal normals and boundary weights.
@@ -88,7 +90,7 @@ impl SolidMesh {
                 }
             }
         }
-        let mut mesh = SolidMesh { nodes, tets, sides: Vec::new(), source: format!("box {}x{}x{}, {nx}x{ny}x{nz} cells", l[0], l[1], l[2]) };
+        let mut mesh = SolidMesh { nodes, tets, sides: Vec::new(), tags: None, source: format!("box {}x{}x{}, {nx}x{ny}x{nz} cells", l[0], l[1], l[2]) };
         mesh.orient();
         // boundary faces of the tetrahedra, sorted to the six sides by the coordinate they share
         let faces = mesh.boundary_faces();
@@ -160,7 +162,7 @@ impl SolidMesh {
     }
 
     fn side_list(&self) -> String {
-        self.sides.iter().map(|s| s.name.escape_debug().to_string()).collect::<Vec<_>>().join(", ")
+        super::side_names(self.sides.iter().map(|s| s.name.as_str()))
     }
 
     fn named(&self, name: &str) -> Result<&Surface> {
@@ -227,7 +229,11 @@ impl SolidMesh {
         if let Some((&(a, b), &count)) = edges.iter().filter(|e| *e.1 > 2).min_by_key(|e| *e.0) {
             return Err(Error::mesh(
                 &self.source,
-                format!("the edge ({a}, {b}) of the sides {names:?} belongs to {count} of their faces: the contact surface is not a manifold"),
+                format!(
+                    "the edge between {} and {} of the sides {names:?} belongs to {count} of their faces: the contact surface is not a manifold",
+                    super::node_name(self.tags.as_ref(), a),
+                    super::node_name(self.tags.as_ref(), b)
+                ),
             ));
         }
         let mut nodes: Vec<usize> = acc.keys().copied().filter(|&v| !exclude.get(v).copied().unwrap_or(false)).collect();
@@ -237,7 +243,10 @@ impl SolidMesh {
             let (n, w) = acc[&v];
             let norm = dot(n, n).sqrt();
             if !(norm > 1e-12 * w) {
-                return Err(Error::mesh(&self.source, format!("node {v} sits where adjacent side faces have opposite normals; its nodal normal is undefined")));
+                return Err(Error::mesh(
+                    &self.source,
+                    format!("{} sits where adjacent side faces have opposite normals; its nodal normal is undefined", super::node_name(self.tags.as_ref(), v)),
+                ));
             }
             out.nodes.push(v);
             out.normals.push(n.map(|c| c / norm));
@@ -261,7 +270,7 @@ impl SolidMesh {
     /// above round-off, every node used, side faces on the boundary.
     pub fn check(&self) -> Result<()> {
         let names = super::CellNames { one: "tetrahedron", many: "tetrahedra", measure: "volume", zero: "zero (degenerate)" };
-        super::check_cells(&self.source, self.nodes.len(), &self.tets, |t| self.signed_volume(t), self.bbox_diameter().powi(3), &names)?;
+        super::check_cells(&self.source, self.nodes.len(), &self.tets, |t| self.signed_volume(t), self.bbox_diameter().powi(3), &names, self.tags.as_ref())?;
         for s in &self.sides {
             self.face_geometry(s)?;
         }

@@ -92,6 +92,17 @@ pub enum InnerSolver {
     NewtonUnfrozen,
 }
 
+/// What a midpoint step does whose (E.1) residual exceeds `solver.energy_residual_limit`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum EnergyResidualAction {
+    /// the run ends with a failure naming the step
+    #[default]
+    Fail,
+    /// the step is counted and the run goes on (summary.json warns)
+    Warn,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum MassKind {

@@ -9,7 +9,7 @@ pub mod laws;
 pub mod material;
 
 use expr::{Expr, VecExpr};
-use kinds::{Bound, BoundAt, FrictionBound, ContactSolve, FixedPointAcceleration, InnerSolver, MassKind, Plane, SchemeKind};
+use kinds::{Bound, BoundAt, ContactSolve, EnergyResidualAction, FixedPointAcceleration, FrictionBound, InnerSolver, MassKind, Plane, SchemeKind};
 use laws::FrictionCoefficient;
 
 /// A validated scene: every range checked, every expression parsed, every law built. It is
@@ -54,6 +54,16 @@ pub enum Domain {
     Box { size: [f64; 3], cells: [usize; 3] },
     /// a Gmsh file, the path as written in the scene (relative to the scene's folder)
     Gmsh { file: String },
+}
+
+impl Domain {
+    /// The mesh file a `gmsh` domain reads (a relative path resolved against `scene_dir`).
+    pub fn mesh_path(&self, scene_dir: &std::path::Path) -> Option<std::path::PathBuf> {
+        match self {
+            Domain::Gmsh { file } => Some(if std::path::Path::new(file).is_absolute() { file.into() } else { scene_dir.join(file) }),
+            _ => None,
+        }
+    }
 }
 
 /// Material constants as the scene gives them (SI).
@@ -147,6 +157,10 @@ pub struct SolverParams {
     pub contact_solve: ContactSolve,
     /// Anderson extrapolation of S in (F.1), or the plain iteration
     pub fixed_point_acceleration: FixedPointAcceleration,
+    /// the (E.1) guard of a midpoint run: the largest relative residual of a step, and what a
+    /// step beyond it does
+    pub energy_residual_limit: f64,
+    pub energy_residual_action: EnergyResidualAction,
 }
 
 impl Model {

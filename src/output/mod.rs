@@ -1,9 +1,9 @@
 //! Outputs in the run folder (the README): history.csv (every step), contact.csv and VTU
 //! frames (every `output.every` steps), series.pvd, summary.json and plots/*.svg.
 //!
-//! Files are written so that a run stopped at any point leaves valid files: CSV rows are
-//! flushed whole after each step, and the PVD, the summary and the charts are written to a
-//! temporary name and renamed.
+//! Files are written so that a run stopped at any point leaves valid files: CSV rows reach the
+//! disk whole after each step (a row that a full disk cut short is removed again), and the PVD,
+//! the summary and the charts are written to a temporary name and renamed.
 //!
 //! A VTU frame is encoded and written on a background thread while the time loop goes on (one
 //! frame in flight at most: the next frame, the summary and the end of the run wait for it and
@@ -11,6 +11,7 @@
 
 pub mod contact_charts;
 pub mod export;
+pub mod folder;
 pub mod fs;
 pub mod plots;
 pub mod resume;
@@ -18,8 +19,7 @@ pub mod summary;
 pub mod trajectory;
 pub mod vtu;
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::thread::JoinHandle;
@@ -28,7 +28,7 @@ use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::simulation::{NodeRecord, State, StepRecord};
 
-pub use fs::write_atomic;
+pub use fs::{write_atomic, AppendFile};
 pub use summary::{ModelInfo, Summary};
 
 /// A history.csv value: a real or a count (written with Rust's shortest round-trip format).
@@ -118,8 +118,8 @@ pub struct ChartRow {
 /// The writer of one run folder.
 pub struct Writer {
     dir: PathBuf,
-    history: BufWriter<File>,
-    contact: Option<BufWriter<File>>,
+    history: AppendFile,
+    contact: Option<AppendFile>,
     frames: Vec<(f64, String)>,
     every: usize,
     pub rows: Vec<ChartRow>,
@@ -141,39 +141,20 @@ impl Drop for Writer {
     }
 }
 
-fn csv_io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
-    move |e| Error::io(path, e)
-}
-
 impl Writer {
-    /// Create the folder (and frames/, plots/), remove stale outputs of an earlier run, and
-    /// open the CSV files with their headers.
+    /// Create frames/ and plots/ and open the CSV files with their headers, in a folder that
+    /// holds no earlier run's files (output/folder.rs cleared them).
     pub fn create(dir: &Path, problem: &Problem) -> Result<Writer> {
         for sub in ["", "frames", "plots"] {
             let d = dir.join(sub);
             std::fs::create_dir_all(&d).map_err(|e| Error::io(&d, e))?;
         }
-        // stale frames from an earlier run would be listed by no PVD but confuse readers
-        if let Ok(rd) = std::fs::read_dir(dir.join("frames")) {
-            for e in rd.flatten() {
-                if e.path().extension().is_some_and(|x| x == "vtu") {
-                    let _ = std::fs::remove_file(e.path());
-                }
-            }
-        }
-        let hp = dir.join("history.csv");
-        let mut history = BufWriter::new(File::create(&hp).map_err(csv_io(&hp))?);
-        writeln!(history, "{}", history_header()).map_err(csv_io(&hp))?;
-        let cp = dir.join("contact.csv");
-        let contact = if problem.contact.is_some() {
-            let mut w = BufWriter::new(File::create(&cp).map_err(csv_io(&cp))?);
-            writeln!(w, "{}", contact_columns(problem.mesh.dim())).map_err(csv_io(&cp))?;
-            Some(w)
-        } else {
-            // a scene without contact still gets the file, with its header only
-            std::fs::write(&cp, format!("{}\n", contact_columns(problem.mesh.dim()))).map_err(csv_io(&cp))?;
-            None
-        };
+        let mut history = AppendFile::create(&dir.join("history.csv"))?;
+        history.append(format!("{}\n", history_header()).as_bytes())?;
+        let mut contact = AppendFile::create(&dir.join("contact.csv"))?;
+        contact.append(format!("{}\n", contact_columns(problem.mesh.dim())).as_bytes())?;
+        // a scene without contact still gets the file, with its header only
+        let contact = problem.contact.is_some().then_some(contact);
         let mut w = Writer::new(dir, problem, history, contact, Vec::new(), Vec::new(), Vec::new());
         if problem.model.output_trajectory {
             w.trajectory = Some(trajectory::TrajectoryWriter::create(&dir.join("trajectory.f64"), problem.dofs.n_free)?);
@@ -184,8 +165,8 @@ impl Writer {
     pub(crate) fn new(
         dir: &Path,
         problem: &Problem,
-        history: BufWriter<File>,
-        contact: Option<BufWriter<File>>,
+        history: AppendFile,
+        contact: Option<AppendFile>,
         frames: Vec<(f64, String)>,
         rows: Vec<ChartRow>,
         contact_frames: Vec<(usize, f64, Vec<NodeRecord>)>,
@@ -219,12 +200,12 @@ impl Writer {
     /// Record a step: a history row always; a frame and contact rows every `every` steps and
     /// when `last` is set. `state` is the simulation's state after the step (for the frame).
     pub fn record(&mut self, rec: &StepRecord, problem: &Problem, state: &State, last: bool) -> Result<()> {
-        let hp = self.dir.join("history.csv");
+        let mut row = String::with_capacity(512);
         for (j, (_, value)) in HISTORY.iter().enumerate() {
             let sep = if j + 1 == HISTORY.len() { "\n" } else { "," };
-            write!(self.history, "{}{sep}", value(rec)).map_err(csv_io(&hp))?;
+            let _ = write!(row, "{}{sep}", value(rec));
         }
-        self.history.flush().map_err(csv_io(&hp))?;
+        self.history.append(row.as_bytes())?;
         let e = &rec.energy;
         self.rows.push(ChartRow {
             t: rec.t,
@@ -251,7 +232,7 @@ impl Writer {
     fn frame(&mut self, rec: &StepRecord, p: &Problem, state: &State) -> Result<()> {
         let mut contact = vec![(0.0, 0.0, 0.0, 0.0, -1); p.mesh.n_nodes()];
         if let (Some(c), Some(w)) = (&p.contact, self.contact.as_mut()) {
-            let cp = self.dir.join("contact.csv");
+            let mut rows = String::with_capacity(160 * rec.nodes.len());
             for (i, nr) in rec.nodes.iter().enumerate() {
                 let node = c.nodes[i];
                 let x = p.mesh.point(node);
@@ -267,10 +248,11 @@ impl Writer {
                     row.extend(nr.v_t_vec.iter().chain(&nr.friction_vec).map(f64::to_string));
                 }
                 row.push(nr.bound.to_string());
-                writeln!(w, "{}", row.join(","))
-                .map_err(csv_io(&cp))?;
+                rows.push_str(&row.join(","));
+                rows.push('\n');
             }
-            w.flush().map_err(csv_io(&cp))?;
+            // the frame's rows whole, or none of them
+            w.append(rows.as_bytes())?;
         }
         if !rec.nodes.is_empty() {
             self.contact_frames.push((rec.step, rec.t, rec.nodes.clone()));
@@ -297,9 +279,19 @@ impl Writer {
 
     /// Write only the summary (used when a run fails), after the frame in flight.
     pub fn write_summary(&mut self, summary: &Summary) -> Result<()> {
-        self.wait()?;
+        let waited = self.wait();
         let json = serde_json::to_string_pretty(summary).map_err(|e| Error::Output(format!("summary.json: {e}")))?;
-        write_atomic(&self.dir.join("summary.json"), json.as_bytes())
+        write_atomic(&self.dir.join("summary.json"), json.as_bytes())?;
+        waited
+    }
+
+    /// The last resort when summary.json cannot be replaced through a temporary file (a full
+    /// disk has no room for a second copy): overwrite it where it is. Best effort: a run whose
+    /// summary cannot be written at all still returns its error.
+    pub fn write_summary_in_place(&mut self, summary: &Summary) {
+        if let Ok(json) = serde_json::to_string_pretty(summary) {
+            let _ = std::fs::write(self.dir.join("summary.json"), json.as_bytes());
+        }
     }
 
     /// Write plots/: energy.svg (the terms of (E.1) over its residual) and deformed.svg always; with contact, forces.svg,

@@ -1,16 +1,116 @@
-//! Reopening a run folder at a checkpoint: history.csv and contact.csv are cut back to the
-//! rows of steps ≤ the checkpoint (a run stopped later may have written more), frames after
-//! it are removed, series.pvd is rewritten, and the chart data are read back from the CSVs.
+//! Reopening a run folder at a checkpoint. First [`check`] proves, reading only, that the
+//! folder's files belong to the checkpoint: history.csv has every step from 0 on, one row each,
+//! through the checkpoint's step, and that row holds the checkpoint's state (its time and every
+//! energy term, bit for bit); contact.csv holds exactly the frames of the steps up to it; every
+//! such frame is on disk. Anything else is refused, naming the file and the mismatch. Then
+//! [`Writer::reopen`] cuts history.csv and contact.csv back to the rows of steps ≤ the
+//! checkpoint (a run stopped later may have written more), removes later frames, rewrites
+//! series.pvd and reads the chart data back from the CSVs.
 
-use std::fs::OpenOptions;
-use std::io::BufWriter;
 use std::path::Path;
 
-use super::{write_atomic, ChartRow, Writer};
+use super::{history_header, write_atomic, AppendFile, ChartRow, Writer};
+use crate::checkpoint::Checkpoint;
 use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::simulation::NodeRecord;
 use crate::step::NodeStatus;
+
+/// The history.csv columns a checkpoint's state is compared with: (column, value in the state).
+fn state_columns(cp: &Checkpoint, problem: &Problem) -> Vec<(&'static str, f64)> {
+    let s = cp.state();
+    let e = s.energy;
+    vec![
+        ("t", problem.time(cp.step)),
+        ("kinetic", e.kinetic),
+        ("elastic", e.elastic),
+        ("compliance", e.compliance),
+        ("external_work", e.external_work),
+        ("viscous_dissipation", e.viscous_dissipation),
+        ("friction_dissipation", e.friction_dissipation),
+        ("constraint_dissipation", e.constraint_dissipation),
+        ("persistency_dissipation", e.persistency_dissipation),
+        ("energy_residual", e.residual),
+        ("energy_scale", s.energy_scale),
+    ]
+}
+
+/// The steps that have a frame, up to and including `step`: every `output.every`-th (the frame
+/// of the last step of a scene is written only when the run completes).
+fn frame_steps(problem: &Problem, step: usize) -> Vec<usize> {
+    let every = problem.model.output_every;
+    if every == 0 { Vec::new() } else { (0..=step).step_by(every).collect() }
+}
+
+/// Prove, reading only, that the files in `dir` belong to the checkpoint `cp` (see the module
+/// documentation); Err names the file and the mismatch.
+pub fn check(dir: &Path, problem: &Problem, cp: &Checkpoint) -> Result<()> {
+    let refuse = |file: &str, m: String| Error::folder(dir.join(file), format!("{m}; the checkpoint (step {}) and this file do not belong together, so the run is not resumed", cp.step));
+    let read = |file: &str| std::fs::read_to_string(dir.join(file)).map_err(|e| refuse(file, format!("cannot be read ({e})")));
+    // history.csv: rows 0, 1, …, at least through the checkpoint's step, whole
+    let text = read("history.csv")?;
+    let mut lines = text.lines();
+    let header = lines.next().unwrap_or("");
+    if header != history_header() {
+        return Err(refuse("history.csv", "its header is not this version's history.csv header".into()));
+    }
+    let columns: Vec<&str> = header.split(',').collect();
+    let mut at_step: Option<Vec<&str>> = None;
+    let mut rows = 0usize;
+    for (i, line) in lines.enumerate() {
+        let fields: Vec<&str> = line.split(',').collect();
+        if fields.len() != columns.len() {
+            // a last row cut short by a kill after the checkpoint's step is cut off on resume
+            if i > cp.step {
+                break;
+            }
+            return Err(refuse("history.csv", format!("row {} (step {i}) has {} fields, not {}", i + 2, fields.len(), columns.len())));
+        }
+        match fields[0].parse::<usize>() {
+            Ok(s) if s == i => {}
+            Ok(s) => return Err(refuse("history.csv", format!("row {} is step {s} where step {i} belongs: the rows of steps {i}..{} are missing", i + 2, s.saturating_sub(1)))),
+            Err(_) => return Err(refuse("history.csv", format!("row {} does not start with a step number", i + 2))),
+        }
+        if i == cp.step {
+            at_step = Some(fields);
+        }
+        rows += 1;
+    }
+    let Some(row) = at_step else {
+        return Err(refuse("history.csv", format!("has the steps 0..{} only", rows.saturating_sub(1))));
+    };
+    for (name, want) in state_columns(cp, problem) {
+        let Some(c) = columns.iter().position(|c| *c == name) else { continue };
+        let got = row[c].parse::<f64>().ok();
+        if got.map(f64::to_bits) != Some(want.to_bits()) {
+            return Err(refuse("history.csv", format!("the row of step {} does not hold the checkpoint's state ({name} = {} there, {want} in checkpoint.json)", cp.step, row[c])));
+        }
+    }
+    // contact.csv and frames/: exactly the frames of the steps up to the checkpoint's
+    let expected = frame_steps(problem, cp.step);
+    if problem.contact.is_some() {
+        let text = read("contact.csv")?;
+        let mut steps: Vec<usize> = Vec::new();
+        for line in text.lines().skip(1) {
+            let Some(s) = line.split(',').next().and_then(|f| f.parse::<usize>().ok()) else { continue };
+            if s <= cp.step && steps.last() != Some(&s) {
+                steps.push(s);
+            }
+        }
+        if steps != expected {
+            let missing: Vec<usize> = expected.iter().copied().filter(|s| !steps.contains(s)).take(5).collect();
+            let extra: Vec<usize> = steps.iter().copied().filter(|s| !expected.contains(s)).take(5).collect();
+            return Err(refuse("contact.csv", format!("holds the frames of steps that are not this run's (missing: {missing:?}, unexpected: {extra:?})")));
+        }
+    }
+    for s in expected {
+        let name = format!("frames/frame_{s:05}.vtu");
+        if !dir.join(&name).is_file() {
+            return Err(refuse(&name, "is missing".into()));
+        }
+    }
+    Ok(())
+}
 
 /// Keep the header and the rows whose first field (the step) is ≤ `step`; returns the rows.
 fn cut_csv(path: &Path, step: usize) -> Result<Vec<Vec<String>>> {
@@ -45,7 +145,7 @@ fn column(header: &str, name: &str) -> Result<usize> {
 }
 
 impl Writer {
-    /// Reopen `dir` to continue after checkpoint step `step`.
+    /// Reopen `dir` to continue after checkpoint step `step` ([`check`] has accepted it).
     pub fn reopen(dir: &Path, problem: &Problem, step: usize) -> Result<Writer> {
         let hp = dir.join("history.csv");
         let header = std::fs::read_to_string(&hp).map_err(|e| Error::io(&hp, e))?.lines().next().unwrap_or("").to_string();
@@ -55,9 +155,8 @@ impl Writer {
         let contact_frames = contact_frames(&cut_csv(&cp, step)?, problem.mesh.dim());
         let frames = kept_frames(dir, problem, step);
         write_atomic(&dir.join("series.pvd"), super::vtu::pvd(&frames).as_bytes())?;
-        let open = |p: &Path| OpenOptions::new().append(true).open(p).map(BufWriter::new).map_err(|e| Error::io(p, e));
-        let contact = if problem.contact.is_some() { Some(open(&cp)?) } else { None };
-        let mut w = Writer::new(dir, problem, open(&hp)?, contact, frames, chart_rows, contact_frames);
+        let contact = if problem.contact.is_some() { Some(AppendFile::open(&cp)?) } else { None };
+        let mut w = Writer::new(dir, problem, AppendFile::open(&hp)?, contact, frames, chart_rows, contact_frames);
         if problem.model.output_trajectory {
             w.trajectory = Some(super::trajectory::TrajectoryWriter::reopen(&dir.join("trajectory.f64"), problem.dofs.n_free, step)?);
         }

@@ -41,6 +41,9 @@ pub struct ModelInfo {
     /// (C.k): the largest k for which the unfrozen step problem is convex, and where
     pub ck_step_limit: Option<f64>,
     pub ck_limiting_node: Option<usize>,
+    /// the limiting node for messages: by its tag in the mesh file where there is one
+    #[serde(skip)]
+    pub ck_limiting_name: String,
     /// why (C.k) gives no limit, when it does not
     pub ck_note: String,
     /// where the model switched on is less than the scene states (from validation)
@@ -81,6 +84,7 @@ impl ModelInfo {
             step: p.k,
             ck_step_limit: None,
             ck_limiting_node: None,
+            ck_limiting_name: String::new(),
             ck_note: "no velocity-dependent friction: every step problem is convex".into(),
             scene_warnings: s.warnings.clone(),
         };
@@ -163,6 +167,7 @@ impl ModelInfo {
         if let Some((k, i)) = c.convex_step_limit(&masses, a_v).filter(|_| !masses.is_empty()) {
             self.ck_step_limit = Some(k);
             self.ck_limiting_node = Some(c.nodes[i]);
+            self.ck_limiting_name = p.mesh.node_name(c.nodes[i]);
             self.ck_note = if k == 0.0 {
                 "the modified mass puts zero mass on the contact nodes: the inertia no longer convexifies the \
                  friction term, so (C.k) admits no step; F.1 still applies"
@@ -210,8 +215,8 @@ impl ModelInfo {
         match self.ck_step_limit {
             Some(k) if k == 0.0 => v.push(format!("(C.k)          : no admissible step — {}", self.ck_note)),
             Some(k) => v.push(format!(
-                "(C.k)          : the unfrozen step problem is convex for k <= {k:.4e} (limited at node {})",
-                self.ck_limiting_node.unwrap_or(0)
+                "(C.k)          : the unfrozen step problem is convex for k <= {k:.4e} (limited at {})",
+                self.ck_limiting_name
             )),
             None => v.push(format!("(C.k)          : no limit — {}", self.ck_note)),
         }
@@ -242,10 +247,10 @@ impl ModelInfo {
         }
         (self.step > k).then(|| {
             format!(
-                "time.step = {} exceeds the (C.k) limit {k:.4e} (node {}): the unfrozen step problem may be nonconvex; \
+                "time.step = {} exceeds the (C.k) limit {k:.4e} ({}): the unfrozen step problem may be nonconvex; \
                  F.1 may need more iterations or relaxation < 1",
                 self.step,
-                self.ck_limiting_node.unwrap_or(0)
+                self.ck_limiting_name
             )
         })
     }
@@ -272,10 +277,18 @@ pub struct Timing {
 /// summary.json.
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
+    /// the dyncontact that wrote the folder
+    pub version: String,
     pub scene: String,
     pub description: String,
-    /// completed | failed | interrupted (running while the run goes on)
+    /// running (from the start) | completed | failed | interrupted
     pub status: RunStatus,
+    /// this run's identity: a fresh run makes a new one, a resumed run keeps it, and its
+    /// checkpoint carries it (resume refuses a checkpoint of another run)
+    pub run_id: String,
+    /// the fingerprint of everything the run read: the scene as validated and the bytes of
+    /// its mesh file (crate::fingerprint::inputs)
+    pub inputs_fingerprint: String,
     pub failure: Option<String>,
     /// the kind of the failure (`Error::kind`: non_finite, solver, input, interrupted, output)
     pub failure_kind: Option<String>,
@@ -283,6 +296,9 @@ pub struct Summary {
     pub steps_completed: usize,
     pub final_time: f64,
     pub wall_time_s: f64,
+    /// the process's peak resident memory (Linux VmHWM) at the end of the run, in MB; in a
+    /// sweep run in one process, shared by the points running at once
+    pub peak_memory_mb: Option<f64>,
     pub timing: Timing,
     /// the form of the Delassus operator ("dense" | "sparse" | "none") and, for the sparse form,
     /// its probing facts (radius, colours, solves, density, measured apply error)
@@ -307,5 +323,8 @@ pub struct Summary {
     pub unfrozen_fallbacks: usize,
     pub max_abs_energy_residual: f64,
     pub max_relative_energy_residual: f64,
+    /// steps whose (E.1) residual exceeded `solver.energy_residual_limit` (with
+    /// `energy_residual_action = "warn"`; with "fail" the first one ends the run)
+    pub energy_guard_exceeded_steps: usize,
     pub warnings: Vec<String>,
 }

@@ -2,9 +2,16 @@
 //! ran here (`dyncontact sweep`) or as Snakemake jobs (`dyncontact sweep collect DIR`).
 //!
 //! sweep.csv has one row per point: `point`, one column per axis (named by its key or name, the
-//! value's label), `status` (completed, failed, interrupted, or missing when the point has not
-//! run), `wall_time_s`, the figures of [`FIGURES`] (from the point's history.csv and
-//! summary.json; empty where the run gave none), and `reason` (why it failed).
+//! value's label), `status`, `wall_time_s`, the figures of [`FIGURES`] (from the point's
+//! history.csv and summary.json; empty where the run gave none), and `reason` (why it failed,
+//! or why it is corrupt).
+//!
+//! Every point's files are checked before its figures are read: summary.json readable with a
+//! known status; history.csv with one row per completed step (steps_completed + 1 rows, steps
+//! 0, 1, … in order), every value a finite number; a completed point's inputs (the scene and
+//! the files it reads) unchanged since it ran. A point that fails a check is `corrupt`, with the
+//! reason, and no figure of it is reported. Statuses: completed, failed, interrupted, running
+//! (a run in progress, or killed), missing (not run yet), corrupt.
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -66,6 +73,23 @@ pub fn point_status(pd: &Path) -> Option<String> {
     v.get("status").and_then(|s| s.as_str()).map(str::to_string)
 }
 
+/// Whether the point folder holds a completed run of exactly `scene_text` and the files it
+/// reads now (its summary's inputs fingerprint is that of the scene and its mesh as they are).
+pub fn completed_with(pd: &Path, scene_text: &str) -> bool {
+    let Some(v) = read_json(&pd.join("summary.json")) else { return false };
+    let recorded = v.get("inputs_fingerprint").and_then(|s| s.as_str());
+    v.get("status").and_then(|s| s.as_str()) == Some("completed") && recorded.is_some() && recorded == current_inputs(pd, scene_text).as_deref()
+}
+
+/// The inputs fingerprint of a point's scene with its files as they are now.
+fn current_inputs(pd: &Path, scene_text: &str) -> Option<String> {
+    let model = crate::scene::Scene::from_toml(scene_text, "scene.toml").and_then(|s| s.validate()).ok()?;
+    crate::fingerprint::inputs(&model, pd).ok()
+}
+
+/// The statuses summary.json may hold.
+const STATUSES: [&str; 4] = ["running", "completed", "failed", "interrupted"];
+
 fn read_json(p: &Path) -> Option<serde_json::Value> {
     serde_json::from_str(&std::fs::read_to_string(p).ok()?).ok()
 }
@@ -79,10 +103,19 @@ pub fn rows(dir: &Path) -> Result<(Plan, Vec<Row>)> {
 
 /// One point's row.
 fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
-    let axes = plan.axes.iter().zip(&p.choice).map(|(a, &c)| a.labels[c].clone()).collect();
-    let Some(summary) = read_json(&pd.join("summary.json")) else {
-        return Ok(Row { point: p.id.clone(), axes, status: "missing".into(), wall_time_s: None, figures: vec![String::new(); FIGURES.len()], reason: String::new() });
+    let axes: Vec<String> = plan.axes.iter().zip(&p.choice).map(|(a, &c)| a.labels[c].clone()).collect();
+    let bare = |status: &str, reason: String| Row { point: p.id.clone(), axes: axes.clone(), status: status.into(), wall_time_s: None, figures: vec![String::new(); FIGURES.len()], reason };
+    let sp = pd.join("summary.json");
+    if !sp.exists() {
+        return Ok(bare("missing", String::new()));
+    }
+    let summary = match std::fs::read_to_string(&sp).map_err(|e| e.to_string()).and_then(|t| serde_json::from_str::<serde_json::Value>(&t).map_err(|e| e.to_string())) {
+        Ok(v) => v,
+        Err(e) => return Ok(bare("corrupt", format!("summary.json is not readable JSON ({e})"))),
     };
+    if let Err(reason) = check_point(&summary, pd) {
+        return Ok(bare("corrupt", reason));
+    }
     let text = |k: &str| summary.get(k).and_then(|v| v.as_str()).unwrap_or_default().to_string();
     let number = |k: &str| summary.get(k).and_then(|v| v.as_f64());
     let mut figures: HashMap<&str, String> = HashMap::new();
@@ -127,6 +160,48 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
     // names this folder) is not its reason
     let reason = if status == "interrupted" { "interrupted: runs again when the sweep runs again".to_string() } else { text("failure") };
     Ok(Row { point: p.id.clone(), axes, status, wall_time_s: number("wall_time_s"), figures: FIGURES.iter().map(|f| figures.remove(f).unwrap_or_default()).collect(), reason })
+}
+
+/// A point's files agree: a known status; history.csv, where the run wrote one, with
+/// steps_completed + 1 whole rows of finite numbers, steps in order; a completed run with its
+/// history and with the inputs it ran with. Err: why not.
+fn check_point(summary: &serde_json::Value, pd: &Path) -> std::result::Result<(), String> {
+    let status = summary.get("status").and_then(|v| v.as_str()).ok_or("summary.json has no status")?;
+    if !STATUSES.contains(&status) {
+        return Err(format!("summary.json has the unknown status {status:?}"));
+    }
+    let steps = summary.get("steps_completed").and_then(|v| v.as_u64()).ok_or("summary.json has no steps_completed")? as usize;
+    let hp = pd.join("history.csv");
+    if !hp.exists() {
+        // a run that could not start writes no history; any run that started does
+        return if status == "failed" && steps == 0 { Ok(()) } else { Err(format!("history.csv is missing for a {status} run of {steps} steps")) };
+    }
+    let text = std::fs::read_to_string(&hp).map_err(|e| format!("history.csv cannot be read ({e})"))?;
+    let mut lines = text.lines();
+    let width = lines.next().map(|h| h.split(',').count()).ok_or("history.csv is empty")?;
+    let mut rows = 0usize;
+    for (i, line) in lines.enumerate() {
+        let fields: Vec<&str> = line.split(',').collect();
+        if fields.len() != width {
+            return Err(format!("history.csv row {} has {} fields, not {width} (a truncated file?)", i + 2, fields.len()));
+        }
+        if fields[0].parse::<usize>() != Ok(i) {
+            return Err(format!("history.csv row {} is not step {i}", i + 2));
+        }
+        if let Some((c, v)) = fields.iter().enumerate().find(|(_, v)| !v.parse::<f64>().is_ok_and(f64::is_finite)) {
+            return Err(format!("history.csv row {} column {} holds {v:?}, not a finite number", i + 2, c + 1));
+        }
+        rows += 1;
+    }
+    // a running (or killed) run may be one row ahead of its last summary
+    if rows != steps + 1 && !(status == "running" && rows >= steps + 1) {
+        return Err(format!("history.csv has {rows} rows of steps where summary.json reports {steps} steps (so {} rows)", steps + 1));
+    }
+    let scene_text = std::fs::read_to_string(pd.join("scene.toml")).map_err(|e| format!("scene.toml cannot be read ({e})"))?;
+    if status == "completed" && summary.get("inputs_fingerprint").and_then(|v| v.as_str()) != current_inputs(pd, &scene_text).as_deref() {
+        return Err("its inputs changed since it ran (the scene, or a file it reads such as its mesh): run the sweep again".into());
+    }
+    Ok(())
 }
 
 /// A point's history.csv: its header and rows (numbers as written).

@@ -1,8 +1,14 @@
 //! Running a sweep's points on this machine: `jobs` worker threads take the points in order,
 //! each point one `run` into its folder (the same library call as `dyncontact run`, numerics
 //! sequential inside each), a progress bar over points. A point already completed with the same
-//! scene is skipped, so an interrupted sweep resumes; a point that fails is recorded with its
-//! reason (its summary.json says `failed` and why) and the others go on.
+//! scene and inputs is skipped, so an interrupted sweep resumes; a point that fails is recorded
+//! with its reason (its summary.json says `failed` and why) and the others go on.
+//!
+//! A point that reaches a final outcome — completed, or failed in a way that running it again
+//! would repeat (the solver, its input) — gets the marker `points/<id>.done`: the output of the
+//! Snakefile's rule, which runs one point with `dyncontact sweep point points/<id>` ([`run_one`],
+//! the same code as here). An interrupted, killed or disk-full point has no marker, so Snakemake
+//! runs it again.
 
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -56,18 +62,23 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
     // points too large for this machine (its free memory measured once, before any point runs)
     // are refused as `run` refuses them, before anything starts
     let available = crate::resources::available_memory();
+    let mut largest = 0.0f64;
     let todo: Vec<usize> = todo
         .into_iter()
         .filter(|&i| {
             let pd = Plan::point_dir(dir, &plan.points[i].id);
-            let fits = Scene::from_toml(&plan.points[i].scene_text, "scene.toml")
-                .and_then(|s| s.validate())
-                .and_then(|m| crate::resources::check_fits(&crate::resources::estimate(&m, &pd)?, available));
+            let fits = Scene::from_toml(&plan.points[i].scene_text, "scene.toml").and_then(|s| s.validate()).and_then(|m| {
+                let e = crate::resources::estimate(&m, &pd)?;
+                crate::resources::check_fits(&e, available)?;
+                largest = largest.max(e.total());
+                Ok(())
+            });
             match fits {
                 Ok(()) => true,
                 Err(e) => {
                     let _ = super::clear_outputs(&pd);
                     let _ = write_failed_start(&pd, &plan.points[i].id, &e);
+                    let _ = crate::output::write_atomic(&marker(&pd), b"");
                     if let Ok(mut slot) = outcomes[i].lock() {
                         *slot = Outcome::Failed(e.to_string());
                     }
@@ -76,12 +87,25 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
             }
         })
         .collect();
+    // the points that run at once must fit together
+    let at_once = opts.jobs.clamp(1, todo.len().max(1));
+    if let Some(avail) = available.filter(|a| at_once as f64 * largest > *a) {
+        return Err(Error::scene(
+            "--jobs",
+            format!(
+                "{at_once} points at once would need about {:.0} MB (the largest point {:.0} MB each) but {:.0} MB are available: lower --jobs",
+                at_once as f64 * largest / 1e6,
+                largest / 1e6,
+                avail / 1e6
+            ),
+        ));
+    }
     let next = AtomicUsize::new(0);
     let stopped = || opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
     // each point's numerics run sequentially: the parallelism is across points
     faer::set_global_parallelism(faer::Par::Seq);
     std::thread::scope(|scope| {
-        for _ in 0..opts.jobs.clamp(1, todo.len().max(1)) {
+        for _ in 0..at_once {
             scope.spawn(|| loop {
                 if stopped() {
                     break;
@@ -116,12 +140,56 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
     Ok(outcomes.into_iter().map(|m| m.into_inner().unwrap_or(Outcome::NotRun)).collect())
 }
 
+/// The marker of a point's final outcome: `points/<id>.done` beside its folder.
+pub fn marker(pd: &Path) -> std::path::PathBuf {
+    pd.with_extension("done")
+}
+
+/// Whether a failure of this kind is a point's final outcome (running it again would repeat it).
+fn is_final(kind: &str) -> bool {
+    matches!(kind, "solver" | "non_finite" | "linear_algebra" | "input")
+}
+
+/// `dyncontact sweep point points/<id>`: run one point of a sweep folder from its scene.toml, as
+/// the in-process sweep does. Ok when the point reached a final outcome (its marker is written);
+/// Err otherwise, with the reason.
+pub fn run_one(pd: &Path, interrupt: Option<Arc<AtomicBool>>) -> Result<Outcome> {
+    let sp = pd.join("scene.toml");
+    let text = std::fs::read_to_string(&sp).map_err(|e| Error::read(&sp, e))?;
+    match run_point(pd, &text, interrupt) {
+        Outcome::Interrupted => Err(Error::Interrupted { step: 0, time: 0.0 }),
+        o if marker(pd).exists() => Ok(o),
+        Outcome::Failed(reason) => Err(Error::folder(pd, format!("the point did not reach a final outcome: {reason}"))),
+        o => Ok(o),
+    }
+}
+
 /// One point: its folder cleared (but its scene.toml), its scene read, validated and run into
-/// `pd` (a failure before the run starts writes summary.json saying why). The memory check of
-/// `run` is left out: it measures the memory free now, which the other points running take.
+/// `pd` (a failure before the run starts writes summary.json saying why); the marker written
+/// when the outcome is final. The memory check of `run` is left out: it measures the memory
+/// free now, which the other points running take.
 fn run_point(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> Outcome {
-    if let Err(e) = super::clear_outputs(pd) {
-        return Outcome::Failed(e.to_string());
+    let _ = std::fs::remove_file(marker(pd));
+    let (outcome, kind) = run_point_once(pd, text, interrupt);
+    if matches!(outcome, Outcome::Completed) || kind.is_some_and(is_final) {
+        if let Err(e) = crate::output::write_atomic(&marker(pd), b"") {
+            return Outcome::Failed(e.to_string());
+        }
+    }
+    outcome
+}
+
+/// [`run_point`] without the marker: the outcome and, for a failure, its kind.
+fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> (Outcome, Option<&'static str>) {
+    // the point's folder is the sweep's: cleared under its lock (another process running this
+    // point keeps it), then run (which locks it again)
+    let cleared = crate::output::folder::lock_run(pd).and_then(|lock| {
+        super::clear_outputs(pd)?;
+        drop(lock);
+        Ok(())
+    });
+    if let Err(e) = cleared {
+        return (Outcome::Failed(e.to_string()), Some(e.kind()));
     }
     let scene = Scene::from_toml(text, &pd.join("scene.toml").display().to_string());
     let name = scene.as_ref().map(|s| s.name.clone()).unwrap_or_default();
@@ -130,13 +198,13 @@ fn run_point(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> Outco
         Ok(p) => p,
         Err(e) => {
             let _ = write_failed_start(pd, &name, &e);
-            return Outcome::Failed(e.to_string());
+            return (Outcome::Failed(e.to_string()), Some(e.kind()));
         }
     };
     let opts = RunOptions { out: pd.to_path_buf(), progress: false, checkpoint_every: None, resume: false, stop_after: None, interrupt };
     match run(&problem, &opts) {
-        Ok(_) => Outcome::Completed,
-        Err(Error::Interrupted { .. }) => Outcome::Interrupted,
-        Err(e) => Outcome::Failed(e.to_string()),
+        Ok(_) => (Outcome::Completed, None),
+        Err(Error::Interrupted { .. }) => (Outcome::Interrupted, Some("interrupted")),
+        Err(e) => (Outcome::Failed(e.to_string()), Some(e.kind())),
     }
 }

@@ -1,10 +1,16 @@
 //! `DIR/Snakefile` and `DIR/config.yaml`: the same points as Snakemake jobs, so a workstation
 //! (`snakemake --cores N`) or a cluster (`snakemake --executor slurm --jobs 200`, README) runs the
 //! sweep and `dyncontact sweep collect .` gathers the same sweep.csv. One rule runs one point
-//! (`dyncontact run points/<id>/scene.toml --out points/<id>`; a point that fails still leaves
-//! its summary.json, which says why, so the others go on and the collector records it), one
-//! collects. config.yaml names the binary and each point's resources: `mem_mb` from `check`'s
-//! memory estimate (×1.5 + 100 MB of headroom) and a conservative `runtime` in minutes.
+//! (`dyncontact sweep point points/<id>`, the in-process sweep's code), whose output is the
+//! marker `points/<id>.done` that only a final outcome writes (completed, or a failure that a
+//! rerun would repeat, recorded in the point's summary.json): an interrupted or killed point has
+//! none, so Snakemake runs it again. One rule collects. config.yaml names the binary and each
+//! point's resources: `mem_mb` from `check`'s memory estimate (×1.5 + 100 MB of headroom) and a
+//! conservative `runtime` in minutes.
+//!
+//! No user text reaches the Snakefile but the sweep's name, which is a safe name (letters,
+//! digits, `._-+`); the binary's path is quoted for the shell by Snakemake (`:q`) and written
+//! in config.yaml as a JSON string (valid YAML, every character escaped).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -37,24 +43,24 @@ rule point:
     input:
         "points/{{point}}/scene.toml",
     output:
-        "points/{{point}}/summary.json",
+        # written only by a final outcome (completed, or a failure a rerun would repeat)
+        "points/{{point}}.done",
     log:
-        "points/{{point}}/run.log",
+        "points/{{point}}.log",
     resources:
         mem_mb=lambda wildcards: config["points"][wildcards.point]["mem_mb"],
         runtime=lambda wildcards: config["points"][wildcards.point]["runtime"],
     shell:
-        # a run that fails still writes its summary.json (status "failed" and why): keep going
-        '"{{config[dyncontact]}}" run {{input}} --out points/{{wildcards.point}} > {{log}} 2>&1 || test -f {{output}}'
+        "{{config[dyncontact]:q}} sweep point points/{{wildcards.point}} > {{log:q}} 2>&1"
 
 
 rule collect:
     input:
-        expand("points/{{point}}/summary.json", point=POINTS),
+        expand("points/{{point}}.done", point=POINTS),
     output:
         "sweep.csv",
     shell:
-        '"{{config[dyncontact]}}" sweep collect .'
+        "{{config[dyncontact]:q}} sweep collect ."
 "#,
         name = plan.name,
         n = plan.points.len()
@@ -66,7 +72,8 @@ rule collect:
 pub fn config(plan: &Plan, binary: &str) -> String {
     let mut s = String::from("# written by `dyncontact sweep`: the binary that runs a point, and each point's resources\n");
     s.push_str("# (mem_mb: the memory estimate of `dyncontact check`; runtime: minutes, a conservative bound)\n");
-    let _ = writeln!(s, "dyncontact: \"{}\"", binary.replace('\\', "\\\\").replace('"', "\\\""));
+    // a JSON string is a YAML double-quoted scalar with every special character escaped
+    let _ = writeln!(s, "dyncontact: {}", serde_json::to_string(binary).unwrap_or_else(|_| "\"dyncontact\"".into()));
     s.push_str("points:\n");
     for p in &plan.points {
         let _ = writeln!(s, "  {}: {{mem_mb: {}, runtime: {}}}", p.id, p.mem_mb, p.runtime_min);

@@ -19,7 +19,7 @@ use dyncontact::step::newton::{self, NewtonSettings};
 /// The academic scene on `cells`, built into a problem.
 fn academic(cells: [i64; 2]) -> Problem {
     let mut s = Scene::default_scene();
-    s.domain.cells = Some(cells);
+    s.domain.cells = Some(cells.to_vec());
     s.validate().expect("valid scene");
     Problem::from_scene(&s, Path::new(".")).expect("problem")
 }

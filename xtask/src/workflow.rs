@@ -2,10 +2,15 @@
 //! Snakemake pinned in `xtask/crosscheck/requirements.txt` (installed into the cross-check's venv):
 //!
 //! 1. `dyncontact sweep fixtures/sweeps/six_points.toml` runs its 6 points in-process (2 jobs);
-//! 2. the same sweep with `--plan-only` in another folder, then the generated Snakefile with
-//!    `snakemake --cores 2`, whose last job is `dyncontact sweep collect .`;
+//! 2. the same sweep with `--plan-only` in another folder, planned by a copy of the binary in a
+//!    folder whose name holds a quote, `$(touch PWNED)` and spaces, then the generated Snakefile
+//!    with `snakemake --cores 2`, whose last job is `dyncontact sweep collect .`: the path
+//!    reaches the shell quoted (no PWNED file appears);
 //! 3. the two sweep.csv files must be equal, figure for figure (the wall times aside);
-//! 4. `snakemake -n` on the stability map's sweeps (fixtures/sweeps/stability_*.toml, planned
+//! 4. one point's marker and sweep.csv removed (as a Snakemake run leaves them when a point was
+//!    interrupted or killed: no marker, so no collect): `snakemake -n` lists exactly one `point`
+//!    job to run again;
+//! 5. `snakemake -n` on the stability map's sweeps (fixtures/sweeps/stability_*.toml, planned
 //!    with `--plan-only`) must list one `point` job per point of the plan.
 
 use std::fmt::Write as _;
@@ -31,8 +36,18 @@ pub fn check(root: &Path, bin: &Path, python: &Path, out_root: &Path) -> Result<
     let version = run(Command::new(&snakemake).arg("--version")).map(|v| v.trim().to_string()).unwrap_or_else(|e| e);
     let _ = writeln!(report, "snakemake {version}");
     run(Command::new(bin).current_dir(root).arg("sweep").arg(&sweep).arg("--out").arg(&inproc).args(["--jobs", "2"]))?;
-    run(Command::new(bin).current_dir(root).arg("sweep").arg(&sweep).arg("--out").arg(&snake).arg("--plan-only"))?;
+    let odd = fresh_dir(&out_root.join("we\"ird $(touch PWNED) dir"))?;
+    let odd_bin = odd.join(bin.file_name().unwrap_or_default());
+    std::fs::copy(bin, &odd_bin).map_err(|e| format!("copy {} to {}: {e}", bin.display(), odd_bin.display()))?;
+    run(Command::new(&odd_bin).current_dir(root).arg("sweep").arg(&sweep).arg("--out").arg(&snake).arg("--plan-only"))?;
     run(Command::new(&snakemake).current_dir(&snake).args(["--cores", "2", "--quiet", "all"]))?;
+    let pwned: Vec<_> = [&snake, &odd, out_root, root].iter().map(|d| d.join("PWNED")).filter(|p| p.exists()).collect();
+    if pwned.is_empty() {
+        let _ = writeln!(report, "the binary at a path holding a quote and `$(touch PWNED)` ran every point; nothing ran from its name");
+    } else {
+        ok = false;
+        let _ = writeln!(report, "FAILED: the binary's path ran as code: {pwned:?}");
+    }
     let (a, b) = (read(&inproc.join("sweep.csv"))?, read(&snake.join("sweep.csv"))?);
     match compare(&a, &b) {
         Ok(n) => {
@@ -42,6 +57,16 @@ pub fn check(root: &Path, bin: &Path, python: &Path, out_root: &Path) -> Result<
             ok = false;
             let _ = writeln!(report, "FAILED: six-point sweep, in-process vs Snakemake: {e}");
         }
+    }
+    for f in [snake.join("points").join("p002.done"), snake.join("sweep.csv")] {
+        std::fs::remove_file(&f).map_err(|e| format!("{}: {e}", f.display()))?;
+    }
+    let dry = run(Command::new(&snakemake).current_dir(&snake).args(["-n", "all"]))?;
+    if job_count(&dry, "point") == Some(1) {
+        let _ = writeln!(report, "a point without its marker (interrupted or killed): `snakemake -n` runs it again, and only it");
+    } else {
+        ok = false;
+        let _ = writeln!(report, "FAILED: after removing one marker `snakemake -n` lists {:?} point jobs, not 1", job_count(&dry, "point"));
     }
     for name in ["stability_academic", "stability_impact"] {
         let dir = fresh_dir(&out_root.join(format!("plan-{name}")))?;

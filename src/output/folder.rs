@@ -1,0 +1,165 @@
+//! The run folder contract (README, "Outputs"): a run owns its folder.
+//!
+//! A run owns the files it writes ([`OWNED`], the frames in `frames/` and the charts in
+//! `plots/`, and their temporaries). Besides those a run folder may hold only scene files
+//! (`*.toml`, such as the scene a sweep or the user put there) and `run.log`, which a run
+//! neither reads nor removes. A fresh run
+//! 1. takes the folder's lock (`run.lock`: one process writes a folder at a time; the lock
+//!    goes with the process, so a killed run leaves none behind);
+//! 2. refuses a folder that holds anything else, naming it (so `--out ~` never deletes a file
+//!    that a run did not write);
+//! 3. checks that it can write there before it changes anything;
+//! 4. writes summary.json with status `running`;
+//! 5. removes the earlier run's files (all of them: history, frames, checkpoint, trajectory,
+//!    charts), and only then writes its own.
+//!
+//! So a killed run never reads `completed`, and a failure before step 4 leaves the folder as it
+//! was.
+
+use std::fs::{File, OpenOptions};
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+
+/// Files at the top of a run folder that a run writes.
+pub const OWNED: [&str; 7] = ["summary.json", "history.csv", "contact.csv", "checkpoint.json", "trajectory.f64", "series.pvd", "run.lock"];
+/// Subfolders whose files of the given extension a run writes.
+const OWNED_IN: [(&str, &str); 2] = [("frames", "vtu"), ("plots", "svg")];
+/// Whether a file at the top of a run folder is one the run keeps without owning it: a scene
+/// (`*.toml`) or a log of the run (`run.log`).
+fn kept(name: &str) -> bool {
+    name == "run.log" || Path::new(name).extension().is_some_and(|x| x == "toml")
+}
+/// The lock file.
+const LOCK: &str = "run.lock";
+
+/// Whether `name` (a file at the top of a run folder) is the run's: an owned file or the
+/// temporary of one (`summary.json.tmp`, written by a rename-into-place).
+fn owned_top(name: &str) -> bool {
+    let base = name.strip_suffix(".tmp").unwrap_or(name);
+    OWNED.contains(&base)
+}
+
+/// Whether `name` in the subfolder `sub` is the run's: `frame_00010.vtu`, `energy.svg`, or
+/// their temporaries.
+fn owned_in(sub: &str, name: &str) -> bool {
+    let base = name.strip_suffix(".tmp").unwrap_or(name);
+    OWNED_IN.iter().any(|(d, ext)| *d == sub && Path::new(base).extension().is_some_and(|x| x == *ext))
+}
+
+/// What `dir` holds that a run does not own (relative paths), at most `limit` of them.
+pub fn foreign(dir: &Path, limit: usize) -> Result<Vec<String>> {
+    let mut found = Vec::new();
+    let Ok(rd) = std::fs::read_dir(dir) else { return Ok(found) };
+    for e in rd.flatten() {
+        let name = e.file_name().to_string_lossy().to_string();
+        let path = e.path();
+        if let Some((sub, _)) = OWNED_IN.iter().find(|(d, _)| *d == name) {
+            if !path.is_dir() {
+                found.push(format!("{name} (not a folder)"));
+            } else if let Ok(inner) = std::fs::read_dir(&path) {
+                for f in inner.flatten() {
+                    let fname = f.file_name().to_string_lossy().to_string();
+                    if !(owned_in(sub, &fname) && f.path().is_file()) {
+                        found.push(format!("{name}/{fname}"));
+                    }
+                }
+            }
+        } else if !((owned_top(&name) || kept(&name)) && path.is_file()) {
+            found.push(name);
+        }
+        if found.len() >= limit {
+            break;
+        }
+    }
+    found.sort();
+    Ok(found)
+}
+
+/// The lock of a folder, held while a run (or a sweep) writes it; released when dropped or
+/// when the process ends, however it ends.
+#[derive(Debug)]
+pub struct Lock {
+    _file: File,
+}
+
+/// Lock `dir` for this process through `dir/<name>` (created with `dir` if missing). Refused
+/// when another process holds it. On a file system without locks (some network file systems)
+/// the run goes on unlocked: nothing else could be done there.
+pub fn lock(dir: &Path, name: &str) -> Result<Lock> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let p = dir.join(name);
+    let file = OpenOptions::new().create(true).truncate(false).write(true).open(&p).map_err(|e| Error::io(&p, e))?;
+    match file.try_lock() {
+        Ok(()) => Ok(Lock { _file: file }),
+        Err(std::fs::TryLockError::WouldBlock) => Err(Error::folder(
+            dir,
+            format!("another dyncontact process is writing this folder (it holds {name}); wait for it to end or choose another folder"),
+        )),
+        Err(std::fs::TryLockError::Error(_)) => Ok(Lock { _file: file }),
+    }
+}
+
+/// Lock a run folder ([`lock`] with `run.lock`).
+pub fn lock_run(dir: &Path) -> Result<Lock> {
+    lock(dir, LOCK)
+}
+
+/// Before a fresh run writes anything: refuse a folder holding files a run does not own, and
+/// check that the folder (and its frames/ and plots/, where they exist) can be written.
+/// Returns whether an earlier run's files are there (they are about to be replaced).
+pub fn check_fresh(dir: &Path) -> Result<bool> {
+    let foreign = foreign(dir, 6)?;
+    if !foreign.is_empty() {
+        let more = if foreign.len() > 5 { ", …" } else { "" };
+        let shown = foreign.iter().take(5).cloned().collect::<Vec<_>>().join(", ");
+        return Err(Error::folder(
+            dir,
+            format!(
+                "holds files that are not a dyncontact run's ({shown}{more}); a run replaces the whole folder, so give an empty or new folder with --out"
+            ),
+        ));
+    }
+    for sub in ["", "frames", "plots"] {
+        let d = dir.join(sub);
+        if d.is_dir() {
+            probe(&d)?;
+        }
+    }
+    Ok(OWNED.iter().any(|f| *f != LOCK && dir.join(f).exists()) || OWNED_IN.iter().any(|(d, _)| dir.join(d).is_dir()))
+}
+
+/// Create and remove a file in `dir`: Err (naming `dir`) when the folder cannot be written.
+fn probe(dir: &Path) -> Result<()> {
+    let p: PathBuf = dir.join(format!(".dyncontact-probe-{}", std::process::id()));
+    File::create(&p).map_err(|e| Error::io(dir, e))?;
+    std::fs::remove_file(&p).map_err(|e| Error::io(dir, e))
+}
+
+/// Remove every file a run owns but summary.json and the lock (the new run's summary is already
+/// there), and the frames/ and plots/ files.
+pub fn clear(dir: &Path) -> Result<()> {
+    let remove = |p: &Path| match std::fs::remove_file(p) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(Error::io(p, e)),
+    };
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten() {
+            let name = e.file_name().to_string_lossy().to_string();
+            if owned_top(&name) && name != "summary.json" && name != LOCK {
+                remove(&e.path())?;
+            }
+        }
+    }
+    for (sub, _) in OWNED_IN {
+        if let Ok(rd) = std::fs::read_dir(dir.join(sub)) {
+            for e in rd.flatten() {
+                if owned_in(sub, &e.file_name().to_string_lossy()) {
+                    remove(&e.path())?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
