@@ -454,3 +454,12 @@ fn mesh_messages_name_the_file_tags() {
     println!("{e}");
     assert!(e.contains("tetrahedron 12 (nodes 101, 103, 102, 105) has zero (degenerate) volume"), "{e}");
 }
+
+/// (issue 22, minor) A mesh without physical groups has no named sides, and messages say so
+/// ("the mesh has no named sides …") instead of ending in an empty list.
+#[test]
+fn a_mesh_without_physical_groups_says_it_has_no_named_sides() {
+    let text = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n$EndNodes\n$Elements\n1\n1 2 0 1 2 3\n$EndElements\n";
+    let g = dyncontact::mesh::gmsh::parse_any(text, "bare.msh").expect("a mesh");
+    assert_eq!(g.side_list(), "no named sides (the mesh file defines no physical groups)");
+}
