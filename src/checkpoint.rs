@@ -74,7 +74,13 @@ pub struct Checkpoint {
 }
 
 impl Checkpoint {
-    pub fn new(run_id: &str, inputs: &str, s: &State, counters: Counters, factor: Option<crate::step::delassus::FactorKey>) -> Checkpoint {
+    pub fn new(
+        run_id: &str,
+        inputs: &str,
+        s: &State,
+        counters: Counters,
+        factor: Option<crate::step::delassus::FactorKey>,
+    ) -> Checkpoint {
         let e = &s.energy;
         let mut cp = Checkpoint {
             format: FORMAT,
@@ -86,8 +92,15 @@ impl Checkpoint {
             lambda: bits(&s.lambda),
             t_fric: bits(&s.t_fric),
             energy: [
-                e.kinetic, e.elastic, e.compliance, e.external_work, e.viscous_dissipation, e.friction_dissipation,
-                e.constraint_dissipation, e.persistency_dissipation, e.residual,
+                e.kinetic,
+                e.elastic,
+                e.compliance,
+                e.external_work,
+                e.viscous_dissipation,
+                e.friction_dissipation,
+                e.constraint_dissipation,
+                e.persistency_dissipation,
+                e.residual,
             ]
             .map(f64::to_bits),
             energy_scale: s.energy_scale.to_bits(),
@@ -110,7 +123,9 @@ impl Checkpoint {
 
     /// The first stored number that is not finite, by name.
     fn non_finite(&self) -> Option<String> {
-        let bad = |name: &str, x: &[u64]| x.iter().position(|b| !f64::from_bits(*b).is_finite()).map(|i| format!("{name}[{i}]"));
+        let bad = |name: &str, x: &[u64]| {
+            x.iter().position(|b| !f64::from_bits(*b).is_finite()).map(|i| format!("{name}[{i}]"))
+        };
         bad("u", &self.u)
             .or_else(|| bad("v", &self.v))
             .or_else(|| bad("lambda", &self.lambda))
@@ -155,7 +170,8 @@ impl Checkpoint {
     pub fn read(dir: &std::path::Path) -> Result<Checkpoint> {
         let p = dir.join("checkpoint.json");
         let refuse = |m: String| Error::folder(&p, m);
-        let text = std::fs::read_to_string(&p).map_err(|e| refuse(format!("cannot be read ({e}): there is nothing to resume from")))?;
+        let text = std::fs::read_to_string(&p)
+            .map_err(|e| refuse(format!("cannot be read ({e}): there is nothing to resume from")))?;
         let format = serde_json::from_str::<serde_json::Value>(&text).ok().and_then(|v| v.get("format")?.as_u64());
         if format.is_some_and(|f| f != u64::from(FORMAT)) {
             return Err(refuse(format!(
@@ -163,9 +179,12 @@ impl Checkpoint {
                 format.unwrap_or(0)
             )));
         }
-        let cp: Checkpoint = serde_json::from_str(&text).map_err(|e| refuse(format!("not a dyncontact checkpoint ({e})")))?;
+        let cp: Checkpoint =
+            serde_json::from_str(&text).map_err(|e| refuse(format!("not a dyncontact checkpoint ({e})")))?;
         if cp.checksum != cp.sum() {
-            return Err(refuse("its checksum does not match its contents: the file was changed or damaged after it was written".into()));
+            return Err(refuse(
+                "its checksum does not match its contents: the file was changed or damaged after it was written".into(),
+            ));
         }
         if let Some(what) = cp.non_finite() {
             return Err(refuse(format!("{what} is not finite: a checkpoint holds only finite values")));

@@ -46,7 +46,10 @@ impl StepEnergy {
     /// (E.1) The per-step defect ΔE − work + viscous + friction + constraint; zero up to
     /// solver tolerance for the midpoint scheme.
     pub fn residual(&self) -> f64 {
-        self.d_kinetic + self.d_elastic + self.d_compliance - self.work + self.viscous + self.friction + self.constraint
+        self.d_kinetic + self.d_elastic + self.d_compliance - self.work
+            + self.viscous
+            + self.friction
+            + self.constraint
             + self.persistency
     }
 }

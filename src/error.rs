@@ -37,12 +37,16 @@ pub enum Error {
     Output(String),
 
     /// The run was stopped (SIGINT or a step limit) after a completed step.
-    #[error("interrupted after step {step} (t = {time}); the outputs are valid up to that step and checkpoint.json holds it")]
+    #[error(
+        "interrupted after step {step} (t = {time}); the outputs are valid up to that step and checkpoint.json holds it"
+    )]
     Interrupted { step: usize, time: f64 },
 
     /// A sweep was stopped (SIGINT): the points that finished stay, the rest run when the same
     /// sweep is run again.
-    #[error("interrupted: {finished} of {total} points are done (sweep.csv has them); run the same sweep again to resume — completed points are skipped")]
+    #[error(
+        "interrupted: {finished} of {total} points are done (sweep.csv has them); run the same sweep again to resume — completed points are skipped"
+    )]
     SweepInterrupted { finished: usize, total: usize },
 
     /// A run or sweep folder that is not this run's to write, is in use by another process, or
@@ -134,7 +138,11 @@ impl Error {
             Error::Solver(f) if matches!(f.cause, crate::failure::StepFailureCause::NonFinite { .. }) => "non_finite",
             Error::Solver(_) => "solver",
             Error::LinearAlgebra(_) => "linear_algebra",
-            Error::Scene { .. } | Error::SceneSyntax { .. } | Error::Mesh { .. } | Error::Expression { .. } | Error::Read { .. } => "input",
+            Error::Scene { .. }
+            | Error::SceneSyntax { .. }
+            | Error::Mesh { .. }
+            | Error::Expression { .. }
+            | Error::Read { .. } => "input",
             Error::Interrupted { .. } | Error::SweepInterrupted { .. } => "interrupted",
             Error::Folder { .. } => "folder",
             Error::Output(_) | Error::Io { .. } => "output",

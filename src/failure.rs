@@ -147,7 +147,9 @@ impl fmt::Display for ConicStatus {
             ConicStatus::Settings(e) => write!(f, "Clarabel settings: {e}"),
             ConicStatus::Setup(e) => write!(f, "Clarabel setup: {e}"),
             ConicStatus::Stopped(s) => write!(f, "Clarabel stopped with status {s:?}"),
-            ConicStatus::MajorizationUnsettled { rounds } => write!(f, "majorization did not settle in {rounds} rounds"),
+            ConicStatus::MajorizationUnsettled { rounds } => {
+                write!(f, "majorization did not settle in {rounds} rounds")
+            }
         }
     }
 }

@@ -149,9 +149,14 @@ impl Cholesky {
         })?;
         // faer's Llt does not expose its symbolic part; a second symbolic analysis (cheap next to
         // the numeric one) gives the factor's size for the cost rules of the time loop
-        let factor_len = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), Default::default())
-            .map(|s| s.len_val())
-            .unwrap_or(usize::MAX);
+        let factor_len = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
+            a.symbolic(),
+            Side::Lower,
+            Default::default(),
+            Default::default(),
+        )
+        .map(|s| s.len_val())
+        .unwrap_or(usize::MAX);
         Ok(Cholesky { llt, n: a.nrows(), factor_len })
     }
 

@@ -4,20 +4,24 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Parser, Subcommand};
+use dyncontact::error::exit;
 use dyncontact::output::ModelInfo;
 use dyncontact::overrides::Override;
 use dyncontact::problem::Problem;
-use dyncontact::run::{run, RunOptions};
+use dyncontact::run::{RunOptions, run};
 use dyncontact::scene::Scene;
-use dyncontact::error::exit;
-use dyncontact::{resources, studies, Error};
+use dyncontact::{Error, resources, studies};
 
 #[derive(Parser)]
-#[command(name = "dyncontact", version, about = "Dynamic viscoelastic contact with normal compliance, finite penetration and slip-rate-dependent friction")]
+#[command(
+    name = "dyncontact",
+    version,
+    about = "Dynamic viscoelastic contact with normal compliance, finite penetration and slip-rate-dependent friction"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -189,7 +193,10 @@ macro_rules! esay {
 fn load(scene: Option<&Path>, set: &[String]) -> Result<(Scene, PathBuf), Error> {
     let overrides = set.iter().map(|a| Override::parse(a)).collect::<Result<Vec<_>, Error>>()?;
     match scene {
-        None => Ok((Scene::from_toml_with(dyncontact::scene::DEFAULT_SCENE, "<embedded academic scene>", &overrides)?, PathBuf::from("."))),
+        None => Ok((
+            Scene::from_toml_with(dyncontact::scene::DEFAULT_SCENE, "<embedded academic scene>", &overrides)?,
+            PathBuf::from("."),
+        )),
         Some(p) => {
             let s = Scene::from_file_with(p, &overrides)?;
             let dir = p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
@@ -240,18 +247,33 @@ fn main() -> ExitCode {
         Command::Run { scene, out, checkpoint_every, resume, stop_after, set } => {
             cmd_run(scene.as_deref(), set, out.as_deref(), *checkpoint_every, resume.as_deref(), *stop_after, stop)
         }
-        Command::Study { study: StudyKind::Penalty { scene, eps, out, jobs } } => cmd_penalty(scene.as_deref(), eps.as_deref(), out.as_deref(), *jobs),
+        Command::Study { study: StudyKind::Penalty { scene, eps, out, jobs } } => {
+            cmd_penalty(scene.as_deref(), eps.as_deref(), out.as_deref(), *jobs)
+        }
         Command::Study { study: StudyKind::Bench { out, quick, floor_only, bookkeeping_only } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/bench"));
-            studies::bench::run(&out, &studies::bench::BenchOptions { quick: *quick, floor_only: *floor_only, bookkeeping_only: *bookkeeping_only }).map(|report| say!("{report}"))
+            studies::bench::run(
+                &out,
+                &studies::bench::BenchOptions {
+                    quick: *quick,
+                    floor_only: *floor_only,
+                    bookkeeping_only: *bookkeeping_only,
+                },
+            )
+            .map(|report| say!("{report}"))
         }
         Command::Study { study: StudyKind::Stability { out, quick, jobs } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/stability"));
-            studies::stability::run(&out, &studies::stability::StabilityOptions { quick: *quick, jobs: jobs.unwrap_or(0) }).map(|report| say!("{report}"))
+            studies::stability::run(
+                &out,
+                &studies::stability::StabilityOptions { quick: *quick, jobs: jobs.unwrap_or(0) },
+            )
+            .map(|report| say!("{report}"))
         }
         Command::Study { study: StudyKind::BoundAt { out, quick } } => {
             let out = out.clone().unwrap_or_else(|| PathBuf::from("target/bound_at"));
-            studies::bound_at::run(&out, &studies::bound_at::BoundAtOptions { quick: *quick }).map(|report| say!("{report}"))
+            studies::bound_at::run(&out, &studies::bound_at::BoundAtOptions { quick: *quick })
+                .map(|report| say!("{report}"))
         }
         Command::ExportOperators { scene, out } => load(Some(scene), &[]).and_then(|(s, dir)| {
             let problem = Problem::from_scene(&s, &dir)?;
@@ -263,19 +285,26 @@ fn main() -> ExitCode {
         Command::Sweep { action: Some(SweepAction::Collect { dir }), .. } => cmd_collect(dir),
         Command::Sweep { action: Some(SweepAction::Point { point }), .. } => {
             faer::set_global_parallelism(faer::Par::Seq);
-            dyncontact::sweep::runner::run_one(point, Some(Arc::clone(stop))).map(|o| say!("{}: {o:?}", point.display()))
+            dyncontact::sweep::runner::run_one(point, Some(Arc::clone(stop)))
+                .map(|o| say!("{}: {o:?}", point.display()))
         }
         Command::Sweep { action: None, sweep: Some(file), out, jobs, plan_only, set, oversubscribe } => {
             cmd_sweep(file, out.as_deref(), *jobs, *plan_only, *oversubscribe, set, stop)
         }
-        Command::Sweep { action: None, sweep: None, .. } => Err(Error::scene("sweep", "give a sweep file (dyncontact sweep SWEEP.toml) or `collect DIR`")),
+        Command::Sweep { action: None, sweep: None, .. } => {
+            Err(Error::scene("sweep", "give a sweep file (dyncontact sweep SWEEP.toml) or `collect DIR`"))
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             esay!("error: {e}");
             let code = e.exit_code();
-            ExitCode::from(if code == exit::INTERRUPTED && signals.term.load(Ordering::SeqCst) { exit::TERMINATED } else { code })
+            ExitCode::from(if code == exit::INTERRUPTED && signals.term.load(Ordering::SeqCst) {
+                exit::TERMINATED
+            } else {
+                code
+            })
         }
     }
 }
@@ -339,10 +368,19 @@ fn cmd_run(
 
 /// `dyncontact study penalty`: the ε → 0 study (a sweep: fixtures/sweeps/penalty.toml on the
 /// scene), printed and written under OUT/study.
-fn cmd_penalty(scene: Option<&Path>, eps: Option<&[f64]>, out: Option<&Path>, jobs: Option<usize>) -> Result<(), Error> {
+fn cmd_penalty(
+    scene: Option<&Path>,
+    eps: Option<&[f64]>,
+    out: Option<&Path>,
+    jobs: Option<usize>,
+) -> Result<(), Error> {
     let (s, _) = load(scene, &[])?;
     let base = match scene {
-        None => dyncontact::sweep::Base { text: dyncontact::scene::DEFAULT_SCENE.to_string(), label: "<embedded academic scene>".into(), dir: PathBuf::from(".") },
+        None => dyncontact::sweep::Base {
+            text: dyncontact::scene::DEFAULT_SCENE.to_string(),
+            label: "<embedded academic scene>".into(),
+            dir: PathBuf::from("."),
+        },
         Some(p) => dyncontact::sweep::Base {
             text: std::fs::read_to_string(p).map_err(|e| Error::read(p, e))?,
             label: p.display().to_string(),
@@ -353,7 +391,12 @@ fn cmd_penalty(scene: Option<&Path>, eps: Option<&[f64]>, out: Option<&Path>, jo
     let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
     let work = out.join("study").join("penalty-sweep");
     let st = studies::penalty::penalty_study(&base, &[], eps, &work, jobs)?;
-    say!("penalty study of {} (exact reference: {:.2} s; runs in {})", s.name, st.reference_wall_time_s, work.display());
+    say!(
+        "penalty study of {} (exact reference: {:.2} s; runs in {})",
+        s.name,
+        st.reference_wall_time_s,
+        work.display()
+    );
     say!("{:>10} {:>12} {:>12} {:>12} {:>10}", "eps", "e_V", "e_H", "delta", "time [s]");
     for r in &st.rows {
         say!("{:>10.1e} {:>12.4e} {:>12.4e} {:>12.4e} {:>10.2}", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s);
@@ -366,28 +409,49 @@ fn cmd_penalty(scene: Option<&Path>, eps: Option<&[f64]>, out: Option<&Path>, jo
 
 /// `dyncontact sweep`: validate every point, lay the folder out, run the points here (skipping
 /// those completed with the same scene), collect sweep.csv and the charts.
-fn cmd_sweep(file: &Path, out: Option<&Path>, jobs: Option<usize>, plan_only: bool, oversubscribe: bool, set: &[String], stop: &Arc<AtomicBool>) -> Result<(), Error> {
-    use dyncontact::sweep::{collect, runner, Plan};
+fn cmd_sweep(
+    file: &Path,
+    out: Option<&Path>,
+    jobs: Option<usize>,
+    plan_only: bool,
+    oversubscribe: bool,
+    set: &[String],
+    stop: &Arc<AtomicBool>,
+) -> Result<(), Error> {
+    use dyncontact::sweep::{Plan, collect, runner};
     let extra = set.iter().map(|a| Override::parse(a)).collect::<Result<Vec<_>, Error>>()?;
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
     let jobs = jobs.unwrap_or(cores).max(1);
     if jobs > cores && !oversubscribe {
         return Err(Error::scene(
             "--jobs",
-            format!("{jobs} points at once on {cores} cores: each point runs on one core, so more would share the cores and multiply the memory; give --oversubscribe to run them anyway"),
+            format!(
+                "{jobs} points at once on {cores} cores: each point runs on one core, so more would share the cores and multiply the memory; give --oversubscribe to run them anyway"
+            ),
         ));
     }
     let plan = Plan::from_file(file, &extra)?;
     let dir = out.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&plan.name));
     let _lock = dyncontact::sweep::lock(&dir)?;
     let done = plan.write(&dir)?;
-    say!("sweep {}: {} points ({} already completed), folder {}", plan.name, plan.points.len(), done.iter().filter(|d| **d).count(), dir.display());
+    say!(
+        "sweep {}: {} points ({} already completed), folder {}",
+        plan.name,
+        plan.points.len(),
+        done.iter().filter(|d| **d).count(),
+        dir.display()
+    );
     if plan_only {
-        say!("plan only: every point validated; run them with `dyncontact sweep {}` or with Snakemake in {}", file.display(), dir.display());
+        say!(
+            "plan only: every point validated; run them with `dyncontact sweep {}` or with Snakemake in {}",
+            file.display(),
+            dir.display()
+        );
         return Ok(());
     }
     let interrupt = Arc::clone(stop);
-    let opts = runner::RunnerOptions { jobs, progress: std::io::stdout().is_terminal(), interrupt: Some(interrupt.clone()) };
+    let opts =
+        runner::RunnerOptions { jobs, progress: std::io::stdout().is_terminal(), interrupt: Some(interrupt.clone()) };
     let outcomes = runner::run_points(&plan, &dir, &done, &opts)?;
     let (_, rows) = collect::collect(&dir)?;
     report_rows(&rows);
@@ -415,11 +479,19 @@ fn cmd_collect(dir: &Path) -> Result<(), Error> {
 
 /// Err (a folder error) naming the corrupt points, if any.
 fn refuse_corrupt(dir: &Path, rows: &[dyncontact::sweep::collect::Row]) -> Result<(), Error> {
-    let corrupt: Vec<String> = rows.iter().filter(|r| r.status == "corrupt").map(|r| format!("{}: {}", r.point, r.reason)).collect();
+    let corrupt: Vec<String> =
+        rows.iter().filter(|r| r.status == "corrupt").map(|r| format!("{}: {}", r.point, r.reason)).collect();
     if corrupt.is_empty() {
         return Ok(());
     }
-    Err(Error::folder(dir, format!("{} points are corrupt (sweep.csv says why; no figure of theirs is reported): {}", corrupt.len(), corrupt.join("; "))))
+    Err(Error::folder(
+        dir,
+        format!(
+            "{} points are corrupt (sweep.csv says why; no figure of theirs is reported): {}",
+            corrupt.len(),
+            corrupt.join("; ")
+        ),
+    ))
 }
 
 /// The counts of a collected sweep by status.

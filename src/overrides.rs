@@ -64,7 +64,12 @@ impl Override {
 }
 
 /// Set `value` at `parents` + `last` below `root`.
-fn set_at(root: &mut toml::Value, parents: &[Segment], last: &Segment, value: &toml::Value) -> std::result::Result<(), String> {
+fn set_at(
+    root: &mut toml::Value,
+    parents: &[Segment],
+    last: &Segment,
+    value: &toml::Value,
+) -> std::result::Result<(), String> {
     let mut here = root;
     let mut at = String::new();
     for seg in parents {
@@ -84,7 +89,8 @@ fn set_at(root: &mut toml::Value, parents: &[Segment], last: &Segment, value: &t
         }
         (Segment::Index(i), toml::Value::Array(a)) => {
             let n = a.len();
-            let slot = a.get_mut(*i).ok_or_else(|| format!("index {i} is out of range: {} has {n} entries", shown(&at)))?;
+            let slot =
+                a.get_mut(*i).ok_or_else(|| format!("index {i} is out of range: {} has {n} entries", shown(&at)))?;
             *slot = value.clone();
             Ok(())
         }
@@ -176,7 +182,12 @@ pub fn parse_path(key: &str) -> Result<Vec<Segment>> {
 }
 
 /// One step down a key path (creating a missing table when `create`).
-fn step<'v>(here: &'v mut toml::Value, seg: &Segment, at: &str, create: bool) -> std::result::Result<&'v mut toml::Value, String> {
+fn step<'v>(
+    here: &'v mut toml::Value,
+    seg: &Segment,
+    at: &str,
+    create: bool,
+) -> std::result::Result<&'v mut toml::Value, String> {
     match (seg, here) {
         (Segment::Key(k), toml::Value::Table(t)) => {
             if create && !t.contains_key(k) {
@@ -212,7 +223,13 @@ fn shown(at: &str) -> String {
 pub fn leaves(table: &toml::Table) -> Result<Vec<Override>> {
     let mut out = Vec::new();
     for (k, v) in table {
-        let key = if k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.' || c == '[' || c == ']') { k.clone() } else { format!("\"{k}\"") };
+        let key =
+            if k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.' || c == '[' || c == ']')
+            {
+                k.clone()
+            } else {
+                format!("\"{k}\"")
+            };
         push_leaves(&key, v, &mut out)?;
     }
     Ok(out)

@@ -91,7 +91,12 @@ fn match_dimension(model: &mut Model, mesh: &Geometry) -> Result<()> {
     if !all_zero {
         return Err(Error::scene(
             "domain.file",
-            format!("the mesh is {d}-D ({} {}) but the scene's vectors (loads, initial data) have {} components", mesh.n_cells(), if d == 3 { "tetrahedra" } else { "triangles" }, model.dim),
+            format!(
+                "the mesh is {d}-D ({} {}) but the scene's vectors (loads, initial data) have {} components",
+                mesh.n_cells(),
+                if d == 3 { "tetrahedra" } else { "triangles" },
+                model.dim
+            ),
         ));
     }
     model.dim = d;
@@ -131,8 +136,18 @@ fn check_sides(model: &Model, mesh: &Geometry) -> Result<()> {
 /// for manufactured solutions with contact), checked finite at t = 0 and t = T.
 pub fn build_loads(model: &Model, mesh: &Geometry, dofs: &Dofs) -> Result<LoadVector> {
     let loads = match mesh {
-        Geometry::Plane(m) => LoadVector::new(m, dofs, &model.loads.body, &surface_loads(model, |side| m.side(side).map(|s| s.edges.clone()).unwrap_or_default())),
-        Geometry::Solid(m) => LoadVector::solid(m, dofs, &model.loads.body, &surface_loads(model, |side| m.side(side).map(|s| s.faces.clone()).unwrap_or_default())),
+        Geometry::Plane(m) => LoadVector::new(
+            m,
+            dofs,
+            &model.loads.body,
+            &surface_loads(model, |side| m.side(side).map(|s| s.edges.clone()).unwrap_or_default()),
+        ),
+        Geometry::Solid(m) => LoadVector::solid(
+            m,
+            dofs,
+            &model.loads.body,
+            &surface_loads(model, |side| m.side(side).map(|s| s.faces.clone()).unwrap_or_default()),
+        ),
     };
     loads.check_finite(0.0)?;
     loads.check_finite(model.time.end)?;
@@ -190,7 +205,10 @@ fn build_mesh(domain: &Domain, scene_dir: &Path) -> Result<Geometry> {
         Domain::Gmsh { .. } => {
             let path = domain.mesh_path(scene_dir).unwrap_or_default();
             if !path.exists() {
-                return Err(Error::scene("domain.file", format!("mesh file {:?} does not exist", path.display().to_string())));
+                return Err(Error::scene(
+                    "domain.file",
+                    format!("mesh file {:?} does not exist", path.display().to_string()),
+                ));
             }
             mesh::gmsh::read_any(&path)?
         }
@@ -210,7 +228,11 @@ pub fn initial_data(mesh: &Geometry, dofs: &Dofs, u0: &VecExpr, v0: &VecExpr) ->
                 let vals = v[..d].iter().map(|c| c.to_string()).collect::<Vec<_>>().join(", ");
                 return Err(Error::Expression {
                     path: path.into(),
-                    message: format!("evaluates to ({vals}) at {} {}; initial data must be finite", mesh.node_name(k), at(mesh, k)),
+                    message: format!(
+                        "evaluates to ({vals}) at {} {}; initial data must be finite",
+                        mesh.node_name(k),
+                        at(mesh, k)
+                    ),
                 });
             }
         }
@@ -223,14 +245,23 @@ pub fn initial_data(mesh: &Geometry, dofs: &Dofs, u0: &VecExpr, v0: &VecExpr) ->
 
 /// The contact model of the contact sides: nodes, normals, weights, gap, and the laws the
 /// contact section switches on.
-fn build_contact(c: &ContactParams, sides: &[String], mesh: &Geometry, dofs: &Dofs, clamped: &[bool]) -> Result<ContactModel> {
+fn build_contact(
+    c: &ContactParams,
+    sides: &[String],
+    mesh: &Geometry,
+    dofs: &Dofs,
+    clamped: &[bool],
+) -> Result<ContactModel> {
     let side = mesh.side_nodes(sides, clamped)?;
     let mut gap = Vec::with_capacity(side.nodes.len());
     for &v in &side.nodes {
         let p = mesh.point(v);
         let g = c.gap.eval3(p[0], p[1], p[2], 0.0);
         if !g.is_finite() {
-            return Err(Error::scene("contact.gap", format!("evaluates to {g} at {} {}", mesh.node_name(v), at(mesh, v))));
+            return Err(Error::scene(
+                "contact.gap",
+                format!("evaluates to {g} at {} {}", mesh.node_name(v), at(mesh, v)),
+            ));
         }
         gap.push(g);
     }
@@ -261,9 +292,27 @@ fn build_contact(c: &ContactParams, sides: &[String], mesh: &Geometry, dofs: &Do
         for comp in 0..d {
             match dofs.map[d * v + comp] {
                 Some(i) => node_dofs.push(i),
-                None => return Err(Error::scene("boundary.contact", format!("contact {} has a clamped DOF", mesh.node_name(v)))),
+                None => {
+                    return Err(Error::scene(
+                        "boundary.contact",
+                        format!("contact {} has a clamped DOF", mesh.node_name(v)),
+                    ));
+                }
             }
         }
     }
-    Ok(ContactModel::new(side, d, gap, node_dofs, normal, compliance, constraint, c.bound, c.enforcement, friction, (c.friction_bound, c.friction_bound_at), p_tau))
+    Ok(ContactModel::new(
+        side,
+        d,
+        gap,
+        node_dofs,
+        normal,
+        compliance,
+        constraint,
+        c.bound,
+        c.enforcement,
+        friction,
+        (c.friction_bound, c.friction_bound_at),
+        p_tau,
+    ))
 }

@@ -71,7 +71,11 @@ pub fn sliding_block_velocity(m: f64, normal: f64, pull: f64, a: f64, b: f64, al
     }
     // log-sum form, stable for large α c1 t/m
     let e = alpha * c1 * t / m;
-    let val = if e > 30.0 { e + ((c1 - c2) + c2 * (-e).exp()).ln() - c1.ln() } else { ((c2 + (c1 - c2) * e.exp()) / c1).ln() };
+    let val = if e > 30.0 {
+        e + ((c1 - c2) + c2 * (-e).exp()).ln() - c1.ln()
+    } else {
+        ((c2 + (c1 - c2) * e.exp()) / c1).ln()
+    };
     val / alpha
 }
 

@@ -123,7 +123,11 @@ impl Estimate {
                 gib(self.outputs.frame_bytes),
                 gib(self.outputs.history_bytes),
                 gib(self.outputs.contact_bytes),
-                if self.outputs.trajectory_bytes > 0.0 { format!(", trajectory.f64 {}", gib(self.outputs.trajectory_bytes)) } else { String::new() }
+                if self.outputs.trajectory_bytes > 0.0 {
+                    format!(", trajectory.f64 {}", gib(self.outputs.trajectory_bytes))
+                } else {
+                    String::new()
+                }
             ),
             format!(
                 "cost per step  : {:.2e} flop in the free and recovery solves; at most {:.2e} flop per Newton iteration of the contact solve (dense Cholesky on {} unknowns; reused while the contact sets hold, less with the sparse form)",
@@ -170,11 +174,15 @@ pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
         Domain::Gmsh { .. } => {
             let path = model.domain.mesh_path(scene_dir).unwrap_or_default();
             if !path.exists() {
-                return Err(Error::scene("domain.file", format!("mesh file {:?} does not exist", path.display().to_string())));
+                return Err(Error::scene(
+                    "domain.file",
+                    format!("mesh file {:?} does not exist", path.display().to_string()),
+                ));
             }
             match mesh::gmsh::read_any(&path)? {
                 mesh::Geometry::Plane(mesh) => {
-                    let on_contact: usize = model.contact_sides.iter().filter_map(|s| mesh.side(s)).map(|s| s.edges.len() + 1).sum();
+                    let on_contact: usize =
+                        model.contact_sides.iter().filter_map(|s| mesh.side(s)).map(|s| s.edges.len() + 1).sum();
                     (mesh.nodes.len(), mesh.triangles.len(), on_contact)
                 }
                 mesh::Geometry::Solid(mesh) => {
@@ -288,7 +296,8 @@ pub fn check_disk(e: &Estimate, out: &Path) -> Result<()> {
 /// None elsewhere).
 pub fn peak_memory() -> Option<f64> {
     let text = std::fs::read_to_string("/proc/self/status").ok()?;
-    let kb: f64 = text.lines().find_map(|l| l.strip_prefix("VmHWM:"))?.trim().trim_end_matches("kB").trim().parse().ok()?;
+    let kb: f64 =
+        text.lines().find_map(|l| l.strip_prefix("VmHWM:"))?.trim().trim_end_matches("kB").trim().parse().ok()?;
     Some(kb * 1024.0)
 }
 

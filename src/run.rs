@@ -13,15 +13,15 @@
 //! checkpoint's checksum and run, its inputs, the history row of its step, the frames.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use crate::checkpoint::{Checkpoint, Counters};
 use crate::error::{Error, Result};
 use crate::failure::RunStatus;
 use crate::output::summary::Timing;
-use crate::output::{folder, write_atomic, ModelInfo, Summary, Writer};
+use crate::output::{ModelInfo, Summary, Writer, folder, write_atomic};
 use crate::problem::Problem;
 use crate::simulation::{Settings, Simulation, StepRecord};
 
@@ -174,7 +174,13 @@ fn new_summary(problem: &Problem, sim: &Simulation, start: Instant, run_id: Stri
 
 /// A fresh run takes its folder: summary.json says `running`, the earlier run's files go, the
 /// CSV files start with the state at t = 0.
-fn start_fresh(problem: &Problem, sim: &Simulation, opts: &RunOptions, summary: &mut Summary, replaced: bool) -> Result<Writer> {
+fn start_fresh(
+    problem: &Problem,
+    sim: &Simulation,
+    opts: &RunOptions,
+    summary: &mut Summary,
+    replaced: bool,
+) -> Result<Writer> {
     write_summary(&opts.out, summary)?;
     folder::clear(&opts.out)?;
     if replaced {
@@ -188,12 +194,22 @@ fn start_fresh(problem: &Problem, sim: &Simulation, opts: &RunOptions, summary: 
 /// A resumed run: the checkpoint (read and checked: checksum, finite values) must belong to the
 /// folder's run and inputs, the folder's files must agree with it; then the state and counters
 /// are restored and the files cut back to its step.
-fn start_resumed(problem: &Problem, sim: &mut Simulation, opts: &RunOptions, cp: &Checkpoint, summary: &mut Summary, first_cap: &mut Option<usize>) -> Result<Writer> {
+fn start_resumed(
+    problem: &Problem,
+    sim: &mut Simulation,
+    opts: &RunOptions,
+    cp: &Checkpoint,
+    summary: &mut Summary,
+    first_cap: &mut Option<usize>,
+) -> Result<Writer> {
     crate::output::resume::check(&opts.out, problem, cp)?;
     sim.restore(cp.state())?;
     if let (Some(key), Some(w)) = (&cp.factor, sim.delassus.as_ref()) {
         sim.delassus_factors.restore(w, key).ok_or_else(|| {
-            Error::folder(opts.out.join("checkpoint.json"), "the checkpoint's contact factorization does not fit this scene")
+            Error::folder(
+                opts.out.join("checkpoint.json"),
+                "the checkpoint's contact factorization does not fit this scene",
+            )
         })?;
     }
     restore_counters(summary, &cp.counters);
@@ -224,7 +240,10 @@ fn resumable(out: &Path, problem: &Problem) -> Result<Checkpoint> {
         )));
     }
     if summary.get("status").and_then(|v| v.as_str()) == Some("completed") {
-        return Err(refuse(format!("the run is completed ({} steps): there is nothing to resume", summary["steps_completed"])));
+        return Err(refuse(format!(
+            "the run is completed ({} steps): there is nothing to resume",
+            summary["steps_completed"]
+        )));
     }
     if cp.inputs != problem.inputs_fingerprint {
         return Err(refuse(
@@ -238,7 +257,9 @@ fn resumable(out: &Path, problem: &Problem) -> Result<Checkpoint> {
 fn progress_bar(opts: &RunOptions, steps: usize, at: usize) -> Option<indicatif::ProgressBar> {
     opts.progress.then(|| {
         let b = indicatif::ProgressBar::new(steps as u64);
-        if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {elapsed_precise} (eta {eta})  {msg}") {
+        if let Ok(style) =
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {elapsed_precise} (eta {eta})  {msg}")
+        {
             b.set_style(style);
         }
         b.set_position(at as u64);
@@ -263,7 +284,11 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
     let start = Instant::now();
     let _lock = folder::lock_run(&opts.out)?;
     // everything that can refuse the folder, before anything in it changes
-    let (checkpoint, replaced) = if opts.resume { (Some(resumable(&opts.out, problem)?), false) } else { (None, folder::check_fresh(&opts.out)?) };
+    let (checkpoint, replaced) = if opts.resume {
+        (Some(resumable(&opts.out, problem)?), false)
+    } else {
+        (None, folder::check_fresh(&opts.out)?)
+    };
     let mut sim = match Simulation::with_settings(problem, settings) {
         Ok(sim) => sim,
         Err(e) => {
@@ -316,7 +341,11 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
                 b.abandon_with_message(if summary.status == RunStatus::Interrupted { "interrupted" } else { "failed" });
             }
             // the summary says how the run ended whenever it can be written at all (a full disk)
-            let written = if summary.status == RunStatus::Interrupted { writer.finish(&summary, problem, &sim.state) } else { writer.write_summary(&summary) };
+            let written = if summary.status == RunStatus::Interrupted {
+                writer.finish(&summary, problem, &sim.state)
+            } else {
+                writer.write_summary(&summary)
+            };
             if let Err(w) = written {
                 writer.write_summary_in_place(&summary);
                 if matches!(e, Error::Interrupted { .. }) {
@@ -340,11 +369,16 @@ fn steps_loop(
 ) -> std::result::Result<(), Stop> {
     let interrupted = || opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
     let stop_now = |n: usize| opts.stop_after.is_some_and(|s| n >= s) || interrupted();
-    let checkpoint = |sim: &Simulation, summary: &Summary, first_cap: Option<usize>, writer: &mut Writer| -> Result<()> {
+    let checkpoint = |sim: &Simulation,
+                      summary: &Summary,
+                      first_cap: Option<usize>,
+                      writer: &mut Writer|
+     -> Result<()> {
         // the frames up to this step are on disk before a checkpoint says they are
         writer.wait()?;
         let factor = sim.delassus_factors.key();
-        Checkpoint::new(&summary.run_id, &problem.inputs_fingerprint, &sim.state, counters(summary, first_cap), factor).write(&opts.out)
+        Checkpoint::new(&summary.run_id, &problem.inputs_fingerprint, &sim.state, counters(summary, first_cap), factor)
+            .write(&opts.out)
     };
     // a signal during the setup stops the run before its first step
     if interrupted() && sim.state.n < problem.steps {
@@ -358,7 +392,8 @@ fn steps_loop(
         let counts = steps.simulation().delassus_factors.all_counts();
         (summary.contact_factorizations, summary.contact_factor_reuses) = (counts.factorizations, counts.reuses);
         (summary.contact_pcg_solves, summary.contact_pcg_iterations) = (counts.pcg_solves, counts.pcg_iterations);
-        (summary.contact_velocity_solves, summary.contact_velocity_iterations) = (counts.velocity_solves, counts.velocity_iterations);
+        (summary.contact_velocity_solves, summary.contact_velocity_iterations) =
+            (counts.velocity_solves, counts.velocity_iterations);
         let state = &steps.simulation().state;
         let t_out = Instant::now();
         let last = state.n == problem.steps;

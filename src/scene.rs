@@ -13,10 +13,11 @@ use serde::{Deserialize, Deserializer};
 use crate::defaults;
 use crate::error::{Error, Result};
 use crate::model::expr::{Expr, VecExpr};
-pub use crate::model::kinds::{
-    Bound, BoundAt, DomainKind, EnforcementKind, FrictionBound, FrictionLaw, ContactSolve, EnergyResidualAction, FixedPointAcceleration, InnerSolver, MassKind, Plane, SchemeKind,
-};
 use crate::model::kinds;
+pub use crate::model::kinds::{
+    Bound, BoundAt, ContactSolve, DomainKind, EnergyResidualAction, EnforcementKind, FixedPointAcceleration,
+    FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind,
+};
 use crate::model::laws::FrictionCoefficient;
 use crate::model::{self, ContactParams, Enforcement, MaterialParams, Model, SolverParams, TimeParams};
 
@@ -49,8 +50,6 @@ pub struct Scene {
 fn default_name() -> String {
     "scene".into()
 }
-
-
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -180,9 +179,7 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Pair<T> {
     fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         let v = Vec::<T>::deserialize(d)?;
         let n = v.len();
-        <[T; 2]>::try_from(v)
-            .map(Pair)
-            .map_err(|_| serde::de::Error::invalid_length(n, &"exactly 2 entries [a, b]"))
+        <[T; 2]>::try_from(v).map(Pair).map_err(|_| serde::de::Error::invalid_length(n, &"exactly 2 entries [a, b]"))
     }
 }
 
@@ -204,15 +201,15 @@ fn components<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> std::resu
     Components::<T>::deserialize(d).map(|c| c.0)
 }
 
-fn opt_components<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> std::result::Result<Option<Vec<T>>, D::Error> {
+fn opt_components<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+    d: D,
+) -> std::result::Result<Option<Vec<T>>, D::Error> {
     components(d).map(Some)
 }
 
 fn opt_pairs<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Option<Vec<[f64; 2]>>, D::Error> {
     Vec::<Pair<f64>>::deserialize(d).map(|v| Some(v.into_iter().map(|p| p.0).collect()))
 }
-
-
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -232,7 +229,6 @@ pub struct Contact {
     pub friction: Friction,
 }
 
-
 #[derive(Debug, Clone, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct Friction {
@@ -247,7 +243,6 @@ pub struct Friction {
     pub points: Option<Vec<[f64; 2]>>,
 }
 
-
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Time {
@@ -256,8 +251,6 @@ pub struct Time {
     #[serde(default)]
     pub scheme: SchemeKind,
 }
-
-
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -350,21 +343,22 @@ impl Default for Output {
     }
 }
 
-
 /// The scene text with `overrides` applied to its table (TOML again).
 pub fn overridden_text(text: &str, file: &str, overrides: &[crate::overrides::Override]) -> Result<String> {
-    let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| Error::SceneSyntax { file: file.to_string(), message: one_paragraph(&e.to_string()) })?;
+    let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| Error::SceneSyntax {
+        file: file.to_string(),
+        message: one_paragraph(&e.to_string()),
+    })?;
     crate::overrides::apply_all(&mut table, overrides)?;
-    toml::to_string(&table).map_err(|e| Error::SceneSyntax { file: file.to_string(), message: one_paragraph(&e.to_string()) })
+    toml::to_string(&table)
+        .map_err(|e| Error::SceneSyntax { file: file.to_string(), message: one_paragraph(&e.to_string()) })
 }
 
 impl Scene {
     /// Parse TOML text. `file` names the source in error messages.
     pub fn from_toml(text: &str, file: &str) -> Result<Scene> {
-        let de = toml::de::Deserializer::parse(text).map_err(|e| Error::SceneSyntax {
-            file: file.to_string(),
-            message: one_paragraph(&e.to_string()),
-        })?;
+        let de = toml::de::Deserializer::parse(text)
+            .map_err(|e| Error::SceneSyntax { file: file.to_string(), message: one_paragraph(&e.to_string()) })?;
         let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
             let mut path = e.path().to_string();
             let inner = e.into_inner();
@@ -468,8 +462,13 @@ impl Scene {
         if f.law == FrictionLaw::Constant && f.coefficient == Some(0.0) {
             w.push("contact.friction.coefficient = 0: the contact is frictionless".to_string());
         }
-        if f.law == FrictionLaw::None && (c.friction_bound != FrictionBound::Capped || c.friction_bound_at != BoundAt::Predictor) {
-            w.push("contact.friction_bound and friction_bound_at have no effect: contact.friction.law = \"none\"".to_string());
+        if f.law == FrictionLaw::None
+            && (c.friction_bound != FrictionBound::Capped || c.friction_bound_at != BoundAt::Predictor)
+        {
+            w.push(
+                "contact.friction_bound and friction_bound_at have no effect: contact.friction.law = \"none\""
+                    .to_string(),
+            );
         }
         let infinite = matches!(&c.penetration_bound, NumOrStr::Str(s) if s.trim() == "inf")
             || matches!(&c.penetration_bound, NumOrStr::Num(g) if g.is_infinite());
@@ -528,7 +527,11 @@ impl Scene {
             None => Ok(VecExpr::zero(d)),
             Some(v) if v.len() != d => Err(Error::scene(
                 path,
-                format!("has {} components; the {d}-D domain (kind = {:?}) needs {d}", v.len(), kinds::name(&self.domain.kind)),
+                format!(
+                    "has {} components; the {d}-D domain (kind = {:?}) needs {d}",
+                    v.len(),
+                    kinds::name(&self.domain.kind)
+                ),
             )),
             Some(v) => VecExpr::parse(v, self.space_vars(with_t), path),
         }
@@ -558,7 +561,10 @@ impl Scene {
             }
         }
         let Some(cells) = &d.cells else {
-            return e("domain.cells", format!("missing: a {what} needs cells = [{}]", if N == 3 { "nx, ny, nz" } else { "nx, ny" }));
+            return e(
+                "domain.cells",
+                format!("missing: a {what} needs cells = [{}]", if N == 3 { "nx, ny, nz" } else { "nx, ny" }),
+            );
         };
         let Ok(cells) = <[i64; N]>::try_from(cells.as_slice()) else {
             return e("domain.cells", format!("a {what} needs {N} entries, got {}", cells.len()));
@@ -588,14 +594,19 @@ impl Scene {
             }
             DomainKind::Box => {
                 if d.plane.is_some() {
-                    return e("domain.plane", "is a 2-D key (plane strain or stress); a box is three-dimensional: remove it".into());
+                    return e(
+                        "domain.plane",
+                        "is a 2-D key (plane strain or stress); a box is three-dimensional: remove it".into(),
+                    );
                 }
                 let (size, cells) = self.structured::<3>("box", "Lx, Ly, Lz")?;
                 Ok(model::Domain::Box { size, cells })
             }
             DomainKind::Gmsh => {
                 let file = match &d.file {
-                    None => return e("domain.file", "missing: kind = \"gmsh\" needs file = \"path/to/mesh.msh\"".into()),
+                    None => {
+                        return e("domain.file", "missing: kind = \"gmsh\" needs file = \"path/to/mesh.msh\"".into());
+                    }
                     Some(f) if f.trim().is_empty() => return e("domain.file", "is empty".into()),
                     Some(f) => f.clone(),
                 };
@@ -651,7 +662,8 @@ impl Scene {
         if self.domain.plane == Some(Plane::Stress) && (v.theta > 0.0 || v.zeta > 0.0) {
             // decision 11: σ_zz = 0 is algebraic only when A = β B.
             let (lam, mu) = crate::model::material::lame(m.young, m.poisson);
-            let proportional = (v.theta * mu - v.zeta * lam).abs() <= 1e-12 * (v.theta * mu).abs().max((v.zeta * lam).abs());
+            let proportional =
+                (v.theta * mu - v.zeta * lam).abs() <= 1e-12 * (v.theta * mu).abs().max((v.zeta * lam).abs());
             if !proportional {
                 return e(
                     "material.viscosity",
@@ -681,10 +693,16 @@ impl Scene {
             let path = format!("{p}.value");
             let value = self.vector_field(Some(&tr.value), true, &path)?;
             if self.boundary.dirichlet.contains(&tr.side) {
-                return e(&format!("{p}.side"), format!("{:?} is a Dirichlet side (Γ1); tractions act on Γ2 only", tr.side));
+                return e(
+                    &format!("{p}.side"),
+                    format!("{:?} is a Dirichlet side (Γ1); tractions act on Γ2 only", tr.side),
+                );
             }
             if self.boundary.contact.contains(&tr.side) {
-                return e(&format!("{p}.side"), format!("{:?} is a contact side (Γ3); tractions act on Γ2 only", tr.side));
+                return e(
+                    &format!("{p}.side"),
+                    format!("{:?} is a contact side (Γ3); tractions act on Γ2 only", tr.side),
+                );
             }
             if self.loads.traction[..i].iter().any(|o| o.side == tr.side) {
                 return e(&format!("{p}.side"), format!("{:?} already has a traction; give one per side", tr.side));
@@ -711,7 +729,11 @@ impl Scene {
             let count = if n < 1e15 { format!("{n:.0}") } else { format!("{n:.3e}") };
             return e(
                 "time.step",
-                format!("too many steps ({count}), at most {}: choose time.step >= {:.3e}", defaults::MAX_STEPS, t.end / defaults::MAX_STEPS as f64),
+                format!(
+                    "too many steps ({count}), at most {}: choose time.step >= {:.3e}",
+                    defaults::MAX_STEPS,
+                    t.end / defaults::MAX_STEPS as f64
+                ),
             );
         }
         if (n * t.step - t.end).abs() > 1e-6 * t.step {
@@ -730,12 +752,16 @@ impl Scene {
     fn validate_solver(&self) -> Result<SolverParams> {
         let e = |p: &str, m: String| Err(Error::scene(p, m));
         let s = &self.solver;
-        for (key, val) in [("newton_tolerance", s.newton_tolerance), ("fixed_point_tolerance", s.fixed_point_tolerance)] {
+        for (key, val) in [("newton_tolerance", s.newton_tolerance), ("fixed_point_tolerance", s.fixed_point_tolerance)]
+        {
             if !(val.is_finite() && val > 0.0 && val < 1.0) {
                 return e(&format!("solver.{key}"), format!("must be in (0, 1), got {val}"));
             }
         }
-        for (key, val) in [("max_newton_iterations", s.max_newton_iterations), ("max_fixed_point_iterations", s.max_fixed_point_iterations)] {
+        for (key, val) in [
+            ("max_newton_iterations", s.max_newton_iterations),
+            ("max_fixed_point_iterations", s.max_fixed_point_iterations),
+        ] {
             if !(1..=100_000).contains(&val) {
                 return e(&format!("solver.{key}"), format!("must be in 1..=100000, got {val}"));
             }
@@ -744,7 +770,13 @@ impl Scene {
             return e("solver.relaxation", format!("must be in (0, 1], got {}", s.relaxation));
         }
         if !(s.energy_residual_limit.is_finite() && s.energy_residual_limit > 0.0) {
-            return e("solver.energy_residual_limit", format!("must be a finite number > 0 (a fraction of the energy scale), got {}", s.energy_residual_limit));
+            return e(
+                "solver.energy_residual_limit",
+                format!(
+                    "must be a finite number > 0 (a fraction of the energy scale), got {}",
+                    s.energy_residual_limit
+                ),
+            );
         }
         if s.persistency && s.mass == MassKind::Consistent {
             return e(
@@ -755,7 +787,10 @@ impl Scene {
             );
         }
         if s.mass == MassKind::Modified && self.boundary.contact.is_empty() {
-            return e("solver.mass", "\"modified\" moves the mass of the contact nodes and needs a contact side".into());
+            return e(
+                "solver.mass",
+                "\"modified\" moves the mass of the contact nodes and needs a contact side".into(),
+            );
         }
         Ok(SolverParams {
             inner: s.inner,
@@ -793,13 +828,19 @@ impl Scene {
                 return e("contact.penalty", format!("must be a finite number > 0, got {eps}"));
             }
             (EnforcementKind::Exact, Some(_)) => {
-                return e("contact.penalty", "only used with enforcement = \"penalty\"; remove it or set enforcement = \"penalty\"".into());
+                return e(
+                    "contact.penalty",
+                    "only used with enforcement = \"penalty\"; remove it or set enforcement = \"penalty\"".into(),
+                );
             }
             (EnforcementKind::Penalty, Some(eps)) => Enforcement::Penalty { epsilon: eps },
             (EnforcementKind::Exact, None) => Enforcement::Exact,
         };
         if c.enforcement == EnforcementKind::Penalty && bound == Bound::Infinite {
-            return e("contact.enforcement", "\"penalty\" penalizes u_ν > g and needs a finite penetration_bound".into());
+            return e(
+                "contact.enforcement",
+                "\"penalty\" penalizes u_ν > g and needs a finite penetration_bound".into(),
+            );
         }
         if bound == Bound::Infinite && c.compliance == 0.0 {
             return e(
@@ -836,7 +877,9 @@ impl Scene {
         match &c.penetration_bound {
             NumOrStr::Num(g) if g.is_finite() && *g >= 0.0 => Ok(Bound::Finite(*g)),
             NumOrStr::Num(g) if *g == f64::INFINITY => Ok(Bound::Infinite),
-            NumOrStr::Num(g) => Err(Error::scene("contact.penetration_bound", format!("must be >= 0 or \"inf\", got {g}"))),
+            NumOrStr::Num(g) => {
+                Err(Error::scene("contact.penetration_bound", format!("must be >= 0 or \"inf\", got {g}")))
+            }
             NumOrStr::Str(s) if s.trim() == "inf" => Ok(Bound::Infinite),
             NumOrStr::Str(s) => Err(Error::scene(
                 "contact.penetration_bound",
@@ -863,8 +906,13 @@ fn validate_friction(f: &Friction) -> Result<Option<FrictionCoefficient>> {
     };
     let need = |key: &str, v: Option<f64>| -> Result<f64> {
         match v {
-            None => Err(Error::scene(format!("{p}.{key}"), format!("missing: law = \"{}\" needs it", format!("{:?}", f.law).to_lowercase()))),
-            Some(x) if !(x.is_finite() && x >= 0.0) => Err(Error::scene(format!("{p}.{key}"), format!("must be >= 0, got {x}"))),
+            None => Err(Error::scene(
+                format!("{p}.{key}"),
+                format!("missing: law = \"{}\" needs it", format!("{:?}", f.law).to_lowercase()),
+            )),
+            Some(x) if !(x.is_finite() && x >= 0.0) => {
+                Err(Error::scene(format!("{p}.{key}"), format!("must be >= 0, got {x}")))
+            }
             Some(x) if key != "decay" && x > defaults::MAX_FRICTION_COEFFICIENT => Err(Error::scene(
                 format!("{p}.{key}"),
                 format!("a friction coefficient must be at most {}, got {x}", defaults::MAX_FRICTION_COEFFICIENT),
@@ -900,7 +948,10 @@ fn validate_friction(f: &Friction) -> Result<Option<FrictionCoefficient>> {
             forbid("decay", f.decay.is_some())?;
             forbid("coefficient", f.coefficient.is_some())?;
             let Some(pts) = &f.points else {
-                return e(&format!("{p}.points"), "missing: law = \"table\" needs points = [[r0, mu0], [r1, mu1], ...]".into());
+                return e(
+                    &format!("{p}.points"),
+                    "missing: law = \"table\" needs points = [[r0, mu0], [r1, mu1], ...]".into(),
+                );
             };
             validate_table(pts)?;
         }
@@ -925,7 +976,10 @@ fn validate_table(pts: &[[f64; 2]]) -> Result<()> {
         return e(&format!("{p}.points"), "is empty; give at least one [slip rate, mu] pair".into());
     }
     if pts[0][0] != 0.0 {
-        return e(&format!("{p}.points[0][0]"), format!("the first slip rate must be 0 (μ(0) is the static value), got {}", pts[0][0]));
+        return e(
+            &format!("{p}.points[0][0]"),
+            format!("the first slip rate must be 0 (μ(0) is the static value), got {}", pts[0][0]),
+        );
     }
     for (i, [r, mu]) in pts.iter().enumerate() {
         if !(r.is_finite() && mu.is_finite()) {
@@ -935,7 +989,10 @@ fn validate_table(pts: &[[f64; 2]]) -> Result<()> {
             return e(&format!("{p}.points[{i}][1]"), format!("μ must be >= 0, got {mu}"));
         }
         if *mu > defaults::MAX_FRICTION_COEFFICIENT {
-            return e(&format!("{p}.points[{i}][1]"), format!("a friction coefficient must be at most {}, got {mu}", defaults::MAX_FRICTION_COEFFICIENT));
+            return e(
+                &format!("{p}.points[{i}][1]"),
+                format!("a friction coefficient must be at most {}, got {mu}", defaults::MAX_FRICTION_COEFFICIENT),
+            );
         }
         if i > 0 && *r <= pts[i - 1][0] {
             return e(
@@ -954,7 +1011,9 @@ pub fn check_name(key: &str, name: &str) -> Result<()> {
     if name.is_empty() || name.len() > 100 || !name.chars().all(ok_char) || name.starts_with(['.', '-']) {
         return Err(Error::scene(
             key,
-            format!("must be 1 to 100 letters, digits or _ - . + (not starting with . or -): it names a folder and files; got {name:?}"),
+            format!(
+                "must be 1 to 100 letters, digits or _ - . + (not starting with . or -): it names a folder and files; got {name:?}"
+            ),
         ));
     }
     Ok(())

@@ -8,7 +8,6 @@
 
 use std::time::Instant;
 
-
 use crate::defaults::{CONIC_TOLERANCE_FLOOR, RESPONSES_ADVANTAGE};
 use crate::energy::{self, EnergyTerms, StepEnergy};
 use crate::error::{Error, Result};
@@ -16,13 +15,15 @@ use crate::failure::{ContactFailure, SolverFailure, StepFailureCause};
 use crate::fem::Operators;
 use crate::linalg;
 use crate::model::contact::ContactModel;
-use crate::model::kinds::{BoundAt, EnergyResidualAction, FixedPointAcceleration, FrictionBound, InnerSolver, SchemeKind};
+use crate::model::kinds::{
+    BoundAt, EnergyResidualAction, FixedPointAcceleration, FrictionBound, InnerSolver, SchemeKind,
+};
 use crate::problem::Problem;
 use crate::scheme::{ContactKinematics, StateProducts, StepOperator};
 use crate::step::conic::ConicSettings;
 use crate::step::fixed_point::{self, FixedPointSettings, Inner, NormalPart, StepReport};
 use crate::step::newton::NewtonSettings;
-use crate::step::{delassus, ContactSolution, NodeData, NodeStatus, StepData};
+use crate::step::{ContactSolution, NodeData, NodeStatus, StepData, delassus};
 
 /// (R.2) Velocity-level persistency: on a node that stayed on the constraint (dir = ν) or in
 /// stick (dir = τ) over the step, set the end-point velocity component v_c^{n+1} = 0 instead
@@ -174,7 +175,10 @@ impl Settings {
         };
         let inner = match s.inner {
             InnerSolver::Newton => Inner::Newton(newton),
-            InnerSolver::Conic => Inner::Conic(ConicSettings { tolerance: s.newton_tolerance.max(CONIC_TOLERANCE_FLOOR), ..ConicSettings::default() }),
+            InnerSolver::Conic => Inner::Conic(ConicSettings {
+                tolerance: s.newton_tolerance.max(CONIC_TOLERANCE_FLOOR),
+                ..ConicSettings::default()
+            }),
             InnerSolver::NewtonUnfrozen => Inner::NewtonUnfrozen(newton),
         };
         Settings {
@@ -253,7 +257,8 @@ impl<'p> Simulation<'p> {
     pub fn with_settings(problem: &'p Problem, settings: Settings) -> Result<Simulation<'p>> {
         let clock = Instant::now();
         let contact_nodes: &[usize] = problem.contact.as_ref().map(|c| c.nodes.as_slice()).unwrap_or(&[]);
-        let ops = Operators::new(&problem.mesh, &problem.material, problem.model.solver.mass, &problem.dofs, contact_nodes)?;
+        let ops =
+            Operators::new(&problem.mesh, &problem.material, problem.model.solver.mass, &problem.dofs, contact_nodes)?;
         let assembly = clock.elapsed().as_secs_f64();
         let clock = Instant::now();
         let stepper = StepOperator::new(&ops, problem.model.time.scheme, problem.k)?;
@@ -262,7 +267,8 @@ impl<'p> Simulation<'p> {
         let (delassus, responses) = match problem.contact.as_ref() {
             Some(c) => {
                 let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| problem.mesh.point(i)).collect();
-                let (w, g) = delassus::build_with_responses(stepper.factor(), c, &positions, problem.model.solver.contact_solve);
+                let (w, g) =
+                    delassus::build_with_responses(stepper.factor(), c, &positions, problem.model.solver.contact_solve);
                 (Some(w), g)
             }
             None => (None, None),
@@ -274,7 +280,11 @@ impl<'p> Simulation<'p> {
         let t_delassus = clock.elapsed().as_secs_f64();
         let nc = problem.contact.as_ref().map(ContactModel::n).unwrap_or(0);
         let (u, v) = (problem.u0.clone(), problem.v0.clone());
-        let mut energy = EnergyTerms { kinetic: energy::half_quad(&ops.m, &v), elastic: energy::half_quad(&ops.k, &u), ..EnergyTerms::default() };
+        let mut energy = EnergyTerms {
+            kinetic: energy::half_quad(&ops.m, &v),
+            elastic: energy::half_quad(&ops.k, &u),
+            ..EnergyTerms::default()
+        };
         if let Some(c) = &problem.contact {
             energy.compliance = c.penetration(&u).iter().zip(&c.omega).map(|(d, w)| w * c.normal.energy(*d)).sum();
         }
@@ -341,7 +351,11 @@ impl<'p> Simulation<'p> {
             energy_scale: self.state.energy_scale,
             normal_force: 0.0,
             tangential_force: 0.0,
-            max_penetration: if nodes.is_empty() { 0.0 } else { nodes.iter().map(|nr| nr.u_n).fold(f64::NEG_INFINITY, f64::max) },
+            max_penetration: if nodes.is_empty() {
+                0.0
+            } else {
+                nodes.iter().map(|nr| nr.u_n).fold(f64::NEG_INFINITY, f64::max)
+            },
             nodes,
             ..StepRecord::empty(0, 0.0)
         }
@@ -359,7 +373,12 @@ impl<'p> Simulation<'p> {
         if let Some(entry) = f.iter().position(|x| !x.is_finite()) {
             // name the load and where it is not finite (an expression like 1/(t − t0))
             let t = self.stepper.load_time(self.problem.time(self.state.n));
-            return Err(self.problem.loads.check_finite(t).err().unwrap_or_else(|| self.failure(StepFailureCause::NonFinite { entry })));
+            return Err(self
+                .problem
+                .loads
+                .check_finite(t)
+                .err()
+                .unwrap_or_else(|| self.failure(StepFailureCause::NonFinite { entry })));
         }
         let mut timing = StepTiming { free_solve: clock.elapsed().as_secs_f64(), ..StepTiming::default() };
         let contact = match self.contact_solve(&v_new) {
@@ -397,7 +416,9 @@ impl<'p> Simulation<'p> {
     /// solve pair reads (2 × the factor's), else by a solve.
     fn recover(&self, c: &ContactModel, cs: &ContactStep, v_new: &mut [f64]) {
         let forces = cs.r.iter().filter(|v| **v != 0.0).count();
-        if let Some(g) = self.responses.as_ref().filter(|_| (forces * v_new.len()) as f64 <= RESPONSES_ADVANTAGE * 2.0 * self.stepper.factor().factor_len() as f64) {
+        if let Some(g) = self.responses.as_ref().filter(|_| {
+            (forces * v_new.len()) as f64 <= RESPONSES_ADVANTAGE * 2.0 * self.stepper.factor().factor_len() as f64
+        }) {
             for (l, &rl) in cs.r.iter().enumerate() {
                 if rl != 0.0 {
                     for (vi, gi) in v_new.iter_mut().zip(g.col_as_slice(l)) {
@@ -417,7 +438,14 @@ impl<'p> Simulation<'p> {
 
     /// (E.1) terms of the step, (R.2) persistency, the contact records; the energy guard; then
     /// the state moves to t_{n+1} (a step that fails the guard leaves it at t_n).
-    fn balance(&mut self, u_new: Vec<f64>, mut v_new: Vec<f64>, f: &[f64], contact: Option<ContactStep>, timing: StepTiming) -> Result<StepRecord> {
+    fn balance(
+        &mut self,
+        u_new: Vec<f64>,
+        mut v_new: Vec<f64>,
+        f: &[f64],
+        contact: Option<ContactStep>,
+        timing: StepTiming,
+    ) -> Result<StepRecord> {
         let clock = Instant::now();
         let mut p_new = StateProducts::of(&self.ops, &u_new, &v_new);
         let t_products = clock.elapsed().as_secs_f64();
@@ -433,7 +461,10 @@ impl<'p> Simulation<'p> {
             viscous: self.stepper.viscous_work(&du, &p.cv, &p_new.cv),
             ..StepEnergy::default()
         };
-        let mut rec = StepRecord { timing: StepTiming { products: t_products, ..timing }, ..StepRecord::empty(self.state.n + 1, self.problem.time(self.state.n + 1)) };
+        let mut rec = StepRecord {
+            timing: StepTiming { products: t_products, ..timing },
+            ..StepRecord::empty(self.state.n + 1, self.problem.time(self.state.n + 1))
+        };
         if let (Some(c), Some(cs)) = (&self.problem.contact, &contact) {
             self.contact_terms(c, cs, &u_new, &du, &mut se, &mut rec);
             if self.persistency(c, cs, &mut v_new, &mut se, &mut rec) {
@@ -469,14 +500,29 @@ impl<'p> Simulation<'p> {
 
     /// The contact terms of (E.1) (compliance energy, friction and constraint dissipation),
     /// the forces and counts of the history row, and the contact.csv records.
-    fn contact_terms(&self, c: &ContactModel, cs: &ContactStep, u_new: &[f64], du: &[f64], se: &mut StepEnergy, rec: &mut StepRecord) {
+    fn contact_terms(
+        &self,
+        c: &ContactModel,
+        cs: &ContactStep,
+        u_new: &[f64],
+        du: &[f64],
+        se: &mut StepEnergy,
+        rec: &mut StepRecord,
+    ) {
         let (sol, s_bound) = (&cs.sol, &cs.s_bound);
         let d_new = c.penetration(u_new);
         let mut max_pen = f64::NEG_INFINITY;
         for i in 0..c.n() {
             let omega = c.omega[i];
             se.d_compliance += omega * (c.normal.energy(d_new[i]) - c.normal.energy(cs.d_n[i]));
-            se.friction += omega * s_bound[i] * if c.dim == 2 { c.components(i, du).1.abs() } else { let d = c.tangential(i, du); d[0].hypot(d[1]) };
+            se.friction += omega
+                * s_bound[i]
+                * if c.dim == 2 {
+                    c.components(i, du).1.abs()
+                } else {
+                    let d = c.tangential(i, du);
+                    d[0].hypot(d[1])
+                };
             if let Some(g) = c.constraint {
                 se.constraint += omega * sol.lambda[i] * (g - cs.d_n[i]);
             }
@@ -499,8 +545,11 @@ impl<'p> Simulation<'p> {
             }
             let k = self.kinematics;
             let v_now = c.tangential(i, &self.state.v);
-            let vbar: [f64; 2] = std::array::from_fn(|j| if j + 1 < c.dim { k.a_v * (sol.y[c.dim * i + 1 + j] + k.b_v * v_now[j]) } else { 0.0 });
-            let (v_t, friction) = if c.dim == 2 { (vbar[0], -sol.t[i]) } else { (vbar[0].hypot(vbar[1]), t_i[0].hypot(t_i[1])) };
+            let vbar: [f64; 2] = std::array::from_fn(|j| {
+                if j + 1 < c.dim { k.a_v * (sol.y[c.dim * i + 1 + j] + k.b_v * v_now[j]) } else { 0.0 }
+            });
+            let (v_t, friction) =
+                if c.dim == 2 { (vbar[0], -sol.t[i]) } else { (vbar[0].hypot(vbar[1]), t_i[0].hypot(t_i[1])) };
             rec.nodes.push(NodeRecord {
                 u_n: d_new[i],
                 u_t: c.tangential_size(i, u_new),
@@ -524,7 +573,14 @@ impl<'p> Simulation<'p> {
     /// (R.2) on nodes that stayed on the constraint or in stick over the step: either remove
     /// the velocity they keep (`solver.persistency`) and book it, or measure it as chatter.
     /// Returns whether it changed v^{n+1}.
-    fn persistency(&mut self, c: &ContactModel, cs: &ContactStep, v_new: &mut [f64], se: &mut StepEnergy, rec: &mut StepRecord) -> bool {
+    fn persistency(
+        &mut self,
+        c: &ContactModel,
+        cs: &ContactStep,
+        v_new: &mut [f64],
+        se: &mut StepEnergy,
+        rec: &mut StepRecord,
+    ) -> bool {
         let persistency = self.problem.model.solver.persistency;
         let mut removed = 0.0;
         for i in 0..c.n() {
@@ -607,7 +663,17 @@ impl<'p> Simulation<'p> {
         trace: Option<&mut Vec<Vec<f64>>>,
     ) -> std::result::Result<(ContactSolution, Vec<f64>, StepReport), ContactFailure> {
         let Some(c) = &self.problem.contact else {
-            return fixed_point::solve(data, None, &NormalPart::Total, &[], &[], &[], inner, &self.settings.fixed_point, trace);
+            return fixed_point::solve(
+                data,
+                None,
+                &NormalPart::Total,
+                &[],
+                &[],
+                &[],
+                inner,
+                &self.settings.fixed_point,
+                trace,
+            );
         };
         let normal = match (c.friction_bound, c.bound_at) {
             (FrictionBound::Total, _) => NormalPart::Total,
@@ -615,17 +681,34 @@ impl<'p> Simulation<'p> {
             (_, BoundAt::Predictor) => NormalPart::Predictor(p_tau_hat),
         };
         let vn = c.restrict(&self.state.v);
-        fixed_point::solve(data, c.friction.as_ref(), &normal, &vn, &self.state.lambda, &self.state.t_fric, inner, &self.settings.fixed_point, trace)
+        fixed_point::solve(
+            data,
+            c.friction.as_ref(),
+            &normal,
+            &vn,
+            &self.state.lambda,
+            &self.state.t_fric,
+            inner,
+            &self.settings.fixed_point,
+            trace,
+        )
     }
 
     /// Continue from a checkpointed state (sizes must match this problem).
     pub fn restore(&mut self, s: State) -> Result<()> {
         let cur = &self.state;
-        if s.u.len() != cur.u.len() || s.v.len() != cur.v.len() || s.lambda.len() != cur.lambda.len() || s.t_fric.len() != cur.t_fric.len() {
+        if s.u.len() != cur.u.len()
+            || s.v.len() != cur.v.len()
+            || s.lambda.len() != cur.lambda.len()
+            || s.t_fric.len() != cur.t_fric.len()
+        {
             return Err(Error::Output("the checkpoint does not match this problem's sizes".into()));
         }
         if s.n > self.problem.steps {
-            return Err(Error::Output(format!("the checkpoint is at step {}, beyond the scene's {} steps", s.n, self.problem.steps)));
+            return Err(Error::Output(format!(
+                "the checkpoint is at step {}, beyond the scene's {} steps",
+                s.n, self.problem.steps
+            )));
         }
         self.state = s;
         self.products = StateProducts::of(&self.ops, &self.state.u, &self.state.v);

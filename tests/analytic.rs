@@ -6,7 +6,7 @@
 mod common;
 
 use common::{fixture, mean_velocity_x, problem, records};
-use dyncontact::reference::{bar_impact_force, sliding_block_velocity, CompliantLayer};
+use dyncontact::reference::{CompliantLayer, bar_impact_force, sliding_block_velocity};
 use dyncontact::scene::EnforcementKind as Enforcement;
 use dyncontact::simulation::{Simulation, StepRecord};
 
@@ -32,7 +32,12 @@ fn b1_bar_impact_matches_closed_form() {
     let (rho, young, length, height, v0) = (1.0, 1.0, 1.0, 0.1, 0.1);
     let expected = bar_impact_force(rho, young, length, v0, 1.0) * height;
     let mean = mean_over(&recs, 0.1, 1.9, |r| r.normal_force);
-    let release = recs.iter().filter(|r| r.t > 1.0).find(|r| r.normal_force == 0.0).map(|r| r.t).expect("the bar leaves the wall");
+    let release = recs
+        .iter()
+        .filter(|r| r.t > 1.0)
+        .find(|r| r.normal_force == 0.0)
+        .map(|r| r.t)
+        .expect("the bar leaves the wall");
     let c = (young / rho).sqrt();
     let h = length / 100.0;
     // exit speed from the kinetic energy after release (the bar moves rigidly, up to the
@@ -46,8 +51,18 @@ fn b1_bar_impact_matches_closed_form() {
         last.energy.constraint_dissipation,
         0.5 * rho * length * height * v0 * v0
     );
-    common::measured("analytic::b1_bar_impact_matches_closed_form", "B.1 mean contact force, relative error", mean / expected - 1.0, "|·| ≤ 1e-2");
-    common::measured("analytic::b1_bar_impact_matches_closed_form", "B.1 exit speed / v0 − 1", v_exit / v0 - 1.0, "|·| ≤ 1e-2");
+    common::measured(
+        "analytic::b1_bar_impact_matches_closed_form",
+        "B.1 mean contact force, relative error",
+        mean / expected - 1.0,
+        "|·| ≤ 1e-2",
+    );
+    common::measured(
+        "analytic::b1_bar_impact_matches_closed_form",
+        "B.1 exit speed / v0 − 1",
+        v_exit / v0 - 1.0,
+        "|·| ≤ 1e-2",
+    );
     assert!((mean / expected - 1.0).abs() <= 0.01, "mean contact force off by more than 1%");
     assert!((release - 2.0 * length / c).abs() <= 2.0 * h / c + 2.0 * p.k, "release time {release}");
     assert!((v_exit / v0 - 1.0).abs() <= 0.01, "exit speed {v_exit}");
@@ -72,7 +87,12 @@ fn b1_impact_dissipation_falls_with_h_not_with_k() {
     let by_k: Vec<f64> = [5e-3, 2.5e-3, 1.25e-3].iter().map(|&k| run(100, k)).collect();
     println!("B.1 impact dissipation, h = 1/50, 1/100, 1/200 at c k/h = 0.25: {by_h:?}, orders {orders:?}");
     println!("B.1 impact dissipation at h = 1/100, k = 5e-3, 2.5e-3, 1.25e-3: {by_k:?}");
-    common::measured("analytic::b1_impact_dissipation_falls_with_h_not_with_k", "B.1 impact dissipation order in h", orders[orders.len() - 1], "1 ± 0.1");
+    common::measured(
+        "analytic::b1_impact_dissipation_falls_with_h_not_with_k",
+        "B.1 impact dissipation order in h",
+        orders[orders.len() - 1],
+        "1 ± 0.1",
+    );
     assert!(orders.iter().all(|o| (o - 1.0).abs() <= 0.1), "impact dissipation is not O(h): {orders:?}");
     assert!(by_k[2] >= by_k[0], "at fixed h the dissipation now falls with k — update the documentation: {by_k:?}");
 }
@@ -106,7 +126,12 @@ fn b2_compliant_layer_penetration_matches_closed_form() {
         l.t_star().unwrap_or(f64::NAN),
         l.impedance() * l.v0
     );
-    common::measured("analytic::b2_compliant_layer_penetration_matches_closed_form", "B.2 penetration error / g", worst / l.g, "≤ 5e-3");
+    common::measured(
+        "analytic::b2_compliant_layer_penetration_matches_closed_form",
+        "B.2 penetration error / g",
+        worst / l.g,
+        "≤ 5e-3",
+    );
     assert!(worst <= 5e-3 * l.g, "penetration off the closed form by {worst:.3e}");
     assert!((mean / (l.impedance() * l.v0) - 1.0).abs() <= 0.01, "mean reaction {mean}");
 }
@@ -131,8 +156,16 @@ fn b2_penalty_overshoot_matches_closed_form() {
             peak = peak.max(r.max_penetration - l.g);
         }
         let e_inf = l.penalty_overshoot_limit(eps);
-        println!("B.2 penalty ε = {eps:e}: peak overshoot {peak:.5e}, e_∞ = {e_inf:.5e} ({:+.3}%), worst |δ_h − δ_ε| = {worst:.3e}", 100.0 * (peak / e_inf - 1.0));
-        common::measured("analytic::b2_penalty_overshoot_matches_closed_form", &format!("B.2 penalty overshoot / e_∞ − 1 (ε = {eps:e})"), peak / e_inf - 1.0, "|·| ≤ 2e-2");
+        println!(
+            "B.2 penalty ε = {eps:e}: peak overshoot {peak:.5e}, e_∞ = {e_inf:.5e} ({:+.3}%), worst |δ_h − δ_ε| = {worst:.3e}",
+            100.0 * (peak / e_inf - 1.0)
+        );
+        common::measured(
+            "analytic::b2_penalty_overshoot_matches_closed_form",
+            &format!("B.2 penalty overshoot / e_∞ − 1 (ε = {eps:e})"),
+            peak / e_inf - 1.0,
+            "|·| ≤ 2e-2",
+        );
         assert!((peak / e_inf - 1.0).abs() <= 0.02, "overshoot {peak:.4e} vs e_∞ {e_inf:.4e}");
         assert!(worst <= 5e-3 * l.g + 0.02 * e_inf, "penetration history off by {worst:.3e}");
         over.push(peak);
@@ -168,7 +201,12 @@ fn b3_sliding_block_matches_closed_form() {
     let v_end = mean_velocity_x(&sim);
     let exact_end = sliding_block_velocity(m, n, ft, a, b, alpha, p.time(sim.state.n) - t0);
     println!("B.3: worst |v_h − v| = {worst:.3e}; at the end v_h = {v_end:.5}, closed form {exact_end:.5}");
-    common::measured("analytic::b3_sliding_block_matches_closed_form", "B.3 sliding velocity error (absolute)", worst, "≤ 3e-3");
+    common::measured(
+        "analytic::b3_sliding_block_matches_closed_form",
+        "B.3 sliding velocity error (absolute)",
+        worst,
+        "≤ 3e-3",
+    );
     assert!(worst <= 3e-3, "sliding velocity off the closed form by {worst:.3e}");
 }
 
@@ -181,7 +219,8 @@ fn b3_sliding_block_matches_closed_form() {
 #[test]
 fn b3_block_sticks_below_the_static_threshold() {
     let mut s = fixture("sliding_block");
-    s.loads.body.as_mut().expect("the fixture gives a body force")[0] = "27.5*if(t < 0.1, 0, if(t < 0.15, 0.5*(1 - cos(pi*(t - 0.1)/0.05)), 1))".into();
+    s.loads.body.as_mut().expect("the fixture gives a body force")[0] =
+        "27.5*if(t < 0.1, 0, if(t < 0.15, 0.5*(1 - cos(pi*(t - 0.1)/0.05)), 1))".into();
     let p = problem(s);
     let mut sim = Simulation::new(&p).expect("setup");
     let mut worst: f64 = 0.0;
@@ -192,7 +231,11 @@ fn b3_block_sticks_below_the_static_threshold() {
         worst = worst.max(mean_velocity_x(steps.simulation()).abs());
     }
     let last = last.expect("steps");
-    println!("B.3 stuck: largest |mean velocity| {worst:.3e}; stick nodes at the end {} of {}", last.stick_nodes, last.nodes.len());
+    println!(
+        "B.3 stuck: largest |mean velocity| {worst:.3e}; stick nodes at the end {} of {}",
+        last.stick_nodes,
+        last.nodes.len()
+    );
     assert_eq!(sliding_block_velocity(2.0, 10.0, 5.5, 0.6, 0.3, 20.0, 0.1), 0.0);
     assert!(worst <= 1e-4, "the block moved: {worst:.3e}");
     assert_eq!(last.stick_nodes, last.nodes.len());
@@ -211,7 +254,10 @@ fn b4_hertz_pressure_matches_closed_form() {
     let last = recs.last().expect("records");
     let c = p.contact.as_ref().expect("contact");
     let (load, radius, h) = (7.77, 10.0, 4.0 / 128.0);
-    let (a, p0) = (dyncontact::reference::hertz_pressure(load, radius, 1000.0, 0.3, 0.0).0, dyncontact::reference::hertz_pressure(load, radius, 1000.0, 0.3, 0.0).1);
+    let (a, p0) = (
+        dyncontact::reference::hertz_pressure(load, radius, 1000.0, 0.3, 0.0).0,
+        dyncontact::reference::hertz_pressure(load, radius, 1000.0, 0.3, 0.0).1,
+    );
     let (mut worst, mut half_width): (f64, f64) = (0.0, 0.0);
     for (i, n) in last.nodes.iter().enumerate() {
         let s = p.mesh.plane().expect("a 2-D mesh").nodes[c.nodes[i]][0] - 2.0;
@@ -227,7 +273,12 @@ fn b4_hertz_pressure_matches_closed_form() {
         100.0 * worst / p0,
         last.energy.kinetic / last.energy.elastic
     );
-    common::measured("analytic::b4_hertz_pressure_matches_closed_form", "B.4 pressure error / p0", worst / p0, "≤ 5e-2");
+    common::measured(
+        "analytic::b4_hertz_pressure_matches_closed_form",
+        "B.4 pressure error / p0",
+        worst / p0,
+        "≤ 5e-2",
+    );
     assert!((last.normal_force / load - 1.0).abs() <= 1e-3, "total force {}", last.normal_force);
     assert!(half_width <= a && half_width >= a - h, "contact half-width {half_width} vs a = {a}");
     assert!(worst <= 0.05 * p0, "pressure off by {worst:.4} ({:.2}% of p0)", 100.0 * worst / p0);

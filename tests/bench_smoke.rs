@@ -20,7 +20,8 @@ const WORK_COLUMNS: [&str; 14] = [
     "fixed_point_iterations",
 ];
 
-const RACE_COLUMNS: [&str; 6] = ["case", "method", "time_per_step_s", "newton_iterations_per_step", "unfrozen_steps", "fallback_steps"];
+const RACE_COLUMNS: [&str; 6] =
+    ["case", "method", "time_per_step_s", "newton_iterations_per_step", "unfrozen_steps", "fallback_steps"];
 
 /// The rows of a CSV file as maps from column name to field.
 fn read_csv(path: &std::path::Path) -> (Vec<String>, Vec<std::collections::HashMap<String, String>>) {
@@ -47,7 +48,8 @@ fn number(row: &std::collections::HashMap<String, String>, col: &str) -> f64 {
 #[test]
 fn quick_bench_writes_its_files() {
     let dir = std::env::temp_dir().join(format!("dyncontact-bench-smoke-{}", std::process::id()));
-    let report = bench::run(&dir, &BenchOptions { quick: true, floor_only: false, bookkeeping_only: false }).expect("the quick benchmark runs");
+    let report = bench::run(&dir, &BenchOptions { quick: true, floor_only: false, bookkeeping_only: false })
+        .expect("the quick benchmark runs");
     assert!(report.contains("work–precision") && report.contains("race"), "{report}");
 
     let (header, rows) = read_csv(&dir.join("work_precision.csv"));
@@ -85,10 +87,19 @@ fn quick_bench_writes_its_files() {
 
     // the 3-D rows of part 2 and the 3-D points of part 4
     let (header, rows) = read_csv(&dir.join("floor3d.csv"));
-    assert!(header.iter().any(|h| h == "ratio_to_floor") && header.iter().any(|h| h == "contact_nodes"), "floor3d.csv columns");
-    assert!(rows.iter().any(|r| r["scene"] == "academic3d") && rows.iter().any(|r| r["scene"] == "sliding_block3d"), "floor3d.csv rows");
+    assert!(
+        header.iter().any(|h| h == "ratio_to_floor") && header.iter().any(|h| h == "contact_nodes"),
+        "floor3d.csv columns"
+    );
+    assert!(
+        rows.iter().any(|r| r["scene"] == "academic3d") && rows.iter().any(|r| r["scene"] == "sliding_block3d"),
+        "floor3d.csv rows"
+    );
     let (_, rows) = read_csv(&dir.join("scaling.csv"));
-    assert!(rows.iter().any(|r| r["form"] == "3-D" && number(r, "contact_per_step_s") > 0.0), "a 3-D point in scaling.csv");
+    assert!(
+        rows.iter().any(|r| r["form"] == "3-D" && number(r, "contact_per_step_s") > 0.0),
+        "a 3-D point in scaling.csv"
+    );
 
     for svg in ["work_precision.svg", "race.svg", "scaling.svg"] {
         let text = std::fs::read_to_string(dir.join(svg)).expect(svg);

@@ -130,7 +130,8 @@ fn check_xml(text: &str) -> Result<(), String> {
 fn check_text(s: &str) -> Result<(), String> {
     for (i, _) in s.match_indices('&') {
         let ent = s[i + 1..].split(';').next().unwrap_or("");
-        let ok = matches!(ent, "amp" | "lt" | "gt" | "quot" | "apos") || ent.starts_with('#') && s[i + 1..].contains(';');
+        let ok =
+            matches!(ent, "amp" | "lt" | "gt" | "quot" | "apos") || ent.starts_with('#') && s[i + 1..].contains(';');
         if !ok {
             return Err(format!("bare & in {:?}", &s[i..s.len().min(i + 20)]));
         }
@@ -142,7 +143,9 @@ fn check_text(s: &str) -> Result<(), String> {
 fn polylines(svg: &str) -> Vec<usize> {
     svg.split("<polyline")
         .skip(1)
-        .map(|t| t.split("points=\"").nth(1).and_then(|p| p.split('"').next()).map_or(0, |p| p.split_whitespace().count()))
+        .map(|t| {
+            t.split("points=\"").nth(1).and_then(|p| p.split('"').next()).map_or(0, |p| p.split_whitespace().count())
+        })
         .collect()
 }
 
@@ -177,7 +180,14 @@ fn texts(svg: &str) -> Vec<String> {
     svg.split("<text")
         .skip(1)
         .filter_map(|t| t.split_once('>').and_then(|(_, b)| b.split("</text>").next()))
-        .map(|s| s.trim().replace("&lt;", "<").replace("&gt;", ">").replace("&quot;", "\"").replace("&apos;", "'").replace("&amp;", "&"))
+        .map(|s| {
+            s.trim()
+                .replace("&lt;", "<")
+                .replace("&gt;", ">")
+                .replace("&quot;", "\"")
+                .replace("&apos;", "'")
+                .replace("&amp;", "&")
+        })
         .collect()
 }
 
@@ -203,7 +213,18 @@ fn contact_categories(out: &Path) -> (BTreeSet<usize>, Vec<&'static str>) {
             "slip" => NodeStatus::Slip,
             _ => NodeStatus::Separated,
         };
-        let rec = NodeRecord { u_n: 0.0, u_t: 0.0, v_t: 0.0, p: 0.0, lambda, friction: 0.0, bound: 0.0, status, v_t_vec: [0.0; 3], friction_vec: [0.0; 3] };
+        let rec = NodeRecord {
+            u_n: 0.0,
+            u_t: 0.0,
+            v_t: 0.0,
+            p: 0.0,
+            lambda,
+            friction: 0.0,
+            bound: 0.0,
+            status,
+            v_t_vec: [0.0; 3],
+            friction_vec: [0.0; 3],
+        };
         cats.push(Category::of(&rec).label());
     }
     (steps, cats)
@@ -213,7 +234,9 @@ fn contact_categories(out: &Path) -> (BTreeSet<usize>, Vec<&'static str>) {
 /// and bare ampersands.
 #[test]
 fn xml_check_rejects_malformed_documents() {
-    assert!(check_xml("<?xml version=\"1.0\"?><!-- c --><svg a=\"x>y\"><g><rect/></g><text>a &amp; b</text></svg>").is_ok());
+    assert!(
+        check_xml("<?xml version=\"1.0\"?><!-- c --><svg a=\"x>y\"><g><rect/></g><text>a &amp; b</text></svg>").is_ok()
+    );
     assert!(check_xml("<svg><g></svg>").is_err());
     assert!(check_xml("<svg><g></g>").is_err());
     assert!(check_xml("<svg></svg><svg></svg>").is_err());
@@ -237,7 +260,10 @@ fn forces_chart_has_both_histories_and_the_reference_line() {
     // p(g)·|Γ3| = c_ν g · L = 2000 · 0.01 · 1.0
     let reference = reference.expect("reference line label");
     assert!(reference.contains("= 20.0000 N/m"), "{reference}");
-    assert!(labels.iter().any(|t| t.starts_with("normal force")) && labels.iter().any(|t| t.starts_with("tangential force")));
+    assert!(
+        labels.iter().any(|t| t.starts_with("normal force"))
+            && labels.iter().any(|t| t.starts_with("tangential force"))
+    );
 }
 
 /// contact_status.svg has a filled cell per (frame, contact node) and a legend entry for each
@@ -279,7 +305,11 @@ fn normal_stress_has_five_profiles_and_p_of_g() {
     let profiles = lines.iter().filter(|&&n| n >= f.contact_nodes).count();
     let labels = texts(&svg);
     let times: Vec<&String> = labels.iter().filter(|t| t.starts_with("t = ")).collect();
-    println!("normal_stress.svg: {} polylines, {profiles} with ≥ {} points; legend {times:?}", lines.len(), f.contact_nodes);
+    println!(
+        "normal_stress.svg: {} polylines, {profiles} with ≥ {} points; legend {times:?}",
+        lines.len(),
+        f.contact_nodes
+    );
     assert!(profiles >= 5, "polylines: {lines:?}");
     assert_eq!(times.len(), 5);
     assert!(labels.iter().any(|t| t.starts_with("p(g) = 20.0000")), "no p(g) line label");
@@ -296,7 +326,10 @@ fn deformed_mesh_has_every_edge_and_the_outline() {
     let deformed = svg.split("<polyline").filter(|t| t.contains("stroke=\"#1F77B4\"")).count();
     let outline = svg.split("<polyline").filter(|t| t.contains("stroke=\"#A0A0A0\"")).count();
     let title = texts(&svg).into_iter().find(|t| t.starts_with("Deformed mesh")).expect("title");
-    println!("deformed.svg: {edges} lines ({deformed} deformed, {outline} outline) for {} triangles; {title}", f.triangles);
+    println!(
+        "deformed.svg: {edges} lines ({deformed} deformed, {outline} outline) for {} triangles; {title}",
+        f.triangles
+    );
     assert!(deformed >= f.triangles, "{deformed} deformed edges for {} triangles", f.triangles);
     // 16 × 8 cells: 48 boundary edges
     assert_eq!(outline, 48, "outline edges");
@@ -359,15 +392,37 @@ fn charts_accept_empty_and_non_finite_data() {
         tangential_force: v,
     };
     let along = Along { s: vec![0.0, 0.5, 1.0], order: vec![0, 1, 2], label: "x along Γ3 [m]" };
-    let rec = |p: f64, lambda: f64, status| NodeRecord { u_n: 0.0, u_t: 0.0, v_t: 0.0, p, lambda, friction: 0.0, bound: 0.0, status, v_t_vec: [0.0; 3], friction_vec: [0.0; 3] };
+    let rec = |p: f64, lambda: f64, status| NodeRecord {
+        u_n: 0.0,
+        u_t: 0.0,
+        v_t: 0.0,
+        p,
+        lambda,
+        friction: 0.0,
+        bound: 0.0,
+        status,
+        v_t_vec: [0.0; 3],
+        friction_vec: [0.0; 3],
+    };
     let frames = vec![
-        (0, 0.0, vec![rec(nan, 0.0, NodeStatus::Separated), rec(1.0, nan, NodeStatus::Stick), rec(f64::INFINITY, 2.0, NodeStatus::Slip)]),
+        (
+            0,
+            0.0,
+            vec![
+                rec(nan, 0.0, NodeStatus::Separated),
+                rec(1.0, nan, NodeStatus::Stick),
+                rec(f64::INFINITY, 2.0, NodeStatus::Slip),
+            ],
+        ),
         // a short frame (fewer records than nodes)
         (1, 0.1, vec![rec(1.0, 0.0, NodeStatus::Slip)]),
     ];
     let outputs = [
         contact_charts::forces(&[], Some(nan)),
-        contact_charts::forces(&[row(0.0, nan), row(nan, 1.0), row(0.1, f64::INFINITY), row(0.2, 1e308), row(0.3, -1e308)], Some(1.0)),
+        contact_charts::forces(
+            &[row(0.0, nan), row(nan, 1.0), row(0.1, f64::INFINITY), row(0.2, 1e308), row(0.3, -1e308)],
+            Some(1.0),
+        ),
         contact_charts::contact_status(&[], &along),
         contact_charts::contact_status(&frames, &along),
         contact_charts::normal_stress(&[], &along, None),
@@ -396,7 +451,8 @@ fn positions_follow_the_arc_length_on_a_bent_contact_boundary() {
     let c = problem.contact.as_ref().expect("contact");
     let along = Along::of(problem.mesh.plane().expect("a 2-D mesh"), c, &problem.model.contact_sides);
     let at = |x: f64, y: f64| {
-        let i = c.nodes.iter().position(|&v| problem.mesh.plane().expect("a 2-D mesh").nodes[v] == [x, y]).expect("node");
+        let i =
+            c.nodes.iter().position(|&v| problem.mesh.plane().expect("a 2-D mesh").nodes[v] == [x, y]).expect("node");
         along.s[i]
     };
     println!("{} nodes; s(0,0) = {}, s(1,0) = {}, s(1,0.5) = {}", c.n(), at(0.0, 0.0), at(1.0, 0.0), at(1.0, 0.5));

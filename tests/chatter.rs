@@ -42,7 +42,8 @@ fn force_error(recs: &[StepRecord], k: f64) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
     for r in recs.iter().skip(1).filter(|r| r.t <= 2.4) {
         // the force of step n acts over (t_n − k, t_n]: compare with the closed form's mean there
-        let exact = 0.5 * (bar_impact_force(1.0, 1.0, 1.0, v0, r.t - k) + bar_impact_force(1.0, 1.0, 1.0, v0, r.t)) * height;
+        let exact =
+            0.5 * (bar_impact_force(1.0, 1.0, 1.0, v0, r.t - k) + bar_impact_force(1.0, 1.0, 1.0, v0, r.t)) * height;
         num += (r.normal_force - exact).abs() * k;
         den += exact * k;
     }
@@ -100,7 +101,9 @@ fn r1_r2_bar_impact_chatter_and_remedies() {
             m.exit_speed
         );
         match v {
-            Variant::Midpoint => assert!(m.trapped > 0.0 && m.chatter > 0.0, "the midpoint chatter is gone: update the documentation"),
+            Variant::Midpoint => {
+                assert!(m.trapped > 0.0 && m.chatter > 0.0, "the midpoint chatter is gone: update the documentation")
+            }
             Variant::ModifiedMass => assert_eq!(m.trapped, 0.0, "the modified mass traps kinetic energy"),
             Variant::Persistency => {
                 assert_eq!(m.chatter, 0.0, "persistency left chatter");
@@ -111,7 +114,12 @@ fn r1_r2_bar_impact_chatter_and_remedies() {
         if v != Variant::BackwardEuler {
             assert!(m.residual <= 1e-12, "{v:?}: (E.1) defect {:.3e}", m.residual);
         }
-        common::measured("chatter::r1_r2_bar_impact_chatter_and_remedies", &format!("B.1 force error, {v:?}"), m.force_error, "reported");
+        common::measured(
+            "chatter::r1_r2_bar_impact_chatter_and_remedies",
+            &format!("B.1 force error, {v:?}"),
+            m.force_error,
+            "reported",
+        );
         errs.push(m.force_error);
     }
     assert!(errs[1] < errs[0] && errs[2] < errs[0], "the remedies do not reduce the force error: {errs:?}");
@@ -197,13 +205,19 @@ fn r1_modified_mass_keeps_total_mass_and_centre_of_mass() {
     half_disk.boundary.dirichlet = vec![];
     half_disk.loads.traction.clear();
     half_disk.contact = fixture("impact_friction").contact;
-    for (name, s) in [("academic", fixture("academic")), ("bar_impact", fixture("bar_impact")), ("half disk", half_disk)] {
+    for (name, s) in
+        [("academic", fixture("academic")), ("bar_impact", fixture("bar_impact")), ("half disk", half_disk)]
+    {
         let p = problem(s);
         let c = p.contact.as_ref().expect("contact");
         let m = modified_masses(&p.mesh, &p.material, &p.dofs, &c.nodes).expect("modified mass");
         let mut lumped = vec![0.0; p.mesh.plane().expect("a 2-D mesh").nodes.len()];
         for tri in &p.mesh.plane().expect("a 2-D mesh").triangles {
-            let x = [p.mesh.plane().expect("a 2-D mesh").nodes[tri[0]], p.mesh.plane().expect("a 2-D mesh").nodes[tri[1]], p.mesh.plane().expect("a 2-D mesh").nodes[tri[2]]];
+            let x = [
+                p.mesh.plane().expect("a 2-D mesh").nodes[tri[0]],
+                p.mesh.plane().expect("a 2-D mesh").nodes[tri[1]],
+                p.mesh.plane().expect("a 2-D mesh").nodes[tri[2]],
+            ];
             let a = dyncontact::fem::element::gradients(x).1.abs();
             for &v in tri {
                 lumped[v] += p.material.rho * a / 3.0;
@@ -217,12 +231,27 @@ fn r1_modified_mass_keeps_total_mass_and_centre_of_mass() {
         };
         let (t0, x0, y0) = moments(&lumped);
         let (t1, x1, y1) = moments(&m);
-        println!("{name}: total {t0:.6e} → {t1:.6e}, centre ({:.6}, {:.6}) → ({:.6}, {:.6}), min mass {:.3e}", x0 / t0, y0 / t0, x1 / t1, y1 / t1, m.iter().zip(0..).filter(|(_, j)| !c.nodes.contains(j)).map(|(v, _)| *v).fold(f64::INFINITY, f64::min));
+        println!(
+            "{name}: total {t0:.6e} → {t1:.6e}, centre ({:.6}, {:.6}) → ({:.6}, {:.6}), min mass {:.3e}",
+            x0 / t0,
+            y0 / t0,
+            x1 / t1,
+            y1 / t1,
+            m.iter().zip(0..).filter(|(_, j)| !c.nodes.contains(j)).map(|(v, _)| *v).fold(f64::INFINITY, f64::min)
+        );
         let scale = p.mesh.bbox_diameter();
         assert!((t1 - t0).abs() <= 1e-13 * t0, "{name}: total mass changed");
-        assert!((x1 / t1 - x0 / t0).abs() <= 1e-13 * scale && (y1 / t1 - y0 / t0).abs() <= 1e-13 * scale, "{name}: centre of mass moved");
+        assert!(
+            (x1 / t1 - x0 / t0).abs() <= 1e-13 * scale && (y1 / t1 - y0 / t0).abs() <= 1e-13 * scale,
+            "{name}: centre of mass moved"
+        );
         assert!(c.nodes.iter().all(|&i| m[i] == 0.0));
-        assert!(m.iter().enumerate().filter(|(j, _)| !c.nodes.contains(j) && p.dofs.map[2 * j].is_some()).all(|(_, v)| *v > 0.0));
+        assert!(
+            m.iter()
+                .enumerate()
+                .filter(|(j, _)| !c.nodes.contains(j) && p.dofs.map[2 * j].is_some())
+                .all(|(_, v)| *v > 0.0)
+        );
     }
 }
 
@@ -254,11 +283,19 @@ fn r1_modified_mass_in_3d() {
         };
         let (a, b) = (moments(&lumped), moments(&m));
         let scale = p.mesh.bbox_diameter();
-        println!("{name}: total {:.6e} → {:.6e}, centre moves by {:.1e}", a[0], b[0], (1..4).map(|k| (b[k] / b[0] - a[k] / a[0]).abs()).fold(0.0, f64::max));
+        println!(
+            "{name}: total {:.6e} → {:.6e}, centre moves by {:.1e}",
+            a[0],
+            b[0],
+            (1..4).map(|k| (b[k] / b[0] - a[k] / a[0]).abs()).fold(0.0, f64::max)
+        );
         assert!((b[0] - a[0]).abs() <= 1e-13 * a[0], "{name}: total mass changed");
         assert!((1..4).all(|k| (b[k] / b[0] - a[k] / a[0]).abs() <= 1e-13 * scale), "{name}: centre of mass moved");
         assert!(c.nodes.iter().all(|&i| m[i] == 0.0), "{name}: a contact node keeps mass");
-        assert!((0..m.len()).filter(|j| !c.nodes.contains(j) && p.dofs.map[3 * j].is_some()).all(|j| m[j] > 0.0), "{name}: a free node without mass");
+        assert!(
+            (0..m.len()).filter(|j| !c.nodes.contains(j) && p.dofs.map[3 * j].is_some()).all(|j| m[j] > 0.0),
+            "{name}: a free node without mass"
+        );
     }
     // B.1 in 3-D with the lumped and the modified mass
     let error = |s: Scene| {
@@ -266,7 +303,9 @@ fn r1_modified_mass_in_3d() {
         let recs = records(&problem(s));
         let (mut num, mut den) = (0.0, 0.0);
         for r in recs.iter().skip(1).filter(|r| r.t <= 2.4) {
-            let exact = 0.5 * (bar_impact_force(1.0, 1.0, 1.0, 0.1, r.t - k) + bar_impact_force(1.0, 1.0, 1.0, 0.1, r.t)) * 0.01;
+            let exact = 0.5
+                * (bar_impact_force(1.0, 1.0, 1.0, 0.1, r.t - k) + bar_impact_force(1.0, 1.0, 1.0, 0.1, r.t))
+                * 0.01;
             num += (r.normal_force - exact).abs() * k;
             den += exact * k;
         }
@@ -276,7 +315,9 @@ fn r1_modified_mass_in_3d() {
     };
     let (e_lumped, trapped_lumped, _) = error(fixture("column_impact3d"));
     let (e_mod, trapped_mod, residual_mod) = error(with(fixture("column_impact3d"), Variant::ModifiedMass));
-    println!("column impact 3-D: force error lumped {e_lumped:.3e} (trapped KE {trapped_lumped:.2e}), modified {e_mod:.3e} (trapped {trapped_mod:.2e}, (E.1) {residual_mod:.1e})");
+    println!(
+        "column impact 3-D: force error lumped {e_lumped:.3e} (trapped KE {trapped_lumped:.2e}), modified {e_mod:.3e} (trapped {trapped_mod:.2e}, (E.1) {residual_mod:.1e})"
+    );
     common::measured("chatter::r1_modified_mass_in_3d", "B.1 3-D force error, modified mass", e_mod, "< lumped");
     common::measured("chatter::r1_modified_mass_in_3d", "B.1 3-D force error, lumped mass", e_lumped, "reported");
     assert_eq!(trapped_mod, 0.0, "the modified mass traps kinetic energy");

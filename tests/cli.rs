@@ -41,7 +41,8 @@ fn cli_run_default_scene_writes_outputs() {
     let c = header(&out.join("contact.csv"));
     let want_c: Vec<&str> = CONTACT.split(',').collect();
     assert_eq!(&c[..want_c.len()], want_c.as_slice(), "contact.csv columns");
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
     assert_eq!(summary["status"], "completed");
     assert_eq!(summary["scene"], "academic");
     assert_eq!(summary["steps_completed"], 2000);
@@ -51,7 +52,8 @@ fn cli_run_default_scene_writes_outputs() {
     let warnings = summary["warnings"].as_array().expect("warnings");
     assert!(warnings.iter().all(|w| w.as_str().unwrap_or("").contains("(C.k)")), "unexpected warnings: {warnings:?}");
     let pvd = std::fs::read_to_string(out.join("series.pvd")).expect("pvd");
-    let listed: Vec<&str> = pvd.lines().filter_map(|l| l.split("file=\"").nth(1)).map(|s| s.trim_end_matches("\"/>")).collect();
+    let listed: Vec<&str> =
+        pvd.lines().filter_map(|l| l.split("file=\"").nth(1)).map(|s| s.trim_end_matches("\"/>")).collect();
     assert_eq!(listed.len(), 201, "frames every 10 steps, t = 0 included");
     for f in &listed {
         assert!(out.join(f).exists(), "{f} listed but missing");

@@ -6,14 +6,14 @@ mod common;
 
 use common::{fixture, problem, records, records_with};
 use dyncontact::linalg;
-use faer::linalg::solvers::DenseSolveCore;
 use dyncontact::problem::Problem;
 use dyncontact::scene::{Bound, FixedPointAcceleration, FrictionLaw, NumOrStr};
 use dyncontact::simulation::{Settings, Simulation};
 use dyncontact::step::conic::ConicSettings;
 use dyncontact::step::fixed_point::Inner;
 use dyncontact::step::newton::{self, NewtonSettings};
-use dyncontact::step::{conic, StepData};
+use dyncontact::step::{StepData, conic};
+use faer::linalg::solvers::DenseSolveCore;
 
 /// A frictionless scene does zero fixed-point iterations (one convex solve per step).
 #[test]
@@ -80,12 +80,21 @@ fn twins_on(p: &Problem, steps: usize) -> (f64, f64) {
         let rb = data.forces(&b.y, &b.lambda, &b.t);
         // the conic solver works in r̃ = r/V with V the velocity scale, so its absolute force
         // accuracy is relative to V/‖W‖ as well as to the forces themselves
-        let w_norm = (0..data.delassus.dim()).map(|i| (0..data.delassus.dim()).map(|j| data.delassus[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
+        let w_norm = (0..data.delassus.dim())
+            .map(|i| (0..data.delassus.dim()).map(|j| data.delassus[(i, j)].abs()).sum::<f64>())
+            .fold(0.0, f64::max);
         let fs = linalg::norm_inf(&ra).max(data.velocity_scale(&data.y_free) / w_norm).max(1e-300);
         if linalg::norm_inf(&ra) > 0.0 {
             let (dv, df) = (rel(&a.y, &b.y, vs), rel(&ra, &rb, fs));
             if std::env::var_os("TWIN_DEBUG").is_some() && (dv > 1e-6 || df > 1e-6) {
-                println!("step {}: dv {dv:.3e} df {df:.3e} vs {vs:.3e} fs {fs:.3e} y_newton {:?} y_conic {:?} status {:?} {:?}", sim.state.n + 1, &a.y[..6], &b.y[..6], &a.status[..3], &b.status[..3]);
+                println!(
+                    "step {}: dv {dv:.3e} df {df:.3e} vs {vs:.3e} fs {fs:.3e} y_newton {:?} y_conic {:?} status {:?} {:?}",
+                    sim.state.n + 1,
+                    &a.y[..6],
+                    &b.y[..6],
+                    &a.status[..3],
+                    &b.status[..3]
+                );
             }
             worst_v = worst_v.max(dv);
             worst_f = worst_f.max(df);
@@ -125,8 +134,18 @@ fn s6_twins_newton_and_conic_agree() {
         let p = problem(s);
         let (v, f) = twins_on(&p, steps);
         println!("{name}: worst relative difference: velocity {v:.3e}, force {f:.3e}");
-        common::measured("contact::s6_twins_newton_and_conic_agree", &format!("twins: velocity difference ({name})"), v, "≤ 1e-5");
-        common::measured("contact::s6_twins_newton_and_conic_agree", &format!("twins: force difference ({name})"), f, "≤ 1e-5");
+        common::measured(
+            "contact::s6_twins_newton_and_conic_agree",
+            &format!("twins: velocity difference ({name})"),
+            v,
+            "≤ 1e-5",
+        );
+        common::measured(
+            "contact::s6_twins_newton_and_conic_agree",
+            &format!("twins: force difference ({name})"),
+            f,
+            "≤ 1e-5",
+        );
         assert!(v <= 1e-5 && f <= 1e-5, "{name}: the twins disagree: velocity {v:.3e}, force {f:.3e}");
     }
 }
@@ -142,7 +161,9 @@ fn n2_n3_alart_curnier_parameters_do_not_change_the_solution() {
     let p = problem(s);
     let mut sim = Simulation::new(&p).expect("setup");
     let mut worst = 0.0f64;
-    for rec in sim.steps().before_each(|sim| {
+    for rec in sim
+        .steps()
+        .before_each(|sim| {
             let (w, _) = sim.free_velocity();
             let c = p.contact.as_ref().expect("contact");
             let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
@@ -160,11 +181,18 @@ fn n2_n3_alart_curnier_parameters_do_not_change_the_solution() {
                     worst = worst.max(rel(&ra, &rb, fs));
                 }
             }
-    }).take(p.steps) {
+        })
+        .take(p.steps)
+    {
         rec.expect("step");
     }
     println!("worst relative change under rescaling: {worst:.3e}");
-    common::measured("contact::n2_n3_alart_curnier_parameters_do_not_change_the_solution", "change under r ×10, ×0.1", worst, "≤ 1e-9");
+    common::measured(
+        "contact::n2_n3_alart_curnier_parameters_do_not_change_the_solution",
+        "change under r ×10, ×0.1",
+        worst,
+        "≤ 1e-9",
+    );
     assert!(worst <= 1e-9, "rescaled Alart–Curnier parameters changed the solution by {worst:.3e}");
 }
 
@@ -214,7 +242,13 @@ fn compliance_potential(law: &dyncontact::model::laws::NormalLaw, a: f64, x: f64
 
 /// The true (unfrozen) step functional of (S.6) in the contact velocities y:
 /// ½(y − y_free)ᵀW⁻¹(y − y_free) + Σ (ω/a_d) F(d^{n+1}(y)) + Σ (ω p̂_τ/a_v) ψ(v̄(y)).
-fn step_functional(data: &StepData, winv: &faer::Mat<f64>, mu: &dyncontact::model::laws::FrictionCoefficient, p_hat: &[f64], y: &[f64]) -> f64 {
+fn step_functional(
+    data: &StepData,
+    winv: &faer::Mat<f64>,
+    mu: &dyncontact::model::laws::FrictionCoefficient,
+    p_hat: &[f64],
+    y: &[f64],
+) -> f64 {
     let m = y.len();
     let e: Vec<f64> = (0..m).map(|j| y[j] - data.y_free[j]).collect();
     let mut phi = 0.0;
@@ -250,7 +284,9 @@ fn f1_step_functional_decreases_under_ck() {
     let wmat = sim.delassus.as_ref().expect("W").to_dense();
     let winv = wmat.partial_piv_lu().inverse();
     let (mut checked, mut worst) = (0usize, 0.0f64);
-    for rec in sim.steps().before_each(|sim| {
+    for rec in sim
+        .steps()
+        .before_each(|sim| {
             let (w, _) = sim.free_velocity();
             let c = p.contact.as_ref().expect("contact");
             let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
@@ -264,10 +300,14 @@ fn f1_step_functional_decreases_under_ck() {
                 assert!(w[1] <= w[0] + allowance, "step {}: Φ rose from {} to {}", sim.state.n + 1, w[0], w[1]);
                 checked += 1;
             }
-    }).take(p.steps) {
+        })
+        .take(p.steps)
+    {
         rec.expect("step");
     }
-    println!("checked {checked} fixed-point iterations; largest relative change of Φ {worst:.3e} (negative = decrease)");
+    println!(
+        "checked {checked} fixed-point iterations; largest relative change of Φ {worst:.3e} (negative = decrease)"
+    );
     assert!(checked > 100, "too few fixed-point iterations to check");
 }
 
@@ -286,7 +326,11 @@ fn f1_relaxation_gives_the_same_solution() {
     set.fixed_point.max_iterations = 200;
     let b = records_with(&p, set);
     let scale = a.iter().map(|r| r.normal_force.abs() + r.tangential_force.abs()).fold(0.0, f64::max);
-    let diff = a.iter().zip(&b).map(|(x, y)| (x.tangential_force - y.tangential_force).abs() + (x.normal_force - y.normal_force).abs()).fold(0.0, f64::max);
+    let diff = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (x.tangential_force - y.tangential_force).abs() + (x.normal_force - y.normal_force).abs())
+        .fold(0.0, f64::max);
     let fa: usize = a.iter().map(|r| r.report.fixed_point_iterations).sum();
     let fb: usize = b.iter().map(|r| r.report.fixed_point_iterations).sum();
     println!("θ = 1: {fa} fixed-point iterations, θ = 0.5: {fb}; force difference {:.3e} of {scale:.3e}", diff);
@@ -311,7 +355,10 @@ fn reduced_vs_full(p: &Problem, steps: usize, tolerance: f64) -> (f64, f64, f64)
         cold.factors = &fresh;
         let a_cold = newton::solve(&cold, s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced, cold");
         let vs = data.velocity_scale(&a.y).max(1e-300);
-        warm_cold = warm_cold.max(rel(&a_cold.y, &a.y, vs)).max(rel(&a_cold.lambda, &a.lambda, 1.0)).max(rel(&a_cold.t, &a.t, 1.0));
+        warm_cold = warm_cold
+            .max(rel(&a_cold.y, &a.y, vs))
+            .max(rel(&a_cold.lambda, &a.lambda, 1.0))
+            .max(rel(&a_cold.t, &a.t, 1.0));
         let ra = data.forces(&a.y, &a.lambda, &a.t);
         let rb = data.forces(&b.y, &b.lambda, &b.t);
         if linalg::norm_inf(&ra) > 0.0 {
@@ -333,7 +380,9 @@ fn reduced_newton_system_agrees_with_the_full_one() {
     for (name, steps) in [("impact_friction", usize::MAX), ("compliant_layer", usize::MAX), ("academic", 600)] {
         let p = problem(fixture(name));
         let (dv, df, warm_cold) = reduced_vs_full(&p, steps, 1e-12);
-        println!("{name}: reduced vs full Newton system, worst per-step difference: velocity {dv:.3e}, force {df:.3e}; cache warm vs cold {warm_cold:.1e}");
+        println!(
+            "{name}: reduced vs full Newton system, worst per-step difference: velocity {dv:.3e}, force {df:.3e}; cache warm vs cold {warm_cold:.1e}"
+        );
         assert!(dv <= 1e-12 && df <= 1e-12, "{name}: velocity {dv:.3e}, force {df:.3e}");
         assert!(warm_cold == 0.0, "{name}: a reused factorization changed the answer ({warm_cold:.3e})");
     }
@@ -355,15 +404,28 @@ fn reduced_newton_system_agrees_with_the_full_one_in_3d() {
     let mut big = fixture("academic3d");
     big.domain.cells = Some(vec![12, 8, 4]);
     big.time.end = 0.3;
-    for (name, s, steps) in [("sliding_block3d", fixture("sliding_block3d"), 400), ("academic3d 12×8×4", big, usize::MAX)] {
+    for (name, s, steps) in
+        [("sliding_block3d", fixture("sliding_block3d"), 400), ("academic3d 12×8×4", big, usize::MAX)]
+    {
         let p = problem(s);
         let (dv, df, warm_cold) = reduced_vs_full(&p, steps, 1e-13);
-        println!("{name}: reduced vs full Newton system in 3-D, worst per-step difference: velocity {dv:.3e}, force {df:.3e}; cache warm vs cold {warm_cold:.1e}");
-        common::measured("reduced_newton_system_agrees_with_the_full_one_in_3d", &format!("{name}: per-step force difference"), df, "≤ 1e-9");
+        println!(
+            "{name}: reduced vs full Newton system in 3-D, worst per-step difference: velocity {dv:.3e}, force {df:.3e}; cache warm vs cold {warm_cold:.1e}"
+        );
+        common::measured(
+            "reduced_newton_system_agrees_with_the_full_one_in_3d",
+            &format!("{name}: per-step force difference"),
+            df,
+            "≤ 1e-9",
+        );
         assert!(dv <= 1e-12 && df <= 1e-9, "{name}: velocity {dv:.3e}, force {df:.3e}");
         assert!(warm_cold <= 1e-9, "{name}: warm and cold factor caches differ by {warm_cold:.3e}");
         let sim = Simulation::new(&p).expect("setup");
-        assert_eq!(sim.inverse.is_some(), p.contact.as_ref().is_some_and(|c| c.dim * c.n() >= 256), "{name}: the velocity form's rule");
+        assert_eq!(
+            sim.inverse.is_some(),
+            p.contact.as_ref().is_some_and(|c| c.dim * c.n() >= 256),
+            "{name}: the velocity form's rule"
+        );
     }
 }
 
@@ -389,8 +451,18 @@ fn f1_anderson_reaches_the_plain_fixed_point() {
         let normal = dyncontact::step::fixed_point::NormalPart::Predictor(&p_hat);
         let vn = c.restrict(&sim.state.v);
         let run = |fp| {
-            dyncontact::step::fixed_point::solve(&data, c.friction.as_ref(), &normal, &vn, &sim.state.lambda, &sim.state.t_fric, &Inner::Newton(set), &fp, None)
-                .expect("F.1")
+            dyncontact::step::fixed_point::solve(
+                &data,
+                c.friction.as_ref(),
+                &normal,
+                &vn,
+                &sim.state.lambda,
+                &sim.state.t_fric,
+                &Inner::Newton(set),
+                &fp,
+                None,
+            )
+            .expect("F.1")
         };
         let (a, _, ra) = run(plain);
         let (b, _, rb) = run(accelerated);
@@ -403,7 +475,10 @@ fn f1_anderson_reaches_the_plain_fixed_point() {
     }) {
         rec.expect("step");
     }
-    println!("F.1 plain vs Anderson from the same state: worst force difference {worst:.3e}; convex solves {} vs {}", solves[0], solves[1]);
+    println!(
+        "F.1 plain vs Anderson from the same state: worst force difference {worst:.3e}; convex solves {} vs {}",
+        solves[0], solves[1]
+    );
     assert!(worst <= 1e-6, "{worst:.3e}");
     assert!(solves[1] < solves[0], "the extrapolation should save solves: {solves:?}");
 }

@@ -43,7 +43,8 @@ fn strip(n: i64, k: f64, steps: usize) -> Scene {
 /// with each form of W; the worst relative differences of the contact velocities and forces.
 fn per_step(p: &Problem, steps: usize) -> (f64, f64) {
     let c = p.contact.as_ref().expect("contact");
-    let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| p.mesh.plane().expect("a 2-D mesh").nodes[i]).map(|x| [x[0], x[1], 0.0]).collect();
+    let positions: Vec<[f64; 3]> =
+        c.nodes.iter().map(|&i| p.mesh.plane().expect("a 2-D mesh").nodes[i]).map(|x| [x[0], x[1], 0.0]).collect();
     let setup = Simulation::new(p).expect("setup");
     let w_sparse = delassus::build(setup.stepper.factor(), c, &positions, ContactSolve::Sparse);
     assert_eq!(w_sparse.form(), "sparse");
@@ -76,7 +77,12 @@ fn sparse_and_dense_contact_solves_agree_per_step() {
         let p = problem(fixture(name));
         let (dv, df) = per_step(&p, steps.min(p.steps));
         println!("{name}: sparse vs dense W, worst per-step difference: velocity {dv:.3e}, force {df:.3e}");
-        measured("sparse_and_dense_contact_solves_agree_per_step", &format!("{name}: per-step force difference"), df, "≤ 2e-9");
+        measured(
+            "sparse_and_dense_contact_solves_agree_per_step",
+            &format!("{name}: per-step force difference"),
+            df,
+            "≤ 2e-9",
+        );
         assert!(dv <= 2e-9 && df <= 2e-9, "{name}: velocity {dv:.3e}, force {df:.3e}");
     }
 }
@@ -102,7 +108,10 @@ fn large_strip_sparse_equals_dense() {
             let w = sim.delassus.as_ref().expect("W");
             assert_eq!(w.form(), if form == ContactSolve::Dense { "dense" } else { "sparse" });
             if let Some(st) = w.sparse_stats() {
-                println!("sparse W: radius {:.3}, {} colours, {} solves, density {:.4}, apply error {:.2e}", st.radius, st.colours, st.solves, st.density, st.apply_error);
+                println!(
+                    "sparse W: radius {:.3}, {} colours, {} solves, density {:.4}, apply error {:.2e}",
+                    st.radius, st.colours, st.solves, st.density, st.apply_error
+                );
                 // the truncation is 1e-12 of the diagonal; its effect on a response is of that order
                 assert!(st.apply_error <= 1e-10, "apply error {:.3e}", st.apply_error);
                 assert!(st.solves < 200, "{} solves", st.solves);
@@ -146,7 +155,8 @@ fn recovery_by_responses_equals_recovery_by_solve() {
     let m = w.nrows();
     let mut worst = 0.0f64;
     for stride in [1, 2, m] {
-        let r: Vec<f64> = (0..m).map(|l| if l % stride == 0 { ((l * 37 % 11) as f64 - 5.0) * 1e3 } else { 0.0 }).collect();
+        let r: Vec<f64> =
+            (0..m).map(|l| if l % stride == 0 { ((l * 37 % 11) as f64 - 5.0) * 1e3 } else { 0.0 }).collect();
         let mut by_solve = vec![0.0; a.dim()];
         c.scatter_add(&r, &mut by_solve);
         a.solve_in_place(&mut by_solve);

@@ -6,8 +6,8 @@
 
 mod common;
 
-use dyncontact::studies::convergence::convergence;
 use dyncontact::scene::SchemeKind;
+use dyncontact::studies::convergence::convergence;
 
 fn orders(e: &[f64]) -> Vec<f64> {
     e.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
@@ -19,14 +19,20 @@ fn orders(e: &[f64]) -> Vec<f64> {
 fn academic_scene_converges_under_refinement() {
     for scheme in [SchemeKind::Midpoint, SchemeKind::BackwardEuler] {
         let rows = convergence(scheme, 3, 0.3).expect("study");
-        let col = |f: fn(&dyncontact::studies::convergence::ConvergenceRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+        let col =
+            |f: fn(&dyncontact::studies::convergence::ConvergenceRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
         let (force, imp, disp) = (col(|r| r.error_force), col(|r| r.error_impulse), col(|r| r.error_disp));
         println!("{scheme:?}: force {force:?} orders {:?}", orders(&force));
         println!("{scheme:?}: impulse {imp:?} orders {:?}", orders(&imp));
         println!("{scheme:?}: displacement {disp:?} orders {:?}", orders(&disp));
         for (q, e) in [("impulse", &imp), ("displacement", &disp), ("force per step", &force)] {
             let o = orders(e);
-            common::measured("convergence::academic_scene_converges_under_refinement", &format!("academic {scheme:?}: {q} order (16x8 → 32x16)"), o[o.len() - 1], "reported");
+            common::measured(
+                "convergence::academic_scene_converges_under_refinement",
+                &format!("academic {scheme:?}: {q} order (16x8 → 32x16)"),
+                o[o.len() - 1],
+                "reported",
+            );
         }
         assert!(imp.windows(2).all(|w| w[1] < w[0]), "{scheme:?}: impulse error does not fall: {imp:?}");
         assert!(disp.windows(2).all(|w| w[1] < w[0]), "{scheme:?}: displacement error does not fall: {disp:?}");

@@ -10,13 +10,13 @@
 mod common;
 
 use common::{fixture, mean_velocity_x, problem, records};
+use dyncontact::linalg;
 use dyncontact::reference::sliding_block_velocity;
 use dyncontact::scene::{BoundAt, FrictionBound, FrictionLaw, NumOrStr, Scene};
 use dyncontact::simulation::Simulation;
-use dyncontact::linalg;
+use dyncontact::step::NodeStatus;
 use dyncontact::step::fixed_point::Inner;
 use dyncontact::step::newton::NewtonSettings;
-use dyncontact::step::NodeStatus;
 
 /// The sliding block of B.3 on a rigid foundation (Signorini, g = 0) with Coulomb friction
 /// bounded by the whole contact force.
@@ -76,12 +76,21 @@ fn co1_b3_signorini_coulomb_block_slides_with_closed_form() {
             let s_scale = rec.nodes.iter().map(|nr| nr.bound).fold(0.0, f64::max);
             for nr in rec.nodes.iter().filter(|nr| nr.status == NodeStatus::Slip) {
                 let s_law = mu(nr.v_t.abs()) * (nr.p + nr.lambda);
-                law_defect = law_defect.max((nr.friction.abs() - nr.bound).abs().max((nr.bound - s_law).abs()) / s_scale);
+                law_defect =
+                    law_defect.max((nr.friction.abs() - nr.bound).abs().max((nr.bound - s_law).abs()) / s_scale);
             }
         }
     }
-    println!("Signorini–Coulomb B.3: worst |v_h − v| = {worst:.3e}, final v_h = {:.5}; Coulomb law defect {law_defect:.2e}", mean_velocity_x(&sim));
-    common::measured("coulomb::co1_b3_signorini_coulomb_block_slides_with_closed_form", "B.3 Signorini–Coulomb velocity error", worst, "≤ 5e-3");
+    println!(
+        "Signorini–Coulomb B.3: worst |v_h − v| = {worst:.3e}, final v_h = {:.5}; Coulomb law defect {law_defect:.2e}",
+        mean_velocity_x(&sim)
+    );
+    common::measured(
+        "coulomb::co1_b3_signorini_coulomb_block_slides_with_closed_form",
+        "B.3 Signorini–Coulomb velocity error",
+        worst,
+        "≤ 5e-3",
+    );
     assert!(law_defect <= 1e-6, "a slipping node is off Coulomb's law by {law_defect:.2e}");
     assert!(worst <= 5e-3, "sliding velocity off the closed form by {worst:.3e}");
 }
@@ -92,7 +101,8 @@ fn co1_b3_signorini_coulomb_block_slides_with_closed_form() {
 #[test]
 fn co1_b3_signorini_coulomb_block_sticks_below_threshold() {
     let mut s = signorini_coulomb_block();
-    s.loads.body.as_mut().expect("the fixture gives a body force")[0] = "27.5*if(t < 0.1, 0, if(t < 0.15, 0.5*(1 - cos(pi*(t - 0.1)/0.05)), 1))".into();
+    s.loads.body.as_mut().expect("the fixture gives a body force")[0] =
+        "27.5*if(t < 0.1, 0, if(t < 0.15, 0.5*(1 - cos(pi*(t - 0.1)/0.05)), 1))".into();
     let p = problem(s);
     let mut sim = Simulation::new(&p).expect("setup");
     let mut worst: f64 = 0.0;
@@ -103,7 +113,10 @@ fn co1_b3_signorini_coulomb_block_sticks_below_threshold() {
         worst = worst.max(mean_velocity_x(steps.simulation()).abs());
     }
     let last = last.expect("steps");
-    println!("stuck: largest |mean velocity| {worst:.3e}; stick {} of {} in contact", last.stick_nodes, last.contact_nodes);
+    println!(
+        "stuck: largest |mean velocity| {worst:.3e}; stick {} of {} in contact",
+        last.stick_nodes, last.contact_nodes
+    );
     assert!(worst <= 1e-4, "the block moved: {worst:.3e}");
     assert!(last.contact_nodes > 0 && last.stick_nodes == last.contact_nodes, "not every contact node sticks");
 }
@@ -135,7 +148,9 @@ fn co1_oblique_bar_impact_slips_with_coulomb_force() {
     assert!(slipping_steps > 100, "the face should slip through the impact ({slipping_steps} steps)");
     // momentum: P_y(t_{n+1}) − P_y(t_n) = k (force on the body)_y; τ = (−ν_2, ν_1) = (0, −1) on the left side
     let mut sim = Simulation::new(&p).expect("setup");
-    let momentum_y = |sim: &Simulation| -> f64 { sim.ops.m_lumped.iter().zip(&sim.state.v).skip(1).step_by(2).map(|(m, v)| m * v).sum() };
+    let momentum_y = |sim: &Simulation| -> f64 {
+        sim.ops.m_lumped.iter().zip(&sim.state.v).skip(1).step_by(2).map(|(m, v)| m * v).sum()
+    };
     let p0 = momentum_y(&sim);
     let (mut impulse, mut worst) = (0.0, 0.0f64);
     let mut steps = sim.steps();
@@ -145,7 +160,9 @@ fn co1_oblique_bar_impact_slips_with_coulomb_force() {
         worst = worst.max((momentum_y(steps.simulation()) - p0 - impulse).abs());
     }
     let scale: f64 = 0.1 * 0.2; // m w0 (ρ = 1, area 0.1)
-    println!("oblique impact: {slipping_steps} slipping steps, tangential impulse {impulse:.6e}, worst momentum defect {worst:.3e}");
+    println!(
+        "oblique impact: {slipping_steps} slipping steps, tangential impulse {impulse:.6e}, worst momentum defect {worst:.3e}"
+    );
     assert!(impulse < 0.0, "friction opposes the +y slip");
     // round-off of sums over 202 nodes accumulated over 1200 steps: far below 1e-10 of m w0
     assert!(worst <= 1e-10 * scale, "momentum defect {worst:.3e}");
@@ -166,16 +183,26 @@ fn co2_bound_at_midpoint_and_total_keep_the_energy_balance() {
     };
     let predictor = records(&problem(base.clone()));
     for (what, edit) in [
-        ("midpoint", (|c: &mut dyncontact::scene::Contact| c.friction_bound_at = BoundAt::Midpoint) as fn(&mut dyncontact::scene::Contact)),
+        (
+            "midpoint",
+            (|c: &mut dyncontact::scene::Contact| c.friction_bound_at = BoundAt::Midpoint)
+                as fn(&mut dyncontact::scene::Contact),
+        ),
         ("total", |c: &mut dyncontact::scene::Contact| c.friction_bound = FrictionBound::Total),
     ] {
         let mut s = base.clone();
         edit(s.contact.as_mut().expect("contact"));
         let recs = records(&problem(s));
-        let worst = recs.iter().map(|r| r.energy.residual.abs() / r.energy_scale.max(f64::MIN_POSITIVE)).fold(0.0, f64::max);
-        let friction = |rs: &[dyncontact::simulation::StepRecord]| rs.last().expect("records").energy.friction_dissipation;
+        let worst =
+            recs.iter().map(|r| r.energy.residual.abs() / r.energy_scale.max(f64::MIN_POSITIVE)).fold(0.0, f64::max);
+        let friction =
+            |rs: &[dyncontact::simulation::StepRecord]| rs.last().expect("records").energy.friction_dissipation;
         let change = (friction(&recs) - friction(&predictor)).abs() / friction(&predictor);
-        println!("{what}: largest (E.1) defect {worst:.2e}; friction dissipation {:.6e} vs predictor {:.6e} ({change:.2e})", friction(&recs), friction(&predictor));
+        println!(
+            "{what}: largest (E.1) defect {worst:.2e}; friction dissipation {:.6e} vs predictor {:.6e} ({change:.2e})",
+            friction(&recs),
+            friction(&predictor)
+        );
         assert!(worst <= 1e-10, "{what}: (E.1) defect {worst:.2e}");
         assert!(friction(&recs) > 0.0, "{what}: friction acts");
     }
@@ -226,7 +253,8 @@ fn co3_coupled_newton_agrees_with_the_fixed_point() {
             let (v_free, _) = sim.free_velocity();
             let (data, p_hat) = sim.step_data(c.restrict(&v_free)).expect("contact data");
             let (f1, _, r1) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).expect("F.1");
-            let (co, _, r2) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).expect("coupled");
+            let (co, _, r2) =
+                sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).expect("coupled");
             (it_f1, it_c) = (it_f1 + r1.inner_iterations, it_c + r2.inner_iterations);
             fallbacks += usize::from(r2.fallback.is_some());
             let vs = data.velocity_scale(&f1.y).max(1e-300);
@@ -240,8 +268,15 @@ fn co3_coupled_newton_agrees_with_the_fixed_point() {
                 None => break,
             }
         }
-        println!("{name}: worst difference {worst:.2e}; {fallbacks} fallbacks; Newton iterations F.1 {it_f1}, coupled {it_c}");
-        common::measured("coulomb::co3_coupled_newton_agrees_with_the_fixed_point", &format!("Co.3 vs F.1 per step, {name}"), worst, "≤ 1e-6");
+        println!(
+            "{name}: worst difference {worst:.2e}; {fallbacks} fallbacks; Newton iterations F.1 {it_f1}, coupled {it_c}"
+        );
+        common::measured(
+            "coulomb::co3_coupled_newton_agrees_with_the_fixed_point",
+            &format!("Co.3 vs F.1 per step, {name}"),
+            worst,
+            "≤ 1e-6",
+        );
         assert!(worst <= 1e-6, "{name}: F.1 and the coupled Newton differ by {worst:.2e}");
         assert_eq!(fallbacks, 0, "{name}: the coupled Newton fell back to F.1");
     }
@@ -253,13 +288,17 @@ fn co3_coupled_newton_agrees_with_the_fixed_point() {
 /// ≥ 2.8, i.e. an observed order ≥ 1.5 — measured ratio 4.5).
 #[test]
 fn co2_bound_at_study_runs_and_converges_on_the_soft_block() {
-    use dyncontact::studies::bound_at::{csv, rows, BoundAtOptions};
+    use dyncontact::studies::bound_at::{BoundAtOptions, csv, rows};
     let rows = rows(&BoundAtOptions { quick: true }).expect("study");
     assert_eq!(rows.len(), 2 * 2 * 2 * 2);
     assert!(rows.iter().all(|r| r.error_tangential.is_finite() && r.error_tangential > 0.0));
     assert!(csv(&rows).starts_with("case,compliance,bound_at,k,error_tangential_impulse,wall_time_s\n"));
     for at in [BoundAt::Predictor, BoundAt::Midpoint] {
-        let e: Vec<f64> = rows.iter().filter(|r| r.case == "block" && r.compliance == 1e3 && r.at == at).map(|r| r.error_tangential).collect();
+        let e: Vec<f64> = rows
+            .iter()
+            .filter(|r| r.case == "block" && r.compliance == 1e3 && r.at == at)
+            .map(|r| r.error_tangential)
+            .collect();
         println!("block, c = 1e3, {at:?}: {e:?}");
         assert!(e[0] / e[1] >= 2.8, "{at:?}: {e:?}");
     }

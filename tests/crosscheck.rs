@@ -8,7 +8,7 @@ mod common;
 use std::collections::HashMap;
 
 use common::{fixture, problem};
-use dyncontact::fem::assemble::{assemble_full, Dofs};
+use dyncontact::fem::assemble::{Dofs, assemble_full};
 use dyncontact::linalg;
 
 fn reference(name: &str) -> std::path::PathBuf {
@@ -19,12 +19,16 @@ fn reference(name: &str) -> std::path::PathBuf {
 fn read_mtx(name: &str) -> (usize, HashMap<(usize, usize), f64>) {
     let text = std::fs::read_to_string(reference(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
     let mut lines = text.lines().filter(|l| !l.starts_with('%'));
-    let head: Vec<usize> = lines.next().expect("size line").split_whitespace().map(|w| w.parse().expect("size")).collect();
+    let head: Vec<usize> =
+        lines.next().expect("size line").split_whitespace().map(|w| w.parse().expect("size")).collect();
     let mut m = HashMap::new();
     for l in lines {
         let w: Vec<&str> = l.split_whitespace().collect();
         if w.len() == 3 {
-            m.insert((w[0].parse::<usize>().expect("row") - 1, w[1].parse::<usize>().expect("col") - 1), w[2].parse::<f64>().expect("value"));
+            m.insert(
+                (w[0].parse::<usize>().expect("row") - 1, w[1].parse::<usize>().expect("col") - 1),
+                w[2].parse::<f64>().expect("value"),
+            );
         }
     }
     (head[0], m)
@@ -42,7 +46,10 @@ fn rel_diff(ours: &linalg::SpMat, theirs: &HashMap<(usize, usize), f64>) -> f64 
     }
     let mut keys: Vec<&(usize, usize)> = a.keys().chain(theirs.keys()).collect();
     keys.dedup();
-    keys.iter().map(|k| (a.get(k).copied().unwrap_or(0.0) - theirs.get(k).copied().unwrap_or(0.0)).abs()).fold(0.0, f64::max) / scale
+    keys.iter()
+        .map(|k| (a.get(k).copied().unwrap_or(0.0) - theirs.get(k).copied().unwrap_or(0.0)).abs())
+        .fold(0.0, f64::max)
+        / scale
 }
 
 /// (P.1) (P.2) (P.4) M, K, C and f(0) equal scikit-fem's entry by entry to 1e-12 relative
@@ -51,7 +58,8 @@ fn rel_diff(ours: &linalg::SpMat, theirs: &HashMap<(usize, usize), f64>) -> f64 
 fn p1_p2_p4_operators_match_scikit_fem() {
     for name in ["crosscheck_strain", "crosscheck_stress", "crosscheck_elastic", "crosscheck_gmsh"] {
         let p = problem(fixture(name));
-        let (m, k, c) = assemble_full(p.mesh.plane().expect("a 2-D mesh"), &p.material, p.model.solver.mass).expect("assembly");
+        let (m, k, c) =
+            assemble_full(p.mesh.plane().expect("a 2-D mesh"), &p.material, p.model.solver.mass).expect("assembly");
         let n = 2 * p.mesh.plane().expect("a 2-D mesh").nodes.len();
         let mut report = Vec::new();
         for (label, ours) in [("M", &m), ("K", &k), ("C", &c)] {
@@ -61,10 +69,17 @@ fn p1_p2_p4_operators_match_scikit_fem() {
             report.push(format!("{label} {d:.2e}"));
             assert!(d <= 1e-12, "{name}: {label} differs from scikit-fem by {d:.3e}");
         }
-        let all = Dofs::new(p.mesh.plane().expect("a 2-D mesh").nodes.len(), &vec![false; p.mesh.plane().expect("a 2-D mesh").nodes.len()]);
+        let all = Dofs::new(
+            p.mesh.plane().expect("a 2-D mesh").nodes.len(),
+            &vec![false; p.mesh.plane().expect("a 2-D mesh").nodes.len()],
+        );
         let f = dyncontact::problem::build_loads(&p.model, &p.mesh, &all).expect("loads").at(0.0);
         let text = std::fs::read_to_string(reference(&format!("{name}_f.txt"))).expect("f");
-        let theirs: Vec<f64> = text.lines().filter(|l| !l.starts_with('%') && !l.trim().is_empty()).map(|l| l.trim().parse().expect("value")).collect();
+        let theirs: Vec<f64> = text
+            .lines()
+            .filter(|l| !l.starts_with('%') && !l.trim().is_empty())
+            .map(|l| l.trim().parse().expect("value"))
+            .collect();
         assert_eq!(theirs.len(), n);
         let scale = theirs.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let d = f.iter().zip(&theirs).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())) / scale;
@@ -79,10 +94,13 @@ fn p1_p2_p4_operators_match_scikit_fem() {
 /// relative; `test` names the measurements.
 fn solid_operators_match(mesh: &dyncontact::mesh::solid::SolidMesh, prefix: &str, test: &str) {
     use dyncontact::fem::assemble::assemble_solid;
-    use dyncontact::model::material::Material;
     use dyncontact::model::MaterialParams;
+    use dyncontact::model::material::Material;
     use dyncontact::scene::{MassKind, Plane};
-    let mat = Material::new(&MaterialParams { density: 1.3, young: 1000.0, poisson: 0.3, theta: 2.0, zeta: 1.5 }, Plane::Strain);
+    let mat = Material::new(
+        &MaterialParams { density: 1.3, young: 1000.0, poisson: 0.3, theta: 2.0, zeta: 1.5 },
+        Plane::Strain,
+    );
     let n = 3 * mesh.nodes.len();
     let mut report = Vec::new();
     for (mass, label) in [(MassKind::Consistent, "consistent"), (MassKind::Lumped, "lumped")] {

@@ -51,9 +51,20 @@ fn e1_energy_balance_without_contact() {
     let recs = records(&p);
     let worst = recs.iter().map(|r| r.energy.residual.abs() / r.energy_scale).fold(0.0, f64::max);
     let last = recs.last().expect("records");
-    println!("max relative (E.1) defect {worst:.3e}; final work {:.4e}, viscous {:.4e}", last.energy.external_work, last.energy.viscous_dissipation);
-    common::measured("energy::e1_energy_balance_without_contact", "E.1 largest relative defect (no contact)", worst, "≤ 1e-12");
-    assert!(last.energy.viscous_dissipation > 0.0 && last.energy.external_work.abs() > 0.0, "the scene must exercise both terms");
+    println!(
+        "max relative (E.1) defect {worst:.3e}; final work {:.4e}, viscous {:.4e}",
+        last.energy.external_work, last.energy.viscous_dissipation
+    );
+    common::measured(
+        "energy::e1_energy_balance_without_contact",
+        "E.1 largest relative defect (no contact)",
+        worst,
+        "≤ 1e-12",
+    );
+    assert!(
+        last.energy.viscous_dissipation > 0.0 && last.energy.external_work.abs() > 0.0,
+        "the scene must exercise both terms"
+    );
     assert!(worst <= 1e-12, "relative (E.1) defect {worst:.3e} > 1e-12");
 }
 
@@ -83,9 +94,21 @@ fn largest_defect_with_monotone_dissipations(name: &str, recs: &[dyncontact::sim
         let (a, b) = (&w[0], &w[1]);
         worst = worst.max(b.energy.residual.abs() / b.energy_scale);
         let tol = 1e-14 * b.energy_scale;
-        assert!(b.energy.friction_dissipation >= a.energy.friction_dissipation - tol, "{name}: friction dissipation decreased at step {}", b.step);
-        assert!(b.energy.constraint_dissipation >= a.energy.constraint_dissipation - tol, "{name}: constraint dissipation decreased at step {}", b.step);
-        assert!(b.energy.viscous_dissipation >= a.energy.viscous_dissipation - tol, "{name}: viscous dissipation decreased at step {}", b.step);
+        assert!(
+            b.energy.friction_dissipation >= a.energy.friction_dissipation - tol,
+            "{name}: friction dissipation decreased at step {}",
+            b.step
+        );
+        assert!(
+            b.energy.constraint_dissipation >= a.energy.constraint_dissipation - tol,
+            "{name}: constraint dissipation decreased at step {}",
+            b.step
+        );
+        assert!(
+            b.energy.viscous_dissipation >= a.energy.viscous_dissipation - tol,
+            "{name}: viscous dissipation decreased at step {}",
+            b.step
+        );
     }
     worst
 }
@@ -186,7 +209,12 @@ fn e1_energy_balance_every_3d_fixture() {
         let recs = records(&problem(s));
         let worst = largest_defect_with_monotone_dissipations(&name, &recs);
         println!("{name}: {} steps, max relative (E.1) defect {worst:.3e}", recs.len() - 1);
-        common::measured("energy::e1_energy_balance_every_3d_fixture", &format!("E.1 largest relative defect ({name})"), worst, "≤ 1e-10");
+        common::measured(
+            "energy::e1_energy_balance_every_3d_fixture",
+            &format!("E.1 largest relative defect ({name})"),
+            worst,
+            "≤ 1e-10",
+        );
         assert!(worst <= 1e-10, "{name}: relative (E.1) defect {worst:.3e}");
     }
 }

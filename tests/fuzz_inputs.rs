@@ -39,10 +39,10 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
+use dyncontact::Error;
 use dyncontact::problem::Problem;
 use dyncontact::scene::{InnerSolver, Scene};
 use dyncontact::simulation::Simulation;
-use dyncontact::Error;
 use proptest::prelude::*;
 use proptest::sample::Index;
 use proptest::test_runner::{Config, RngSeed, TestCaseError, TestRunner};
@@ -132,9 +132,36 @@ fn env_number(key: &str) -> Option<u64> {
 
 fn number_text() -> impl Strategy<Value = String> {
     const SPECIAL: &[&str] = &[
-        "0", "-1", "1", "1e308", "-1e308", "-1e-300", "1e-300", "nan", "-nan", "inf", "-inf", "+inf",
-        "18446744073709551616", "9223372036854775807", "-9223372036854775808", "99999999999999999999999",
-        "4097", "65", "64", "100000", "100001", "0.5", "0.0", "-0.0", "1e400", "0x10", "1_000", "2", "1.0e", "1..0",
+        "0",
+        "-1",
+        "1",
+        "1e308",
+        "-1e308",
+        "-1e-300",
+        "1e-300",
+        "nan",
+        "-nan",
+        "inf",
+        "-inf",
+        "+inf",
+        "18446744073709551616",
+        "9223372036854775807",
+        "-9223372036854775808",
+        "99999999999999999999999",
+        "4097",
+        "65",
+        "64",
+        "100000",
+        "100001",
+        "0.5",
+        "0.0",
+        "-0.0",
+        "1e400",
+        "0x10",
+        "1_000",
+        "2",
+        "1.0e",
+        "1..0",
     ];
     prop_oneof![
         4 => prop::sample::select(SPECIAL).prop_map(String::from),
@@ -158,14 +185,15 @@ fn float_text(v: f64) -> String {
 
 const BINOPS: &[&str] = &["+", "-", "*", "/", "^", "**", "<", "<=", ">", ">=", "==", "!=", "&&", "||"];
 const FUNC1: &[&str] = &[
-    "sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh", "exp", "ln", "log", "log10", "sqrt", "abs", "sign",
-    "floor", "ceil",
+    "sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh", "exp", "ln", "log", "log10", "sqrt", "abs",
+    "sign", "floor", "ceil",
 ];
 const ANY_FUNC: &[&str] = &["atan2", "pow", "min", "max", "if", "sin", "sqrt", "foo", "exp", "log10"];
 
 /// A random expression of the grammar of src/model/expr.rs (and some that are not).
 fn expression() -> impl Strategy<Value = String> {
-    const LEAVES: &[&str] = &["x", "y", "t", "pi", "e", "0", "1", "0.5", "2", "-1", "1e308", "1e-300", "1e400", ".5", "0.", "1e3"];
+    const LEAVES: &[&str] =
+        &["x", "y", "t", "pi", "e", "0", "1", "0.5", "2", "-1", "1e308", "1e-300", "1e400", ".5", "0.", "1e3"];
     const BAD_LEAVES: &[&str] = &["z", "foo", "nan", "inf", "1e", "1.2.3", "sin", "_", "t0", "x1"];
     let leaf = prop_oneof![
         12 => prop::sample::select(LEAVES).prop_map(String::from),
@@ -175,7 +203,8 @@ fn expression() -> impl Strategy<Value = String> {
     leaf.prop_recursive(6, 48, 4, |inner| {
         prop_oneof![
             (inner.clone(), prop::sample::select(BINOPS), inner.clone()).prop_map(|(a, op, b)| format!("{a} {op} {b}")),
-            (inner.clone(), prop::sample::select(BINOPS), inner.clone()).prop_map(|(a, op, b)| format!("({a}){op}({b})")),
+            (inner.clone(), prop::sample::select(BINOPS), inner.clone())
+                .prop_map(|(a, op, b)| format!("({a}){op}({b})")),
             (prop::sample::select(&["-", "!", "+", "--"][..]), inner.clone()).prop_map(|(op, a)| format!("{op}{a}")),
             (prop::sample::select(FUNC1), inner.clone()).prop_map(|(f, a)| format!("{f}({a})")),
             (prop::sample::select(ANY_FUNC), prop::collection::vec(inner.clone(), 0..5))
@@ -203,18 +232,88 @@ fn deep_expression() -> impl Strategy<Value = String> {
 
 fn special_expression() -> impl Strategy<Value = String> {
     const SPECIAL: &[&str] = &[
-        "1/(t-0.5)", "sqrt(-1)", "1/0", "0/0", "-1/0", "ln(0)", "log(-1)", "exp(1000)", "10^400", "tan(pi/2)", "asin(2)",
-        "x^-1", "1/x", "1/y", "1/(x-0.5)", "pow(0, -1)", "1e308*10", "1e308*t", "t^1e5*1e300", "exp(1e3*t)", "1/(t-0.0005)",
-        "-40*min(t/0.2, 1)", "if(t >= 0.2, 15*sin(2*pi*t/0.5), 0)", "0.01 + 0.02*x", "1e300*x*y", "-1e6", "1e12*sin(t)",
-        "floor(t*1e9)", "min(x)", "max()", "if(1,2)", "sin()", "x y", "1 +", "(", ")", "", " ", "é", "x²", "−1", "1e+",
+        "1/(t-0.5)",
+        "sqrt(-1)",
+        "1/0",
+        "0/0",
+        "-1/0",
+        "ln(0)",
+        "log(-1)",
+        "exp(1000)",
+        "10^400",
+        "tan(pi/2)",
+        "asin(2)",
+        "x^-1",
+        "1/x",
+        "1/y",
+        "1/(x-0.5)",
+        "pow(0, -1)",
+        "1e308*10",
+        "1e308*t",
+        "t^1e5*1e300",
+        "exp(1e3*t)",
+        "1/(t-0.0005)",
+        "-40*min(t/0.2, 1)",
+        "if(t >= 0.2, 15*sin(2*pi*t/0.5), 0)",
+        "0.01 + 0.02*x",
+        "1e300*x*y",
+        "-1e6",
+        "1e12*sin(t)",
+        "floor(t*1e9)",
+        "min(x)",
+        "max()",
+        "if(1,2)",
+        "sin()",
+        "x y",
+        "1 +",
+        "(",
+        ")",
+        "",
+        " ",
+        "é",
+        "x²",
+        "−1",
+        "1e+",
     ];
     prop::sample::select(SPECIAL).prop_map(String::from)
 }
 
 fn garbage_text() -> impl Strategy<Value = String> {
     const TRICKY: &[&str] = &[
-        "\u{0}", "\u{feff}", "é", "€", "𝔁", "\"", "\\", "[", "]]", "=", "#", "\n", "\r\n", "'''", "\"\"\"", "\t", "{", "}", ",",
-        "\u{202e}", "\u{7f}", "\u{2028}", "\\n", "\\r", "\\u2028", "\\u0000", "\\u001b[31m", "\\t", "\\\\", "\\\"", "x = 1", "[domain]", "[[loads.traction]]", "a.b.c = 1",
+        "\u{0}",
+        "\u{feff}",
+        "é",
+        "€",
+        "𝔁",
+        "\"",
+        "\\",
+        "[",
+        "]]",
+        "=",
+        "#",
+        "\n",
+        "\r\n",
+        "'''",
+        "\"\"\"",
+        "\t",
+        "{",
+        "}",
+        ",",
+        "\u{202e}",
+        "\u{7f}",
+        "\u{2028}",
+        "\\n",
+        "\\r",
+        "\\u2028",
+        "\\u0000",
+        "\\u001b[31m",
+        "\\t",
+        "\\\\",
+        "\\\"",
+        "x = 1",
+        "[domain]",
+        "[[loads.traction]]",
+        "a.b.c = 1",
     ];
     prop_oneof![
         2 => any::<String>().prop_map(|s| s.chars().take(16).collect()),
@@ -237,10 +336,45 @@ fn string_value() -> impl Strategy<Value = String> {
 /// The values of every enum key of the scene format, and words that are none of them.
 fn enum_word() -> impl Strategy<Value = String> {
     const WORDS: &[&str] = &[
-        "\"midpoint\"", "\"trapezoid\"", "\"backward-euler\"", "\"exponential\"", "\"constant\"", "\"table\"", "\"none\"",
-        "\"exact\"", "\"penalty\"", "\"lumped\"", "\"consistent\"", "\"modified\"", "\"newton\"", "\"conic\"", "\"rectangle\"", "\"gmsh\"",
-        "\"strain\"", "\"stress\"", "\"capped\"", "\"uncapped\"", "\"total\"", "\"predictor\"", "\"newton-unfrozen\"", "\"inf\"", "\"Midpoint\"", "\"EXACT\"", "\"backward_euler\"",
-        "\"newton \"", "\"\"", "midpoint", "inf", "nan", "0", "-1", "true", "[]", "{}", "\"-inf\"", "\"1e308\"",
+        "\"midpoint\"",
+        "\"trapezoid\"",
+        "\"backward-euler\"",
+        "\"exponential\"",
+        "\"constant\"",
+        "\"table\"",
+        "\"none\"",
+        "\"exact\"",
+        "\"penalty\"",
+        "\"lumped\"",
+        "\"consistent\"",
+        "\"modified\"",
+        "\"newton\"",
+        "\"conic\"",
+        "\"rectangle\"",
+        "\"gmsh\"",
+        "\"strain\"",
+        "\"stress\"",
+        "\"capped\"",
+        "\"uncapped\"",
+        "\"total\"",
+        "\"predictor\"",
+        "\"newton-unfrozen\"",
+        "\"inf\"",
+        "\"Midpoint\"",
+        "\"EXACT\"",
+        "\"backward_euler\"",
+        "\"newton \"",
+        "\"\"",
+        "midpoint",
+        "inf",
+        "nan",
+        "0",
+        "-1",
+        "true",
+        "[]",
+        "{}",
+        "\"-inf\"",
+        "\"1e308\"",
     ];
     prop_oneof![
         3 => prop::sample::select(WORDS).prop_map(String::from),
@@ -249,38 +383,143 @@ fn enum_word() -> impl Strategy<Value = String> {
     ]
 }
 
-const ENUM_KEYS: &[&str] =
-    &["scheme", "law", "enforcement", "mass", "inner", "kind", "plane", "friction_bound", "friction_bound_at", "penetration_bound"];
+const ENUM_KEYS: &[&str] = &[
+    "scheme",
+    "law",
+    "enforcement",
+    "mass",
+    "inner",
+    "kind",
+    "plane",
+    "friction_bound",
+    "friction_bound_at",
+    "penetration_bound",
+];
 
 /// Lines that are valid somewhere in a scene; inserted at random places they switch features
 /// on (penalty, table law, conic solver, ...) or land in the wrong table.
 fn scene_line() -> impl Strategy<Value = String> {
     const LINES: &[&str] = &[
-        "penalty = 1.0e-4", "penalty = 1e-300", "penalty = 1e308", "enforcement = \"penalty\"", "law = \"constant\"",
-        "coefficient = 0.3", "coefficient = 1e308", "law = \"table\"", "points = [[0, 0.6], [0.1, 0.35], [1, 0.3]]",
-        "points = [[0, 0.6], [0, 0.3]]", "points = []", "points = [[0, 1e308], [1e308, 0]]", "points = [[0]]",
-        "inner = \"conic\"", "mass = \"consistent\"", "mass = \"modified\"", "persistency = true", "persistency = 1", "scheme = \"backward-euler\"", "scheme = \"trapezoid\"",
-        "friction_bound = \"uncapped\"", "friction_bound = \"total\"", "friction_bound_at = \"midpoint\"", "plane = \"stress\"", "penetration_bound = \"inf\"", "penetration_bound = 0.0",
-        "penetration_bound = 1e308", "compliance = 0.0", "compliance = 1e308", "gap = \"0.01 - 0.2*x\"", "gap = -0.5",
-        "gap = \"1/x\"", "relaxation = 0.5", "relaxation = 1e-300", "dirichlet = []", "contact = [\"bottom\", \"top\"]",
-        "contact = [\"left\", \"right\", \"top\", \"bottom\"]", "dirichlet = [\"left\", \"right\", \"top\", \"bottom\"]",
-        "contact = [\"bottom\"]", "contact = [\"arc\"]", "dirichlet = [\"flat\"]", "velocity = [\"0\", \"-100\"]",
-        "velocity = [\"1e308\", \"0\"]", "displacement = [\"0\", \"-1\"]", "displacement = [\"0\", \"1e-3\"]",
-        "body = [\"0\", \"-1e6\"]", "body = [\"0\", \"1/(t-0.001)\"]", "[contact]", "[contact.friction]",
-        "[[loads.traction]]", "side = \"top\"", "side = \"bottom\"", "value = [\"0\", \"1/(t-0.5)\"]",
-        "value = [\"1e308\", \"1e308\"]", "viscosity = { theta = 0.0, zeta = 0.0 }",
-        "viscosity = { theta = 1e308, zeta = 1e308 }", "cells = [64, 64]", "cells = [65, 1]", "cells = [1, 1]",
-        "size = [1e-300, 1e-300]", "size = [1e300, 1e300]", "end = 1e-300", "step = 1e-300", "step = 1e300", "every = 0",
-        "newton_tolerance = 1e-300", "fixed_point_tolerance = 0.9", "max_newton_iterations = 1",
-        "max_fixed_point_iterations = 1", "young = 1e308", "young = 1e-300", "density = 1e-300", "density = 1e308",
-        "poisson = 0.4999999999", "poisson = -0.9999999", "kind = \"gmsh\"", "file = \"../meshes/half_disk.msh\"",
-        "file = \"/\"", "file = \"\"", "file = \"../scenes/academic.toml\"", "name = \"..\"", "name = \"\"",
-        "description = \"\"", "static = 1e308", "decay = 1e308", "kinetic = 0", "unknown_key = 1",
+        "penalty = 1.0e-4",
+        "penalty = 1e-300",
+        "penalty = 1e308",
+        "enforcement = \"penalty\"",
+        "law = \"constant\"",
+        "coefficient = 0.3",
+        "coefficient = 1e308",
+        "law = \"table\"",
+        "points = [[0, 0.6], [0.1, 0.35], [1, 0.3]]",
+        "points = [[0, 0.6], [0, 0.3]]",
+        "points = []",
+        "points = [[0, 1e308], [1e308, 0]]",
+        "points = [[0]]",
+        "inner = \"conic\"",
+        "mass = \"consistent\"",
+        "mass = \"modified\"",
+        "persistency = true",
+        "persistency = 1",
+        "scheme = \"backward-euler\"",
+        "scheme = \"trapezoid\"",
+        "friction_bound = \"uncapped\"",
+        "friction_bound = \"total\"",
+        "friction_bound_at = \"midpoint\"",
+        "plane = \"stress\"",
+        "penetration_bound = \"inf\"",
+        "penetration_bound = 0.0",
+        "penetration_bound = 1e308",
+        "compliance = 0.0",
+        "compliance = 1e308",
+        "gap = \"0.01 - 0.2*x\"",
+        "gap = -0.5",
+        "gap = \"1/x\"",
+        "relaxation = 0.5",
+        "relaxation = 1e-300",
+        "dirichlet = []",
+        "contact = [\"bottom\", \"top\"]",
+        "contact = [\"left\", \"right\", \"top\", \"bottom\"]",
+        "dirichlet = [\"left\", \"right\", \"top\", \"bottom\"]",
+        "contact = [\"bottom\"]",
+        "contact = [\"arc\"]",
+        "dirichlet = [\"flat\"]",
+        "velocity = [\"0\", \"-100\"]",
+        "velocity = [\"1e308\", \"0\"]",
+        "displacement = [\"0\", \"-1\"]",
+        "displacement = [\"0\", \"1e-3\"]",
+        "body = [\"0\", \"-1e6\"]",
+        "body = [\"0\", \"1/(t-0.001)\"]",
+        "[contact]",
+        "[contact.friction]",
+        "[[loads.traction]]",
+        "side = \"top\"",
+        "side = \"bottom\"",
+        "value = [\"0\", \"1/(t-0.5)\"]",
+        "value = [\"1e308\", \"1e308\"]",
+        "viscosity = { theta = 0.0, zeta = 0.0 }",
+        "viscosity = { theta = 1e308, zeta = 1e308 }",
+        "cells = [64, 64]",
+        "cells = [65, 1]",
+        "cells = [1, 1]",
+        "size = [1e-300, 1e-300]",
+        "size = [1e300, 1e300]",
+        "end = 1e-300",
+        "step = 1e-300",
+        "step = 1e300",
+        "every = 0",
+        "newton_tolerance = 1e-300",
+        "fixed_point_tolerance = 0.9",
+        "max_newton_iterations = 1",
+        "max_fixed_point_iterations = 1",
+        "young = 1e308",
+        "young = 1e-300",
+        "density = 1e-300",
+        "density = 1e308",
+        "poisson = 0.4999999999",
+        "poisson = -0.9999999",
+        "kind = \"gmsh\"",
+        "file = \"../meshes/half_disk.msh\"",
+        "file = \"/\"",
+        "file = \"\"",
+        "file = \"../scenes/academic.toml\"",
+        "name = \"..\"",
+        "name = \"\"",
+        "description = \"\"",
+        "static = 1e308",
+        "decay = 1e308",
+        "kinetic = 0",
+        "unknown_key = 1",
     ];
     const KEYS: &[&str] = &[
-        "name", "kind", "size", "cells", "file", "plane", "dirichlet", "contact", "density", "young", "poisson", "theta",
-        "zeta", "body", "side", "value", "displacement", "velocity", "gap", "compliance", "penetration_bound", "penalty",
-        "static", "kinetic", "decay", "coefficient", "points", "end", "step", "every", "relaxation",
+        "name",
+        "kind",
+        "size",
+        "cells",
+        "file",
+        "plane",
+        "dirichlet",
+        "contact",
+        "density",
+        "young",
+        "poisson",
+        "theta",
+        "zeta",
+        "body",
+        "side",
+        "value",
+        "displacement",
+        "velocity",
+        "gap",
+        "compliance",
+        "penetration_bound",
+        "penalty",
+        "static",
+        "kinetic",
+        "decay",
+        "coefficient",
+        "points",
+        "end",
+        "step",
+        "every",
+        "relaxation",
     ];
     prop_oneof![
         3 => prop::sample::select(LINES).prop_map(String::from),
@@ -339,7 +578,9 @@ fn pair_of<S: Strategy<Value = String>>(s: impl Fn() -> S) -> impl Strategy<Valu
 /// problem and the solver with extreme values.
 fn set_key() -> impl Strategy<Value = TextMut> {
     let cells = || prop_oneof![6 => (1i64..=8).prop_map(|v| v.to_string()), 1 => number_text()];
-    let key = |table: &'static str, key: &'static str, v: BoxedStrategy<String>| v.prop_map(move |v| TextMut::SetKey(table, key, v)).boxed();
+    let key = |table: &'static str, key: &'static str, v: BoxedStrategy<String>| {
+        v.prop_map(move |v| TextMut::SetKey(table, key, v)).boxed()
+    };
     let sides = prop::sample::subsequence(&["left", "right", "top", "bottom", "arc", "flat", "nowhere"][..], 0..4)
         .prop_map(|v| format!("[{}]", v.iter().map(|s| format!("\"{s}\"")).collect::<Vec<_>>().join(", ")))
         .boxed();
@@ -352,20 +593,40 @@ fn set_key() -> impl Strategy<Value = TextMut> {
         key("material", "density", physical_number().boxed()),
         key("material", "young", physical_number().boxed()),
         key("material", "poisson", prop_oneof![physical_number(), (-0.999..0.4999f64).prop_map(float_text)].boxed()),
-        key("material", "viscosity", (physical_number(), physical_number()).prop_map(|(a, b)| format!("{{ theta = {a}, zeta = {b} }}")).boxed()),
+        key(
+            "material",
+            "viscosity",
+            (physical_number(), physical_number()).prop_map(|(a, b)| format!("{{ theta = {a}, zeta = {b} }}")).boxed()
+        ),
         key("loads", "body", pair_of(|| quoted(field_expression())).boxed()),
         key("initial", "displacement", pair_of(|| quoted(field_expression())).boxed()),
         key("initial", "velocity", pair_of(|| quoted(field_expression())).boxed()),
         key("contact", "gap", prop_oneof![quoted(field_expression()), physical_number()].boxed()),
         key("contact", "compliance", physical_number().boxed()),
         key("contact", "penetration_bound", prop_oneof![physical_number(), Just("\"inf\"".to_string())].boxed()),
-        key("contact", "friction_bound", prop::sample::select(&["\"capped\"", "\"uncapped\""][..]).prop_map(String::from).boxed()),
+        key(
+            "contact",
+            "friction_bound",
+            prop::sample::select(&["\"capped\"", "\"uncapped\""][..]).prop_map(String::from).boxed()
+        ),
         key("solver", "inner", prop::sample::select(&["\"newton\"", "\"conic\""][..]).prop_map(String::from).boxed()),
-        key("solver", "mass", prop::sample::select(&["\"lumped\"", "\"consistent\"", "\"modified\""][..]).prop_map(String::from).boxed()),
+        key(
+            "solver",
+            "mass",
+            prop::sample::select(&["\"lumped\"", "\"consistent\"", "\"modified\""][..]).prop_map(String::from).boxed()
+        ),
         key("solver", "newton_tolerance", physical_number().boxed()),
         key("solver", "fixed_point_tolerance", physical_number().boxed()),
-        key("solver", "max_newton_iterations", prop_oneof![(1i64..60).prop_map(|v| v.to_string()), number_text()].boxed()),
-        key("solver", "max_fixed_point_iterations", prop_oneof![(1i64..60).prop_map(|v| v.to_string()), number_text()].boxed()),
+        key(
+            "solver",
+            "max_newton_iterations",
+            prop_oneof![(1i64..60).prop_map(|v| v.to_string()), number_text()].boxed()
+        ),
+        key(
+            "solver",
+            "max_fixed_point_iterations",
+            prop_oneof![(1i64..60).prop_map(|v| v.to_string()), number_text()].boxed()
+        ),
         key("solver", "relaxation", prop_oneof![physical_number(), (0.0..1.0f64).prop_map(float_text)].boxed()),
         key("solver", "persistency", prop::sample::select(&["true", "false"][..]).prop_map(String::from).boxed()),
         key("output", "every", number_text().boxed()),
@@ -378,9 +639,14 @@ fn set_table() -> impl Strategy<Value = TextMut> {
     let friction = prop_oneof![
         Just("law = \"none\"".to_string()),
         n().prop_map(|c| format!("law = \"constant\"\ncoefficient = {c}")),
-        (n(), n(), n()).prop_map(|(a, b, c)| format!("law = \"exponential\"\nstatic = {a}\nkinetic = {b}\ndecay = {c}")),
+        (n(), n(), n())
+            .prop_map(|(a, b, c)| format!("law = \"exponential\"\nstatic = {a}\nkinetic = {b}\ndecay = {c}")),
         prop::collection::vec((n(), n()), 1..5).prop_map(|pts| {
-            let pts: Vec<String> = pts.iter().enumerate().map(|(i, (r, m))| if i == 0 { format!("[0, {m}]") } else { format!("[{r}, {m}]") }).collect();
+            let pts: Vec<String> = pts
+                .iter()
+                .enumerate()
+                .map(|(i, (r, m))| if i == 0 { format!("[0, {m}]") } else { format!("[{r}, {m}]") })
+                .collect();
             format!("law = \"table\"\npoints = [{}]", pts.join(", "))
         }),
         prop::collection::vec((0.0..2.0f64, 0.0..1.0f64), 1..5).prop_map(|mut pts| {
@@ -390,7 +656,12 @@ fn set_table() -> impl Strategy<Value = TextMut> {
             format!("law = \"table\"\npoints = [{}]", pts.join(", "))
         }),
     ];
-    let contact = (n(), prop_oneof![n(), Just("\"inf\"".to_string())], prop::option::of(n()), prop::sample::select(&["\"capped\"", "\"uncapped\"", "\"total\""][..]))
+    let contact = (
+        n(),
+        prop_oneof![n(), Just("\"inf\"".to_string())],
+        prop::option::of(n()),
+        prop::sample::select(&["\"capped\"", "\"uncapped\"", "\"total\""][..]),
+    )
         .prop_map(|(c, g, eps, cap)| {
             let enforcement = match &eps {
                 Some(e) => format!("enforcement = \"penalty\"\npenalty = {e}"),
@@ -403,7 +674,9 @@ fn set_table() -> impl Strategy<Value = TextMut> {
         1usize..5,
         prop::sample::select(&["midpoint", "trapezoid", "backward-euler"][..]),
     )
-        .prop_map(|(k, n, scheme)| format!("end = {}\nstep = {}\nscheme = \"{scheme}\"", float_text(k * n as f64), float_text(k)));
+        .prop_map(|(k, n, scheme)| {
+            format!("end = {}\nstep = {}\nscheme = \"{scheme}\"", float_text(k * n as f64), float_text(k))
+        });
     prop_oneof![
         2 => friction.prop_map(|b| TextMut::SetTable("contact.friction", b)),
         2 => contact.prop_map(|b| TextMut::SetTable("contact", b)),
@@ -773,7 +1046,8 @@ enum ByteMut {
 }
 
 fn mesh_mut() -> impl Strategy<Value = MeshMut> {
-    let small = || prop_oneof![(-1.0..1.0f64), prop::sample::select(&[1e-13, -1e-13, 1e-300, 0.5, 3.0, 1e10, -1e300][..])];
+    let small =
+        || prop_oneof![(-1.0..1.0f64), prop::sample::select(&[1e-13, -1e-13, 1e-300, 0.5, 3.0, 1e10, -1e300][..])];
     let node_move = prop_oneof![
         any::<Index>().prop_map(NodeMove::CopyOf),
         any::<Index>().prop_map(NodeMove::SwapWith),
@@ -963,7 +1237,19 @@ enum Outcome {
     Skipped(&'static str),
 }
 
-const TOP_KEYS: &[&str] = &["name", "description", "domain", "boundary", "material", "loads", "initial", "contact", "time", "solver", "output"];
+const TOP_KEYS: &[&str] = &[
+    "name",
+    "description",
+    "domain",
+    "boundary",
+    "material",
+    "loads",
+    "initial",
+    "contact",
+    "time",
+    "solver",
+    "output",
+];
 
 /// `a.b[2].c`: the key path syntax of the scene messages, starting at a top-level key.
 fn is_key_path(path: &str) -> bool {
@@ -1092,7 +1378,9 @@ fn pipeline(input: &Input, reached: &mut Vec<String>) -> Result<Outcome, String>
     }) {
         return Ok(Outcome::Skipped("rectangle or box with more than 64 x 64 cells in all or more than 512 on a side"));
     }
-    if scene.solver.max_newton_iterations.saturating_mul(scene.solver.max_fixed_point_iterations) > MAX_ITERATION_PRODUCT {
+    if scene.solver.max_newton_iterations.saturating_mul(scene.solver.max_fixed_point_iterations)
+        > MAX_ITERATION_PRODUCT
+    {
         return Ok(Outcome::Skipped("more than 10^4 Newton x fixed-point iterations"));
     }
     let problem = match Problem::from_scene(&scene, &input.scene_dir) {
@@ -1103,7 +1391,9 @@ fn pipeline(input: &Input, reached: &mut Vec<String>) -> Result<Outcome, String>
     if !finite(&problem.u0) || !finite(&problem.v0) {
         return Err("Problem::new returned Ok with non-finite initial data".into());
     }
-    if problem.model.solver.inner == InnerSolver::Conic && problem.contact.as_ref().is_some_and(|c| c.n() > MAX_CONIC_NODES) {
+    if problem.model.solver.inner == InnerSolver::Conic
+        && problem.contact.as_ref().is_some_and(|c| c.n() > MAX_CONIC_NODES)
+    {
         return Ok(Outcome::Skipped("conic inner solver on more than 64 contact nodes"));
     }
     let mut sim = match Simulation::new(&problem) {
@@ -1122,8 +1412,18 @@ fn pipeline(input: &Input, reached: &mut Vec<String>) -> Result<Outcome, String>
     reached.push(format!("plane {:?}", sc.plane));
     if let Some(c) = &problem.contact {
         reached.push(format!("contact, {:?} inner solver", sc.solver.inner));
-        reached.push(format!("contact {:?}, bound {}", c.enforcement, if c.constraint.is_some() { "finite" } else { "none" }));
-        reached.push(format!("friction {}", c.friction.as_ref().map(|f| format!("{f:?}").split(['(', ' ', '{']).next().unwrap_or("").to_string()).unwrap_or("none".into())));
+        reached.push(format!(
+            "contact {:?}, bound {}",
+            c.enforcement,
+            if c.constraint.is_some() { "finite" } else { "none" }
+        ));
+        reached.push(format!(
+            "friction {}",
+            c.friction
+                .as_ref()
+                .map(|f| format!("{f:?}").split(['(', ' ', '{']).next().unwrap_or("").to_string())
+                .unwrap_or("none".into())
+        ));
     }
     let mut steps = sim.steps().take(MAX_STEPS);
     let mut n = 0;
@@ -1318,7 +1618,9 @@ where
     let _ = std::fs::write(dir.join(format!("summary_{test}.txt")), &report);
     println!("{report}");
     if let Err(e) = result {
-        panic!("fuzz {test} (seed {seed:#x}, reproduce with DYNCONTACT_FUZZ_SEED={seed:#x} DYNCONTACT_FUZZ_CASES={cases}):\n{e}");
+        panic!(
+            "fuzz {test} (seed {seed:#x}, reproduce with DYNCONTACT_FUZZ_SEED={seed:#x} DYNCONTACT_FUZZ_CASES={cases}):\n{e}"
+        );
     }
 }
 
@@ -1371,7 +1673,9 @@ fn mutated_scenes_fail_cleanly() {
         let f = &scenes[case.scene.index(scenes.len())];
         // contact switches only where there is contact (elsewhere they would add a [contact])
         let has_contact = f.text.contains("\n[contact]");
-        let features = case.features.iter().filter(|m| has_contact || !matches!(m, TextMut::SetKey("contact", ..) | TextMut::SetTable("contact.friction", _)));
+        let features = case.features.iter().filter(|m| {
+            has_contact || !matches!(m, TextMut::SetKey("contact", ..) | TextMut::SetTable("contact.friction", _))
+        });
         let text = features.chain(&case.muts).fold(f.text.clone(), |t, m| apply_text_mut(&t, m));
         Input {
             label: format!("scene {} with {:?} then {:?}", f.name, case.features, case.muts),
@@ -1423,7 +1727,8 @@ fn mutated_meshes_fail_cleanly() {
     let scenes: Vec<Fixture> = read_fixtures("fixtures/scenes", "toml").into_iter().map(coarsened).collect();
     // scenes whose sides exist on the mesh: the squares have left/right/top/bottom (every
     // rectangle scene and gmsh_square), the half disk has arc/flat (crosscheck_gmsh)
-    let square: Vec<&Fixture> = scenes.iter().filter(|s| s.text.contains("\"rectangle\"") || s.name == "gmsh_square.toml").collect();
+    let square: Vec<&Fixture> =
+        scenes.iter().filter(|s| s.text.contains("\"rectangle\"") || s.name == "gmsh_square.toml").collect();
     let disk: Vec<&Fixture> = scenes.iter().filter(|s| s.name == "crosscheck_gmsh.toml").collect();
     assert!(!square.is_empty() && !disk.is_empty());
     let dir = scratch_dir();
@@ -1436,7 +1741,14 @@ fn mutated_meshes_fail_cleanly() {
         prop::collection::vec(feature_switch(), 0..3),
         prop::option::weighted(0.2, scene_mut()),
     )
-        .prop_map(|(mesh, scene, muts, bytes, features, scene_mut)| MeshCase { mesh, scene, muts, bytes, features, scene_mut });
+        .prop_map(|(mesh, scene, muts, bytes, features, scene_mut)| MeshCase {
+            mesh,
+            scene,
+            muts,
+            bytes,
+            features,
+            scene_mut,
+        });
     fuzz("meshes", strategy, |case, n| {
         let k = case.mesh.index(meshes.len());
         let (mesh, info) = (&meshes[k], &infos[k]);
@@ -1447,8 +1759,11 @@ fn mutated_meshes_fail_cleanly() {
         let bytes = case.bytes.iter().fold((lines.join("\n") + "\n").into_bytes(), apply_byte_mut);
         let file = format!("fuzz_{}_{n}.msh", std::process::id());
         let has_contact = scene.text.contains("\n[contact]");
-        let features = case.features.iter().filter(|m| has_contact || !matches!(m, TextMut::SetKey("contact", ..) | TextMut::SetTable("contact.friction", _)));
-        let text = features.chain(&case.scene_mut).fold(scene_for_mesh(&scene.text, &file), |t, m| apply_text_mut(&t, m));
+        let features = case.features.iter().filter(|m| {
+            has_contact || !matches!(m, TextMut::SetKey("contact", ..) | TextMut::SetTable("contact.friction", _))
+        });
+        let text =
+            features.chain(&case.scene_mut).fold(scene_for_mesh(&scene.text, &file), |t, m| apply_text_mut(&t, m));
         Input {
             label: format!(
                 "mesh {} in scene {} with {:?}, {:?}, scene {:?} then {:?}",
@@ -1466,7 +1781,12 @@ fn mutated_meshes_fail_cleanly() {
 fn harness_sees_the_fixtures() {
     let dir = scratch_dir();
     for f in read_fixtures("fixtures/scenes", "toml").into_iter().map(coarsened) {
-        let input = Input { label: f.name.clone(), scene: f.text.clone(), scene_dir: root().join("fixtures/scenes"), mesh: None };
+        let input = Input {
+            label: f.name.clone(),
+            scene: f.text.clone(),
+            scene_dir: root().join("fixtures/scenes"),
+            mesh: None,
+        };
         match run_case(input, &dir, "fixtures") {
             Ok((Outcome::Ok, _, _)) | Ok((Outcome::Skipped(_), _, _)) => {}
             Ok((Outcome::Err { message, .. }, _, _)) => panic!("fixture {} failed: {message}", f.name),

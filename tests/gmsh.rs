@@ -254,7 +254,8 @@ fn gmsh_scene_runs() {
     assert!(problem.contact.is_none());
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("gmsh_scene_runs");
     let _ = std::fs::remove_dir_all(&out);
-    let summary = run(&problem, &RunOptions { out: out.clone(), progress: false, ..Default::default() }).expect("the run completes");
+    let summary = run(&problem, &RunOptions { out: out.clone(), progress: false, ..Default::default() })
+        .expect("the run completes");
     assert_eq!(summary.status, dyncontact::failure::RunStatus::Completed);
     assert_eq!(summary.steps_completed, problem.steps);
     assert!(problem.steps > 0);
@@ -310,8 +311,16 @@ fn malformed_meshes_are_rejected_with_clear_messages() {
         ("quad element", with_tri(&["9 3 0 1 2 3 4"]), "element 9 is a quadrangle"),
         ("2nd-order triangle", with_tri(&["9 9 0 1 2 3 4 5 1"]), "element 9 is second order (type 9)"),
         ("2nd-order line", with_tri(&["9 8 1 1 1 2 5"]), "Mesh.ElementOrder = 1"),
-        ("hexahedron", with_tri(&["9 5 0 1 2 3 4 5 1 2 3"]), "element 9 is a 3-D element of type 5 (hexahedron, prism or pyramid)"),
-        ("a flat tetrahedron among triangles", with_tri(&["9 4 0 1 2 3 5"]), "tetrahedron 9 (nodes 1, 2, 3, 5) has zero (degenerate) volume"),
+        (
+            "hexahedron",
+            with_tri(&["9 5 0 1 2 3 4 5 1 2 3"]),
+            "element 9 is a 3-D element of type 5 (hexahedron, prism or pyramid)",
+        ),
+        (
+            "a flat tetrahedron among triangles",
+            with_tri(&["9 4 0 1 2 3 5"]),
+            "tetrahedron 9 (nodes 1, 2, 3, 5) has zero (degenerate) volume",
+        ),
         ("unknown element type", with_tri(&["9 16 0 1 2 3 4 1 2 3 4"]), "element 9 has type 16"),
         ("too few nodes", with_tri(&["9 2 0 1 2"]), "element 9 lists 2 nodes, type 2 needs 3"),
         (
@@ -333,10 +342,22 @@ fn malformed_meshes_are_rejected_with_clear_messages() {
         ("near-duplicate node", with_node("6 0.99999999999999 1 0"), "nodes 3 and 6 are duplicates"),
         ("duplicate node tag", with_node("5 0.25 0.25 0"), "node tag 5 appears twice"),
         ("unreferenced node", with_node("6 2 2 0"), "node 6 is not a vertex of any triangle"),
-        ("missing node", msh22(UNIT_NODES, &["1 2 0 1 2 5", "2 2 0 2 3 9"]), "triangle 2 refers to node 9, which is not in $Nodes"),
+        (
+            "missing node",
+            msh22(UNIT_NODES, &["1 2 0 1 2 5", "2 2 0 2 3 9"]),
+            "triangle 2 refers to node 9, which is not in $Nodes",
+        ),
         ("line on a missing node", with_tri(&["5 1 2 1 1 1 9"]), "line element 5 refers to node 9"),
-        ("interior physical line", with_tri(&["5 1 2 3 3 1 5"]), "side \"inner\": line element 5 (nodes 1 5) is an interior edge"),
-        ("line that is no triangle edge", with_tri(&["5 1 2 1 1 1 3"]), "side \"bottom\": line element 5 (nodes 1 3) is not an edge of any triangle"),
+        (
+            "interior physical line",
+            with_tri(&["5 1 2 3 3 1 5"]),
+            "side \"inner\": line element 5 (nodes 1 5) is an interior edge",
+        ),
+        (
+            "line that is no triangle edge",
+            with_tri(&["5 1 2 1 1 1 3"]),
+            "side \"bottom\": line element 5 (nodes 1 3) is not an edge of any triangle",
+        ),
         ("truncated file", good[..good.find("$EndNodes").unwrap_or(0)].to_string(), "unexpected end of file in $Nodes"),
         ("missing $EndNodes", good.replace("$EndNodes\n", ""), "expected $EndNodes, found \"$Elements\""),
         ("truncated elements", good[..good.find("$EndElements").unwrap_or(0)].to_string(), "$EndElements is missing"),
@@ -348,7 +369,11 @@ fn malformed_meshes_are_rejected_with_clear_messages() {
         ("negative ntags (2.2)", good.replace("5 1 2 1 1 1 2", "5 1 -2 1 1 1 2"), "element 5"),
         ("negative node count (4.1)", msh41("2 1 0 -5", ELEMENTS41), "node block"),
         ("huge node count (4.1)", msh41("2 1 0 99999999999999", ELEMENTS41), "more than the section header announces"),
-        ("huge physical count (4.1)", msh41("2 1 0 5", ELEMENTS41).replace("0 1 1 2 1 -2", "0 1e300 1 2 1 -2"), "entity 1 (dim 1) lists 1e300 physical tags"),
+        (
+            "huge physical count (4.1)",
+            msh41("2 1 0 5", ELEMENTS41).replace("0 1 1 2 1 -2", "0 1e300 1 2 1 -2"),
+            "entity 1 (dim 1) lists 1e300 physical tags",
+        ),
         ("stray text", format!("{good}hello\n"), "unexpected line \"hello\" outside a section"),
     ];
     assert!(cases.len() >= 12);
@@ -391,7 +416,8 @@ fn missing_mesh_file_is_reported() {
     let missing = fixture("meshes/no_such_mesh.msh");
     let e = gmsh::read(&missing).expect_err("missing file");
     assert!(e.to_string().contains("no_such_mesh.msh"), "{e}");
-    let scene = Scene::from_toml(&scene_text("../meshes/no_such_mesh.msh", "left"), "missing.toml").expect("scene parses");
+    let scene =
+        Scene::from_toml(&scene_text("../meshes/no_such_mesh.msh", "left"), "missing.toml").expect("scene parses");
     let e = Problem::from_scene(&scene, &fixture("scenes")).err().expect("missing mesh file");
     let msg = e.to_string();
     assert!(msg.contains("domain.file") && msg.contains("no_such_mesh.msh") && msg.contains("does not exist"), "{msg}");
@@ -400,7 +426,8 @@ fn missing_mesh_file_is_reported() {
 /// A scene naming a side the Gmsh mesh lacks fails with the key path and the available sides.
 #[test]
 fn scene_naming_an_unknown_side_lists_the_available_sides() {
-    let scene = Scene::from_toml(&scene_text("../meshes/square_v41.msh", "west"), "unknown_side.toml").expect("scene parses");
+    let scene =
+        Scene::from_toml(&scene_text("../meshes/square_v41.msh", "west"), "unknown_side.toml").expect("scene parses");
     let e = Problem::from_scene(&scene, &fixture("scenes")).err().expect("unknown side");
     let msg = e.to_string();
     assert!(msg.contains("boundary.dirichlet[0]"), "{msg}");
@@ -430,10 +457,12 @@ fn two_tets(apex: &str, swap_all: bool) -> String {
 /// unfolded is accepted in either consistent orientation (all clockwise is flipped, volume 1/3).
 #[test]
 fn folded_3d_mesh_is_refused_naming_the_tetrahedron() {
-    use dyncontact::mesh::gmsh::parse_any;
     use dyncontact::mesh::Geometry;
+    use dyncontact::mesh::gmsh::parse_any;
     for swap_all in [false, true] {
-        let Geometry::Solid(m) = parse_any(&two_tets("0 0 -1", swap_all), "two.msh").expect("a consistent mesh") else { panic!("3-D") };
+        let Geometry::Solid(m) = parse_any(&two_tets("0 0 -1", swap_all), "two.msh").expect("a consistent mesh") else {
+            panic!("3-D")
+        };
         // every tetrahedron positive after reading; volume 1/6 + 1/6 (exact in binary: round-off only)
         assert!((0..2).all(|t| m.signed_volume(t) > 0.0));
         assert!((m.volume() - 1.0 / 3.0).abs() < 1e-15, "volume {}", m.volume());

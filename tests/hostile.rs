@@ -117,7 +117,8 @@ fn a_sweep_name_with_code_is_refused_before_any_file() {
 #[test]
 fn a_scene_name_with_a_newline_is_refused() {
     let dir = tmp("scene_name_newline");
-    let o = Command::new(BIN).current_dir(&dir).args(["run", "--set", "name=\"a\\nb\""]).args(SMALL).output().expect("run");
+    let o =
+        Command::new(BIN).current_dir(&dir).args(["run", "--set", "name=\"a\\nb\""]).args(SMALL).output().expect("run");
     assert_eq!(o.status.code(), Some(1), "{}", err(&o));
     assert!(err(&o).contains("name: must be"), "{}", err(&o));
     assert!(!dir.join("out").exists(), "an output folder was made");
@@ -135,7 +136,8 @@ fn a_hostile_binary_path_is_quoted_in_generated_files() {
     std::fs::copy(BIN, &bin).expect("copy the binary");
     let out = dir.join("sweep");
     let sweep = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/sweeps/six_points.toml");
-    let o = Command::new(&bin).arg("sweep").arg(&sweep).arg("--plan-only").arg("--out").arg(&out).output().expect("sweep");
+    let o =
+        Command::new(&bin).arg("sweep").arg(&sweep).arg("--plan-only").arg("--out").arg(&out).output().expect("sweep");
     assert!(o.status.success(), "{}", err(&o));
     let config = std::fs::read_to_string(out.join("config.yaml")).expect("config.yaml");
     let line = config.lines().find_map(|l| l.strip_prefix("dyncontact: ")).expect("the binary's line");
@@ -219,7 +221,12 @@ fn a_foreign_checkpoint_is_refused() {
 /// A copy of the Gmsh fixture scene and its mesh in `dir` (so the mesh can be edited).
 fn gmsh_copy(dir: &Path) -> (PathBuf, PathBuf) {
     let scene = std::fs::read_to_string(fixture("gmsh_square")).expect("scene");
-    let file = scene.lines().find_map(|l| l.trim().strip_prefix("file = \"")).and_then(|r| r.split('"').next()).expect("file").to_string();
+    let file = scene
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("file = \""))
+        .and_then(|r| r.split('"').next())
+        .expect("file")
+        .to_string();
     let mesh = fixture("gmsh_square").parent().expect("dir").join(&file);
     std::fs::copy(&mesh, dir.join("mesh.msh")).expect("copy mesh");
     let scene = scene.replace(&file, "mesh.msh");
@@ -266,7 +273,8 @@ fn resume_refuses_a_changed_mesh() {
     let dir = tmp("changed_mesh");
     let (scene, mesh) = gmsh_copy(&dir);
     let out = dir.join("out");
-    let o = Command::new(BIN).arg("run").arg(&scene).args(["--stop-after", "12", "--out"]).arg(&out).output().expect("run");
+    let o =
+        Command::new(BIN).arg("run").arg(&scene).args(["--stop-after", "12", "--out"]).arg(&out).output().expect("run");
     assert_eq!(o.status.code(), Some(130), "{}", err(&o));
     nudge_a_node(&mesh);
     let o = Command::new(BIN).arg("run").arg(&scene).arg("--resume").arg(&out).output().expect("resume");
@@ -282,12 +290,20 @@ fn a_sweep_reruns_points_whose_mesh_changed() {
     let dir = tmp("sweep_changed_mesh");
     let (_, mesh) = gmsh_copy(&dir);
     let sweep = dir.join("sweep.toml");
-    std::fs::write(&sweep, "name = \"mesh-sweep\"\nbase = \"scene.toml\"\n[[axis]]\nkey = \"time.end\"\nvalues = [0.01, 0.02]\n").expect("write");
+    std::fs::write(
+        &sweep,
+        "name = \"mesh-sweep\"\nbase = \"scene.toml\"\n[[axis]]\nkey = \"time.end\"\nvalues = [0.01, 0.02]\n",
+    )
+    .expect("write");
     let out = dir.join("out");
     let args = ["sweep", sweep.to_str().expect("path"), "--jobs", "1", "--out", out.to_str().expect("path")];
     let o = cli(&args);
     assert!(o.status.success(), "{}", err(&o));
-    assert!(String::from_utf8_lossy(&o.stdout).contains("2 points: 2 completed"), "{}", String::from_utf8_lossy(&o.stdout));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("2 points: 2 completed"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
     let first = std::fs::read_to_string(out.join("points/p000/summary.json")).expect("summary");
     nudge_a_node(&mesh);
     let o = cli(&["sweep", "collect", out.to_str().expect("path")]);
@@ -299,7 +315,11 @@ fn a_sweep_reruns_points_whose_mesh_changed() {
     assert!(o.status.success(), "{}", err(&o));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("(0 already completed)") && stdout.contains("2 points: 2 completed"), "{stdout}");
-    assert_ne!(std::fs::read_to_string(out.join("points/p000/summary.json")).expect("summary"), first, "the point did not run again");
+    assert_ne!(
+        std::fs::read_to_string(out.join("points/p000/summary.json")).expect("summary"),
+        first,
+        "the point did not run again"
+    );
 }
 
 // ---- 4. a run owns its folder ---------------------------------------------------------------
@@ -326,7 +346,10 @@ fn a_killed_rerun_never_reads_completed() {
     let s = summary(&out);
     assert_eq!(s["status"], "running", "a killed run's summary must not say how an earlier run ended");
     let steps = history_steps(&out);
-    assert!(steps.len() > 50 && steps.iter().enumerate().all(|(i, s)| i == *s), "history.csv is not the new run's steps 0, 1, …");
+    assert!(
+        steps.len() > 50 && steps.iter().enumerate().all(|(i, s)| i == *s),
+        "history.csv is not the new run's steps 0, 1, …"
+    );
 }
 
 /// (issue 22, defect 4) A run that cannot start changes nothing in a folder holding an earlier
@@ -356,18 +379,28 @@ fn a_run_that_cannot_start_changes_nothing() {
 fn a_3d_run_replaces_a_2d_folder_entirely() {
     let dir = tmp("replace_2d");
     let (mixed, fresh) = (dir.join("mixed"), dir.join("fresh"));
-    let o = run_into(&mixed, &[&["--checkpoint-every", "50", "--set", "output.trajectory=true"][..], &SMALL[..]].concat());
+    let o =
+        run_into(&mixed, &[&["--checkpoint-every", "50", "--set", "output.trajectory=true"][..], &SMALL[..]].concat());
     assert!(o.status.success(), "{}", err(&o));
-    assert!(mixed.join("checkpoint.json").exists() && mixed.join("trajectory.f64").exists() && mixed.join("plots/deformed.svg").exists());
+    assert!(
+        mixed.join("checkpoint.json").exists()
+            && mixed.join("trajectory.f64").exists()
+            && mixed.join("plots/deformed.svg").exists()
+    );
     let cantilever = fixture("cantilever3d");
     let three_d = ["run", cantilever.to_str().expect("path"), "--set", "time.end=0.02", "--out"];
     for out in [&mixed, &fresh] {
         let o = Command::new(BIN).args(three_d).arg(out).output().expect("run");
         assert!(o.status.success(), "{}", err(&o));
     }
-    let names = |d: &Path| -> Vec<PathBuf> { snapshot(d).into_iter().map(|(p, _)| p.strip_prefix(d).expect("below").to_path_buf()).collect() };
+    let names = |d: &Path| -> Vec<PathBuf> {
+        snapshot(d).into_iter().map(|(p, _)| p.strip_prefix(d).expect("below").to_path_buf()).collect()
+    };
     assert_eq!(names(&mixed), names(&fresh), "the 2-D run's files are still there");
-    assert_eq!(std::fs::read(mixed.join("history.csv")).expect("a"), std::fs::read(fresh.join("history.csv")).expect("b"));
+    assert_eq!(
+        std::fs::read(mixed.join("history.csv")).expect("a"),
+        std::fs::read(fresh.join("history.csv")).expect("b")
+    );
 }
 
 // ---- 5. sweep collect checks every point ---------------------------------------------------
@@ -390,7 +423,12 @@ fn collect_marks_corrupt_points_and_exits_4() {
     let h = std::fs::read_to_string(p("p001", "history.csv")).expect("history");
     let mut lines: Vec<String> = h.lines().map(str::to_string).collect();
     let fields: Vec<&str> = lines[10].split(',').collect();
-    lines[10] = std::iter::once(fields[0]).chain(std::iter::once(fields[1])).chain(std::iter::once("NaN")).chain(fields[3..].iter().copied()).collect::<Vec<_>>().join(",");
+    lines[10] = std::iter::once(fields[0])
+        .chain(std::iter::once(fields[1]))
+        .chain(std::iter::once("NaN"))
+        .chain(fields[3..].iter().copied())
+        .collect::<Vec<_>>()
+        .join(",");
     std::fs::write(p("p001", "history.csv"), lines.join("\n") + "\n").expect("nan");
     std::fs::remove_file(p("p002", "history.csv")).expect("remove");
     std::fs::write(p("p003", "summary.json"), "{ not json").expect("garbage");
@@ -400,7 +438,13 @@ fn collect_marks_corrupt_points_and_exits_4() {
     assert_eq!(o.status.code(), Some(4), "{}", err(&o));
     let csv = std::fs::read_to_string(out.join("sweep.csv")).expect("sweep.csv");
     let rows: Vec<&str> = csv.lines().skip(1).collect();
-    for (row, why) in rows.iter().zip(["rows of steps", "not a finite number", "history.csv is missing", "not readable JSON", "unknown status"]) {
+    for (row, why) in rows.iter().zip([
+        "rows of steps",
+        "not a finite number",
+        "history.csv is missing",
+        "not readable JSON",
+        "unknown status",
+    ]) {
         assert!(row.contains(",corrupt,") && row.contains(why), "{row}");
         assert!(!row.contains(",completed,"));
     }
@@ -432,7 +476,8 @@ fn jobs_above_the_cores_need_a_flag() {
     let dir = tmp("jobs");
     let sweep = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/sweeps/six_points.toml");
     let out = dir.join("out");
-    let args = ["sweep", sweep.to_str().expect("path"), "--jobs", "1000", "--plan-only", "--out", out.to_str().expect("path")];
+    let args =
+        ["sweep", sweep.to_str().expect("path"), "--jobs", "1000", "--plan-only", "--out", out.to_str().expect("path")];
     let o = cli(&args);
     assert_eq!(o.status.code(), Some(1), "{}", err(&o));
     assert!(err(&o).contains("--jobs") && err(&o).contains("--oversubscribe"), "{}", err(&o));
@@ -446,12 +491,16 @@ fn jobs_above_the_cores_need_a_flag() {
 fn an_interrupted_point_has_no_marker() {
     let dir = tmp("marker");
     let sweep = dir.join("long.toml");
-    std::fs::write(&sweep, "name = \"long\"\nbase = \"default\"\n[[axis]]\nkey = \"time.end\"\nvalues = [5.0]\n").expect("write");
+    std::fs::write(&sweep, "name = \"long\"\nbase = \"default\"\n[[axis]]\nkey = \"time.end\"\nvalues = [5.0]\n")
+        .expect("write");
     let out = dir.join("out");
     let o = cli(&["sweep", sweep.to_str().expect("path"), "--plan-only", "--out", out.to_str().expect("path")]);
     assert!(o.status.success(), "{}", err(&o));
     let snakefile = std::fs::read_to_string(out.join("Snakefile")).expect("Snakefile");
-    assert!(snakefile.contains("\"points/{point}.done\"") && snakefile.contains("sweep point points/{wildcards.point}"), "{snakefile}");
+    assert!(
+        snakefile.contains("\"points/{point}.done\"") && snakefile.contains("sweep point points/{wildcards.point}"),
+        "{snakefile}"
+    );
     let pd = out.join("points/p000");
     let mut child = Command::new(BIN).args(["sweep", "point"]).arg(&pd).spawn().expect("spawn");
     wait_for_lines(&mut child, &pd.join("history.csv"), 50);
@@ -461,7 +510,11 @@ fn an_interrupted_point_has_no_marker() {
     assert_eq!(summary(&pd)["status"], "interrupted");
     assert!(pd.join("checkpoint.json").exists());
     assert!(!out.join("points/p000.done").exists(), "an interrupted point has a marker");
-    std::fs::write(pd.join("scene.toml"), std::fs::read_to_string(pd.join("scene.toml")).expect("scene").replace("end = 5.0", "end = 0.05")).expect("shorter");
+    std::fs::write(
+        pd.join("scene.toml"),
+        std::fs::read_to_string(pd.join("scene.toml")).expect("scene").replace("end = 5.0", "end = 0.05"),
+    )
+    .expect("shorter");
     let o = cli(&["sweep", "point", pd.to_str().expect("path")]);
     assert!(o.status.success(), "{}", err(&o));
     assert!(out.join("points/p000.done").exists());
@@ -479,14 +532,22 @@ fn a_full_disk_fails_cleanly() {
     let dir = tmp("full_disk");
     let mnt = dir.join("mnt");
     std::fs::create_dir_all(&mnt).expect("mnt");
-    let mounted = Command::new("mount").args(["-t", "tmpfs", "-o", "size=64m", "tmpfs"]).arg(&mnt).output().is_ok_and(|o| o.status.success());
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=64m", "tmpfs"])
+        .arg(&mnt)
+        .output()
+        .is_ok_and(|o| o.status.success());
     if !mounted {
         println!("skipped: mounting a tmpfs needs root");
         return;
     }
     let out = mnt.join("out");
     // 10,000 steps, 12 frames: about 7 MB of outputs, which fit until the filler takes the rest
-    let mut child = Command::new(BIN).args(["run", "--set", "time.end=5.0", "--set", "output.every=1000", "--out"]).arg(&out).spawn().expect("spawn");
+    let mut child = Command::new(BIN)
+        .args(["run", "--set", "time.end=5.0", "--set", "output.every=1000", "--out"])
+        .arg(&out)
+        .spawn()
+        .expect("spawn");
     wait_for_lines(&mut child, &out.join("history.csv"), 20);
     // fill the file system
     {
@@ -527,12 +588,22 @@ fn the_energy_balance_guards_a_midpoint_run() {
     assert!(err(&o).contains("energy balance (E.1)") && err(&o).contains("energy_residual_limit"), "{}", err(&o));
     assert_eq!(summary(&fail)["status"], "failed");
     let warn = dir.join("warn");
-    let o = run_into(&warn, &[&SMALL[..], &["--set", "solver.energy_residual_limit=1e-300", "--set", "solver.energy_residual_action=\"warn\""][..]].concat());
+    let o = run_into(
+        &warn,
+        &[
+            &SMALL[..],
+            &["--set", "solver.energy_residual_limit=1e-300", "--set", "solver.energy_residual_action=\"warn\""][..],
+        ]
+        .concat(),
+    );
     assert!(o.status.success(), "{}", err(&o));
     let s = summary(&warn);
     let text = std::fs::read_to_string(warn.join("history.csv")).expect("history");
     let cols: Vec<&str> = text.lines().next().expect("header").split(',').collect();
-    let (r, e) = (cols.iter().position(|c| *c == "energy_residual").expect("col"), cols.iter().position(|c| *c == "energy_scale").expect("col"));
+    let (r, e) = (
+        cols.iter().position(|c| *c == "energy_residual").expect("col"),
+        cols.iter().position(|c| *c == "energy_scale").expect("col"),
+    );
     let over = text
         .lines()
         .skip(2)
@@ -563,7 +634,8 @@ fn usage_errors_exit_64() {
 fn sigint_during_setup_stops_before_the_first_step() {
     let dir = tmp("sigint_setup");
     let out = dir.join("out");
-    let mut child = Command::new(BIN).arg("run").arg(fixture("academic3d")).arg("--out").arg(&out).spawn().expect("spawn");
+    let mut child =
+        Command::new(BIN).arg("run").arg(fixture("academic3d")).arg("--out").arg(&out).spawn().expect("spawn");
     let start = Instant::now();
     // the lock is taken after the problem is built, before the solver's setup
     while !out.join("run.lock").exists() {
@@ -593,7 +665,16 @@ fn minor_messages_say_what_is_wrong() {
     let junk = dir.join("junk.msh");
     std::fs::write(&junk, vec![b'x'; 50 << 20]).expect("junk");
     let scene = dir.join("scene.toml");
-    std::fs::write(&scene, std::fs::read_to_string(fixture("gmsh_square")).expect("scene").lines().map(|l| if l.trim_start().starts_with("file = ") { "file = \"junk.msh\"" } else { l }).collect::<Vec<_>>().join("\n")).expect("scene");
+    std::fs::write(
+        &scene,
+        std::fs::read_to_string(fixture("gmsh_square"))
+            .expect("scene")
+            .lines()
+            .map(|l| if l.trim_start().starts_with("file = ") { "file = \"junk.msh\"" } else { l })
+            .collect::<Vec<_>>()
+            .join("\n"),
+    )
+    .expect("scene");
     let t = Instant::now();
     let o = cli(&["check", scene.to_str().expect("path")]);
     assert_eq!(o.status.code(), Some(1));

@@ -98,7 +98,13 @@ fn b5_manufactured_orders_in_h() {
         let (p, u) = solve(scene(cells, 1.0 / 1024.0, "midpoint", "lumped"));
         let mat = p.material;
         let uh = p.dofs.expand(&u);
-        let (e0, e1) = error_norms(p.mesh.plane().expect("a 2-D mesh"), &mat, &uh, |x, y| m.u(x, y, END), |x, y| m.grad_u(x, y, END));
+        let (e0, e1) = error_norms(
+            p.mesh.plane().expect("a 2-D mesh"),
+            &mat,
+            &uh,
+            |x, y| m.u(x, y, END),
+            |x, y| m.grad_u(x, y, END),
+        );
         println!("{cells:5}  {:.5}  {e0:.4e}    {e1:.4e}", 1.0 / cells as f64);
         l2.push(e0);
         en.push(e1);
@@ -106,7 +112,12 @@ fn b5_manufactured_orders_in_h() {
     let (ol2, oen) = (order(&l2), order(&en));
     println!("observed orders: L2 {ol2:?}, energy {oen:?}");
     common::measured("manufactured::b5_manufactured_orders_in_h", "L2 order in h (P1)", ol2[ol2.len() - 1], "2 ± 0.2");
-    common::measured("manufactured::b5_manufactured_orders_in_h", "energy-norm order in h (P1)", oen[oen.len() - 1], "1 ± 0.2");
+    common::measured(
+        "manufactured::b5_manufactured_orders_in_h",
+        "energy-norm order in h (P1)",
+        oen[oen.len() - 1],
+        "1 ± 0.2",
+    );
     let (last_l2, last_en) = (ol2[ol2.len() - 1], oen[oen.len() - 1]);
     assert!((last_l2 - 2.0).abs() <= 0.2, "L2 order {last_l2} not within 2 ± 0.2");
     assert!((last_en - 1.0).abs() <= 0.2, "energy-norm order {last_en} not within 1 ± 0.2");
@@ -155,7 +166,13 @@ fn b5_consistent_mass_order_in_h() {
     for cells in [8, 16, 32] {
         let (p, u) = solve(scene(cells, 1.0 / 1024.0, "midpoint", "consistent"));
         let mat = p.material;
-        let (e0, _) = error_norms(p.mesh.plane().expect("a 2-D mesh"), &mat, &p.dofs.expand(&u), |x, y| m.u(x, y, END), |x, y| m.grad_u(x, y, END));
+        let (e0, _) = error_norms(
+            p.mesh.plane().expect("a 2-D mesh"),
+            &mat,
+            &p.dofs.expand(&u),
+            |x, y| m.u(x, y, END),
+            |x, y| m.grad_u(x, y, END),
+        );
         l2.push(e0);
     }
     let o = order(&l2);

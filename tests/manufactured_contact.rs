@@ -39,7 +39,6 @@ const ZETA: f64 = 0.01;
 const CQ: f64 = 0.02; // c, the x² coefficient of u_x
 const C_NU: f64 = 50.0; // compliance
 
-
 struct Mms {
     regime: Regime,
     /// μ(r) = (static − kinetic) e^{−5r} + kinetic
@@ -94,7 +93,12 @@ impl Mms {
     fn body(&self) -> [String; 2] {
         let (l, m) = lame(YOUNG, POISSON);
         [
-            format!("{RHO}*(1-y)*(-0.09*sin(3*t)) - ({l}*(2*{CQ}*(1-y) + {e}) + {}*(1-y) + {}*{e})", 4.0 * m * CQ, m, e = self.e),
+            format!(
+                "{RHO}*(1-y)*(-0.09*sin(3*t)) - ({l}*(2*{CQ}*(1-y) + {e}) + {}*(1-y) + {}*{e})",
+                4.0 * m * CQ,
+                m,
+                e = self.e
+            ),
             format!("{RHO}*(1-y)*({}*sin(2*t)) + {}*x", 4.0 * self.eta, 2.0 * CQ * (l + m)),
         ]
     }
@@ -168,8 +172,19 @@ newton_tolerance = 1e-12
 fixed_point_tolerance = 1e-12
 max_fixed_point_iterations = 200
 "#,
-            b[0], b[1], f3[0], f3[1], l[0], l[1], r[0], r[1], 2.0 * self.eta,
-            fric = format!("[contact.friction]\nlaw = \"exponential\"\nstatic = {}\nkinetic = {}\ndecay = 5.0", self.mu_static, self.mu_kinetic)
+            b[0],
+            b[1],
+            f3[0],
+            f3[1],
+            l[0],
+            l[1],
+            r[0],
+            r[1],
+            2.0 * self.eta,
+            fric = format!(
+                "[contact.friction]\nlaw = \"exponential\"\nstatic = {}\nkinetic = {}\ndecay = 5.0",
+                self.mu_static, self.mu_kinetic
+            )
         );
         Scene::from_toml(&text, "mms_contact").unwrap_or_else(|e| panic!("{e}"))
     }
@@ -182,7 +197,13 @@ fn check(regime: Regime) {
     for cells in [4, 8, 16, 32] {
         let (p, u, seen) = common::run_regimes(m.scene(cells, 1.0 / 512.0));
         let mat = p.material;
-        let (_, e1) = error_norms(p.mesh.plane().expect("a 2-D mesh"), &mat, &p.dofs.expand(&u), |x, y| m.u(x, y, END), |x, y| m.grad(x, y, END));
+        let (_, e1) = error_norms(
+            p.mesh.plane().expect("a 2-D mesh"),
+            &mat,
+            &p.dofs.expand(&u),
+            |x, y| m.u(x, y, END),
+            |x, y| m.grad(x, y, END),
+        );
         en.push(e1);
         if cells == 32 {
             regime.assert_seen(seen);
@@ -221,10 +242,24 @@ fn b5_mms_velocity_weakening_slip_is_unstable() {
             stuck |= r.expect("step").stick_nodes > 0;
         }
         let mat = p.material;
-        en.push(error_norms(p.mesh.plane().expect("a 2-D mesh"), &mat, &p.dofs.expand(&sim.state.u), |x, y| m.u(x, y, END), |x, y| m.grad(x, y, END)).1);
+        en.push(
+            error_norms(
+                p.mesh.plane().expect("a 2-D mesh"),
+                &mat,
+                &p.dofs.expand(&sim.state.u),
+                |x, y| m.u(x, y, END),
+                |x, y| m.grad(x, y, END),
+            )
+            .1,
+        );
     }
     println!("velocity weakening: energy errors {en:?}, orders {:?}, a node stuck: {stuck}", common::orders(&en));
-    common::measured("manufactured_contact", "velocity-weakening slip: energy order in h (unstable)", common::orders(&en)[1], "reported");
+    common::measured(
+        "manufactured_contact",
+        "velocity-weakening slip: energy order in h (unstable)",
+        common::orders(&en)[1],
+        "reported",
+    );
     assert!(stuck, "the weakening case no longer sticks: update the documentation");
 }
 

@@ -42,7 +42,6 @@ const C_NU: f64 = 50.0;
 const SPEED: f64 = 0.05; // V
 const OMEGA: f64 = 3.0; // ω
 
-
 struct Mms {
     regime: Regime,
     delta0: f64,
@@ -115,10 +114,21 @@ impl Mms {
     /// f0 = ρü − Div σ.
     fn body(&self) -> [String; 3] {
         let (l, m) = lame(YOUNG, POISSON);
-        let (add, bdd) = (format!("({}*sin({OMEGA}*t))", -SPEED * OMEGA), format!("({}*cos({OMEGA}*t))", SPEED * OMEGA));
+        let (add, bdd) =
+            (format!("({}*sin({OMEGA}*t))", -SPEED * OMEGA), format!("({}*cos({OMEGA}*t))", SPEED * OMEGA));
         [
-            format!("{RHO}*(1 - z)*{add} - ({l}*(2*{CQ}*(1 - z) + {e}) + {}*(1 - z) + {}*{e})", 4.0 * m * CQ, m, e = self.e),
-            format!("{RHO}*(1 - z)*{bdd} - ({l}*(2*{CQ}*(1 - z) + {f}) + {}*(1 - z) + {}*{f})", 4.0 * m * CQ, m, f = self.f),
+            format!(
+                "{RHO}*(1 - z)*{add} - ({l}*(2*{CQ}*(1 - z) + {e}) + {}*(1 - z) + {}*{e})",
+                4.0 * m * CQ,
+                m,
+                e = self.e
+            ),
+            format!(
+                "{RHO}*(1 - z)*{bdd} - ({l}*(2*{CQ}*(1 - z) + {f}) + {}*(1 - z) + {}*{f})",
+                4.0 * m * CQ,
+                m,
+                f = self.f
+            ),
             format!("{RHO}*(1 - z)*({}*sin(2*t)) + {}*(x + y)", 4.0 * self.eta, 2.0 * CQ * (l + m)),
         ]
     }
@@ -156,8 +166,15 @@ impl Mms {
             Regime::Constraint => ("0", format!("{}", self.delta0)),
         };
         let vec3 = |v: &[String; 3]| format!("[\"{}\", \"{}\", \"{}\"]", v[0], v[1], v[2]);
-        let side = |name: &str, v: [String; 3]| format!("[[loads.traction]]\nside = \"{name}\"\nvalue = {}\n", vec3(&v));
-        let tractions = [side("left", self.traction(0, -1.0)), side("right", self.traction(0, 1.0)), side("front", self.traction(1, -1.0)), side("back", self.traction(1, 1.0))].concat();
+        let side =
+            |name: &str, v: [String; 3]| format!("[[loads.traction]]\nside = \"{name}\"\nvalue = {}\n", vec3(&v));
+        let tractions = [
+            side("left", self.traction(0, -1.0)),
+            side("right", self.traction(0, 1.0)),
+            side("front", self.traction(1, -1.0)),
+            side("back", self.traction(1, 1.0)),
+        ]
+        .concat();
         let d0 = format!("({} + {}*x + {}*y)", self.delta0, self.e, self.f);
         let text = format!(
             r#"
@@ -212,7 +229,13 @@ fn check(regime: Regime) {
     let mut en = Vec::new();
     for cells in [4, 8, 16] {
         let (p, u, seen) = common::run_regimes(m.scene(cells, 1.0 / 256.0));
-        let (_, e1) = error_norms_3d(p.mesh.solid().expect("a 3-D mesh"), &p.material, &p.dofs.expand_dim(&u), |x| m.u(x, END), |x| m.grad(x, END));
+        let (_, e1) = error_norms_3d(
+            p.mesh.solid().expect("a 3-D mesh"),
+            &p.material,
+            &p.dofs.expand_dim(&u),
+            |x| m.u(x, END),
+            |x| m.grad(x, END),
+        );
         en.push(e1);
         if cells == 16 {
             regime.assert_seen(seen);

@@ -2,16 +2,16 @@
 //! identities that must hold for every input, checked on random inputs. Tolerances are
 //! round-off bounds (a few ulps times the size of the terms) unless stated.
 
-use dyncontact::fem::assemble::{assemble_full, Dofs};
-use dyncontact::fem::{element, LoadVector};
+use dyncontact::fem::assemble::{Dofs, assemble_full};
+use dyncontact::fem::{LoadVector, element};
 use dyncontact::linalg;
 use dyncontact::mesh::Mesh;
+use dyncontact::model::MaterialParams;
 use dyncontact::model::expr::VecExpr;
 use dyncontact::model::laws::{FrictionBoundLaw, FrictionCoefficient, NormalForceRule, NormalLaw};
 use dyncontact::model::material::Material;
-use dyncontact::model::MaterialParams;
 use dyncontact::scene::{MassKind, Plane};
-use dyncontact::step::newton::{self, friction_residual, normal_residual, NewtonSettings};
+use dyncontact::step::newton::{self, NewtonSettings, friction_residual, normal_residual};
 use dyncontact::step::{NodeData, StepData};
 use nalgebra::{Matrix3, SMatrix, SymmetricEigen};
 use proptest::prelude::*;
@@ -24,7 +24,9 @@ fn material(young: f64, poisson: f64, theta: f64, zeta: f64, plane: Plane) -> Ma
 fn triangle() -> impl Strategy<Value = [[f64; 2]; 3]> {
     prop::array::uniform3(prop::array::uniform2(-2.0..2.0f64)).prop_filter("non-degenerate", |x| {
         let a = 0.5 * ((x[1][0] - x[0][0]) * (x[2][1] - x[0][1]) - (x[2][0] - x[0][0]) * (x[1][1] - x[0][1]));
-        let d2 = (0..3).map(|i| (x[i][0] - x[(i + 1) % 3][0]).powi(2) + (x[i][1] - x[(i + 1) % 3][1]).powi(2)).fold(0.0, f64::max);
+        let d2 = (0..3)
+            .map(|i| (x[i][0] - x[(i + 1) % 3][0]).powi(2) + (x[i][1] - x[(i + 1) % 3][1]).powi(2))
+            .fold(0.0, f64::max);
         a.abs() >= 0.05 * d2 && d2 > 1e-2
     })
 }

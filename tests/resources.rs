@@ -33,7 +33,10 @@ fn oversize_scene_is_refused_with_its_estimate() {
     assert_eq!(huge.unknowns, 2 * 4097 * 4097);
     let e = check_fits(&huge, Some(twenty_four_gib)).expect_err("refused").to_string();
     println!("{e}");
-    assert!(e.starts_with("domain: the run would need about") && e.contains("GiB") && e.contains("use a coarser mesh"), "{e}");
+    assert!(
+        e.starts_with("domain: the run would need about") && e.contains("GiB") && e.contains("use a coarser mesh"),
+        "{e}"
+    );
     let academic = estimate(&Scene::default_scene().validate().expect("valid"), Path::new(".")).expect("estimate");
     assert!(academic.total() < 16.0 * 1024f64.powi(2), "academic estimated at {} bytes", academic.total());
     check_fits(&academic, Some(twenty_four_gib)).expect("the academic scene fits");
@@ -70,16 +73,22 @@ fn cli_refuses_oversize_scene_before_building_it() {
 #[test]
 fn memory_estimate_is_within_30_percent_of_the_measured_peak() {
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("memory_estimate");
-    let fixture = |n: &str| std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes").join(format!("{n}.toml"));
+    let fixture = |n: &str| {
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes").join(format!("{n}.toml"))
+    };
     let cases: [(&str, &[&str]); 3] = [
         ("academic", &["domain.cells=[128,64]", "time.end=0.05"]),
         ("academic3d", &["domain.cells=[16,8,6]", "time.end=0.02"]),
         ("hertz", &["time.end=0.01"]),
     ];
     for (name, sets) in cases {
-        let overrides: Vec<dyncontact::overrides::Override> = sets.iter().map(|s| dyncontact::overrides::Override::parse(s).expect("override")).collect();
+        let overrides: Vec<dyncontact::overrides::Override> =
+            sets.iter().map(|s| dyncontact::overrides::Override::parse(s).expect("override")).collect();
         let scene = Scene::from_file_with(&fixture(name), &overrides).expect("scene");
-        let est = estimate(&scene.validate().expect("valid"), &fixture(name).parent().expect("dir").to_path_buf()).expect("estimate").total() / 1e6;
+        let est = estimate(&scene.validate().expect("valid"), &fixture(name).parent().expect("dir").to_path_buf())
+            .expect("estimate")
+            .total()
+            / 1e6;
         let out = dir.join(name);
         let _ = std::fs::remove_dir_all(&out);
         let mut cmd = Command::new(BIN);
@@ -89,9 +98,13 @@ fn memory_estimate_is_within_30_percent_of_the_measured_peak() {
         }
         let o = cmd.output().expect("run");
         assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
-        let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
         let peak = summary["peak_memory_mb"].as_f64().expect("the peak is measured on Linux");
         println!("{name}: estimated {est:.1} MB, measured peak {peak:.1} MB, ratio {:.2}", est / peak);
-        assert!((0.7..=1.3).contains(&(est / peak)), "{name}: estimate {est:.1} MB against a measured peak of {peak:.1} MB");
+        assert!(
+            (0.7..=1.3).contains(&(est / peak)),
+            "{name}: estimate {est:.1} MB against a measured peak of {peak:.1} MB"
+        );
     }
 }

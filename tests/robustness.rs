@@ -35,15 +35,20 @@ fn check_files_valid(out: &Path, steps: usize) {
     let h = std::fs::read_to_string(out.join("history.csv")).expect("history");
     let rows: Vec<&str> = h.lines().skip(1).collect();
     assert_eq!(rows.len(), steps + 1, "history.csv rows");
-    let last_step: usize = rows.last().and_then(|r| r.split(',').next()).and_then(|s| s.parse().ok()).expect("last step");
+    let last_step: usize =
+        rows.last().and_then(|r| r.split(',').next()).and_then(|s| s.parse().ok()).expect("last step");
     assert_eq!(last_step, steps);
     let pvd = std::fs::read_to_string(out.join("series.pvd")).expect("series.pvd");
     assert!(pvd.trim_end().ends_with("</VTKFile>"), "series.pvd is not complete");
-    let listed: Vec<String> = pvd.lines().filter_map(|l| l.split("file=\"").nth(1)).map(|s| s.trim_end_matches("\"/>").to_string()).collect();
+    let listed: Vec<String> =
+        pvd.lines().filter_map(|l| l.split("file=\"").nth(1)).map(|s| s.trim_end_matches("\"/>").to_string()).collect();
     for f in &listed {
         assert!(out.join(f).exists(), "{f} listed but missing");
     }
-    let on_disk = std::fs::read_dir(out.join("frames")).expect("frames").filter(|e| e.as_ref().is_ok_and(|e| e.path().extension().is_some_and(|x| x == "vtu"))).count();
+    let on_disk = std::fs::read_dir(out.join("frames"))
+        .expect("frames")
+        .filter(|e| e.as_ref().is_ok_and(|e| e.path().extension().is_some_and(|x| x == "vtu")))
+        .count();
     assert_eq!(on_disk, listed.len(), "frames on disk vs series.pvd");
 }
 
@@ -53,7 +58,11 @@ fn check_files_valid(out: &Path, steps: usize) {
 fn forced_newton_failure_exits_2_with_valid_files() {
     let dir = tmp("fail_newton");
     let scene = dir.join("scene.toml");
-    std::fs::write(&scene, fixture_text("impact_friction").replace("[output]", "[solver]\nmax_newton_iterations = 1\n\n[output]")).expect("write");
+    std::fs::write(
+        &scene,
+        fixture_text("impact_friction").replace("[output]", "[solver]\nmax_newton_iterations = 1\n\n[output]"),
+    )
+    .expect("write");
     let out = dir.join("out");
     let o = run(&[], &scene, &out);
     let err = String::from_utf8_lossy(&o.stderr);
@@ -77,7 +86,9 @@ fn forced_newton_failure_exits_2_with_valid_files() {
 fn forced_non_finite_load_is_refused_naming_the_key() {
     let dir = tmp("fail_nan");
     let scene = dir.join("scene.toml");
-    let text = fixture_text("impact_friction").replace("body = [\"0\", \"-20\"]", "body = [\"0\", \"-20 + 1/(t - 0.0105)\"]").replace("step = 5.0e-4", "step = 1.0e-3");
+    let text = fixture_text("impact_friction")
+        .replace("body = [\"0\", \"-20\"]", "body = [\"0\", \"-20 + 1/(t - 0.0105)\"]")
+        .replace("step = 5.0e-4", "step = 1.0e-3");
     std::fs::write(&scene, text).expect("write");
     let out = dir.join("out");
     let o = run(&[], &scene, &out);
@@ -135,7 +146,8 @@ fn resume_case(name: &str, text: &str, stop: usize) {
     let mut frames = 0;
     for e in std::fs::read_dir(a.join("frames")).expect("frames").flatten() {
         let name = e.file_name();
-        let (x, y) = (std::fs::read(e.path()).expect("a"), std::fs::read(b.join("frames").join(&name)).expect("b frame"));
+        let (x, y) =
+            (std::fs::read(e.path()).expect("a"), std::fs::read(b.join("frames").join(&name)).expect("b frame"));
         assert!(x == y, "{name:?} differs after resume");
         frames += 1;
     }

@@ -7,8 +7,8 @@ use std::path::Path;
 
 use dyncontact::problem::Problem;
 use dyncontact::scene::{
-    Bound, DomainKind, EnforcementKind as Enforcement, FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind, Scene,
-    DEFAULT_SCENE,
+    Bound, DEFAULT_SCENE, DomainKind, EnforcementKind as Enforcement, FrictionBound, FrictionLaw, InnerSolver,
+    MassKind, Plane, Scene, SchemeKind,
 };
 
 /// The valid base scene every malformed case is edited from.
@@ -90,7 +90,12 @@ fn cases() -> Vec<Case> {
             "material.elasticity",
             "unknown field `elasticity`",
         ),
-        case("unknown nested key", after("[contact.friction]", "foo = 1.0"), "contact.friction.foo", "unknown field `foo`"),
+        case(
+            "unknown nested key",
+            after("[contact.friction]", "foo = 1.0"),
+            "contact.friction.foo",
+            "unknown field `foo`",
+        ),
         case(
             "unknown key in an inline table",
             edit("zeta = 1.5 }", "zeta = 1.5, eta = 1.0 }"),
@@ -103,8 +108,18 @@ fn cases() -> Vec<Case> {
             "loads.traction[0].sides",
             "unknown field `sides`",
         ),
-        case("string for a number", edit("density = 1.0", "density = \"heavy\""), "material.density", "invalid type: string"),
-        case("string inside an integer pair", edit("cells = [32, 16]", "cells = [32, \"16\"]"), "domain.cells[1]", "invalid type"),
+        case(
+            "string for a number",
+            edit("density = 1.0", "density = \"heavy\""),
+            "material.density",
+            "invalid type: string",
+        ),
+        case(
+            "string inside an integer pair",
+            edit("cells = [32, 16]", "cells = [32, \"16\"]"),
+            "domain.cells[1]",
+            "invalid type",
+        ),
         case("float for an integer", edit("every = 10", "every = 2.5"), "output.every", "invalid type"),
         case(
             "number for an expression string",
@@ -112,8 +127,18 @@ fn cases() -> Vec<Case> {
             "loads.traction[0].value[1]",
             "invalid type",
         ),
-        case("rectangle size with three entries", edit("size = [2.0, 1.0]", "size = [2.0, 1.0, 3.0]"), "domain.size", "a rectangle needs 2 entries [Lx, Ly], got 3"),
-        case("size with four entries", edit("size = [2.0, 1.0]", "size = [2.0, 1.0, 3.0, 4.0]"), "domain.size", "invalid length 4, expected 2 entries [a, b] (2-D) or 3 [a, b, c] (3-D)"),
+        case(
+            "rectangle size with three entries",
+            edit("size = [2.0, 1.0]", "size = [2.0, 1.0, 3.0]"),
+            "domain.size",
+            "a rectangle needs 2 entries [Lx, Ly], got 3",
+        ),
+        case(
+            "size with four entries",
+            edit("size = [2.0, 1.0]", "size = [2.0, 1.0, 3.0, 4.0]"),
+            "domain.size",
+            "invalid length 4, expected 2 entries [a, b] (2-D) or 3 [a, b, c] (3-D)",
+        ),
         case(
             "3-D expression in a 2-D scene",
             edit("value = [\"0\", \"-40*min(t/0.2, 1)\"]", "value = [\"0\", \"-40\", \"0\"]"),
@@ -138,16 +163,36 @@ fn cases() -> Vec<Case> {
             "time.scheme",
             "unknown variant `rk4`, expected one of `midpoint`, `trapezoid`, `backward-euler`",
         ),
-        case("unknown domain kind", edit("kind = \"rectangle\"", "kind = \"circle\""), "domain.kind", "unknown variant `circle`"),
-        case("unknown plane", edit("plane = \"strain\"", "plane = \"shell\""), "domain.plane", "unknown variant `shell`"),
-        case("unknown inner solver", edit("inner = \"newton\"", "inner = \"cg\""), "solver.inner", "unknown variant `cg`"),
+        case(
+            "unknown domain kind",
+            edit("kind = \"rectangle\"", "kind = \"circle\""),
+            "domain.kind",
+            "unknown variant `circle`",
+        ),
+        case(
+            "unknown plane",
+            edit("plane = \"strain\"", "plane = \"shell\""),
+            "domain.plane",
+            "unknown variant `shell`",
+        ),
+        case(
+            "unknown inner solver",
+            edit("inner = \"newton\"", "inner = \"cg\""),
+            "solver.inner",
+            "unknown variant `cg`",
+        ),
         case(
             "unknown friction bound",
             edit("friction_bound = \"capped\"", "friction_bound = \"soft\""),
             "contact.friction_bound",
             "unknown variant `soft`",
         ),
-        case("unknown friction law", friction("law = \"coulomb\""), "contact.friction.law", "unknown variant `coulomb`"),
+        case(
+            "unknown friction law",
+            friction("law = \"coulomb\""),
+            "contact.friction.law",
+            "unknown variant `coulomb`",
+        ),
         case("missing required key", edit("young = 1000.0\n", ""), "material.young", "missing field `young`"),
         case(
             "missing key in an inline table",
@@ -166,30 +211,94 @@ fn cases() -> Vec<Case> {
         case("name with a slash", edit("name = \"academic\"", "name = \"a/b\""), "name", "letters, digits"),
         // names reach folders and generated files (issue 22): a newline would have put code in a Snakefile
         case("name with a newline", edit("name = \"academic\"", "name = \"a\\nb\""), "name", "letters, digits"),
-        case("name with a shell character", edit("name = \"academic\"", "name = \"a$(touch x)\""), "name", "letters, digits"),
-        case("description with a control character", edit("description = \"Ex-A", "description = \"\\u0007Ex-A"), "description", "control character"),
+        case(
+            "name with a shell character",
+            edit("name = \"academic\"", "name = \"a$(touch x)\""),
+            "name",
+            "letters, digits",
+        ),
+        case(
+            "description with a control character",
+            edit("description = \"Ex-A", "description = \"\\u0007Ex-A"),
+            "description",
+            "control character",
+        ),
         // friction coefficients bounded (a coefficient of 1e300 completed with (E.1) off by 1.0)
         case("static friction 1e300", edit("static = 0.6", "static = 1e300"), "contact.friction.static", "at most 100"),
-        case("energy residual limit 0", edit("[solver]", "[solver]\nenergy_residual_limit = 0"), "solver.energy_residual_limit", "must be a finite number > 0"),
+        case(
+            "energy residual limit 0",
+            edit("[solver]", "[solver]\nenergy_residual_limit = 0"),
+            "solver.energy_residual_limit",
+            "must be a finite number > 0",
+        ),
         case("missing rectangle size", edit("size = [2.0, 1.0]\n", ""), "domain.size", "missing"),
         case("missing rectangle cells", edit("cells = [32, 16]\n", ""), "domain.cells", "missing"),
-        case("zero length", edit("size = [2.0, 1.0]", "size = [2.0, 0.0]"), "domain.size[1]", "must be a finite number > 0"),
+        case(
+            "zero length",
+            edit("size = [2.0, 1.0]", "size = [2.0, 0.0]"),
+            "domain.size[1]",
+            "must be a finite number > 0",
+        ),
         case("zero cells", edit("cells = [32, 16]", "cells = [0, 16]"), "domain.cells[0]", "must be >= 1"),
         case(
             "gmsh without file",
-            edits(&[("kind = \"rectangle\"", "kind = \"gmsh\""), ("size = [2.0, 1.0]\n", ""), ("cells = [32, 16]\n", "")]),
+            edits(&[
+                ("kind = \"rectangle\"", "kind = \"gmsh\""),
+                ("size = [2.0, 1.0]\n", ""),
+                ("cells = [32, 16]\n", ""),
+            ]),
             "domain.file",
             "missing",
         ),
-        case("gmsh with rectangle size", edit("kind = \"rectangle\"", "kind = \"gmsh\"\nfile = \"m.msh\""), "domain.size", "remove it"),
-        case("rectangle with a mesh file", after("[domain]", "file = \"m.msh\""), "domain.file", "only used with kind = \"gmsh\""),
+        case(
+            "gmsh with rectangle size",
+            edit("kind = \"rectangle\"", "kind = \"gmsh\"\nfile = \"m.msh\""),
+            "domain.size",
+            "remove it",
+        ),
+        case(
+            "rectangle with a mesh file",
+            after("[domain]", "file = \"m.msh\""),
+            "domain.file",
+            "only used with kind = \"gmsh\"",
+        ),
         // ---- material ----
-        case("negative density", edit("density = 1.0", "density = -1.0"), "material.density", "must be a finite number > 0, got -1"),
-        case("NaN density", edit("density = 1.0", "density = nan"), "material.density", "must be a finite number > 0, got NaN"),
-        case("zero Young modulus", edit("young = 1000.0", "young = 0.0"), "material.young", "must be a finite number > 0, got 0"),
-        case("Poisson ratio 0.5", edit("poisson = 0.3", "poisson = 0.5"), "material.poisson", "must be in (-1, 0.5), got 0.5"),
-        case("Poisson ratio -1", edit("poisson = 0.3", "poisson = -1.0"), "material.poisson", "must be in (-1, 0.5), got -1"),
-        case("negative viscosity", edit("theta = 2.0", "theta = -2.0"), "material.viscosity.theta", "must be >= 0, got -2"),
+        case(
+            "negative density",
+            edit("density = 1.0", "density = -1.0"),
+            "material.density",
+            "must be a finite number > 0, got -1",
+        ),
+        case(
+            "NaN density",
+            edit("density = 1.0", "density = nan"),
+            "material.density",
+            "must be a finite number > 0, got NaN",
+        ),
+        case(
+            "zero Young modulus",
+            edit("young = 1000.0", "young = 0.0"),
+            "material.young",
+            "must be a finite number > 0, got 0",
+        ),
+        case(
+            "Poisson ratio 0.5",
+            edit("poisson = 0.3", "poisson = 0.5"),
+            "material.poisson",
+            "must be in (-1, 0.5), got 0.5",
+        ),
+        case(
+            "Poisson ratio -1",
+            edit("poisson = 0.3", "poisson = -1.0"),
+            "material.poisson",
+            "must be in (-1, 0.5), got -1",
+        ),
+        case(
+            "negative viscosity",
+            edit("theta = 2.0", "theta = -2.0"),
+            "material.viscosity.theta",
+            "must be >= 0, got -2",
+        ),
         case("negative shear viscosity", edit("zeta = 1.5", "zeta = -0.1"), "material.viscosity.zeta", "must be >= 0"),
         case(
             "plane stress, non-proportional viscosity",
@@ -225,9 +334,24 @@ fn cases() -> Vec<Case> {
             "cannot parse",
         ),
         case("empty expression", edit("body = [\"0\", \"0\"]", "body = [\"0\", \"\"]"), "loads.body[1]", "empty"),
-        case("traction on a clamped side", edit("side = \"top\"", "side = \"left\""), "loads.traction[0].side", "Dirichlet side"),
-        case("traction on a contact side", edit("side = \"top\"", "side = \"bottom\""), "loads.traction[0].side", "contact side"),
-        case("two tractions on one side", edit("side = \"right\"", "side = \"top\""), "loads.traction[1].side", "already has a traction"),
+        case(
+            "traction on a clamped side",
+            edit("side = \"top\"", "side = \"left\""),
+            "loads.traction[0].side",
+            "Dirichlet side",
+        ),
+        case(
+            "traction on a contact side",
+            edit("side = \"top\"", "side = \"bottom\""),
+            "loads.traction[0].side",
+            "contact side",
+        ),
+        case(
+            "two tractions on one side",
+            edit("side = \"right\"", "side = \"top\""),
+            "loads.traction[1].side",
+            "already has a traction",
+        ),
         case(
             "time in the initial displacement",
             edit("displacement = [\"0\", \"0\"]", "displacement = [\"t\", \"0\"]"),
@@ -237,7 +361,12 @@ fn cases() -> Vec<Case> {
         // ---- contact ----
         case("gap depending on time", edit("gap = \"0\"", "gap = \"0.01*t\""), "contact.gap", "`t`"),
         case("infinite numeric gap", edit("gap = \"0\"", "gap = inf"), "contact.gap", "must be finite"),
-        case("negative compliance", edit("compliance = 1000.0", "compliance = -1.0"), "contact.compliance", "must be >= 0"),
+        case(
+            "negative compliance",
+            edit("compliance = 1000.0", "compliance = -1.0"),
+            "contact.compliance",
+            "must be >= 0",
+        ),
         case(
             "penalty with exact enforcement",
             edit("enforcement = \"exact\"", "enforcement = \"exact\"\npenalty = 1.0e-4"),
@@ -279,7 +408,10 @@ fn cases() -> Vec<Case> {
         ),
         case(
             "no force at all",
-            edits(&[("compliance = 1000.0", "compliance = 0.0"), ("penetration_bound = 0.02", "penetration_bound = \"inf\"")]),
+            edits(&[
+                ("compliance = 1000.0", "compliance = 0.0"),
+                ("penetration_bound = 0.02", "penetration_bound = \"inf\""),
+            ]),
             "contact.compliance",
             "no force",
         ),
@@ -302,8 +434,18 @@ fn cases() -> Vec<Case> {
             "contact.friction.static",
             "not used by law = \"constant\"",
         ),
-        case("constant law without coefficient", friction("law = \"constant\""), "contact.friction.coefficient", "missing"),
-        case("no friction with a coefficient", friction("law = \"none\"\ncoefficient = 0.3"), "contact.friction.coefficient", "not used"),
+        case(
+            "constant law without coefficient",
+            friction("law = \"constant\""),
+            "contact.friction.coefficient",
+            "missing",
+        ),
+        case(
+            "no friction with a coefficient",
+            friction("law = \"none\"\ncoefficient = 0.3"),
+            "contact.friction.coefficient",
+            "not used",
+        ),
         case("table without points", friction("law = \"table\""), "contact.friction.points", "missing"),
         case("empty table", friction("law = \"table\"\npoints = []"), "contact.friction.points", "is empty"),
         case(
@@ -334,12 +476,32 @@ fn cases() -> Vec<Case> {
         case("zero end time", edit("end = 1.0", "end = 0.0"), "time.end", "must be a finite number > 0"),
         case("negative step", edit("step = 5.0e-4", "step = -5.0e-4"), "time.step", "must be a finite number > 0"),
         case("step longer than the run", edit("step = 5.0e-4", "step = 2.0"), "time.step", "must be <= time.end"),
-        case("end not a whole number of steps", edit("step = 5.0e-4", "step = 0.3"), "time.step", "not a whole number of steps"),
-        case("too many steps", edit("step = 5.0e-4", "step = 1.0e-9"), "time.step", "too many steps (1000000000), at most 100000000"),
-        case("a step so small that N overflows", edit("step = 5.0e-4", "step = 1.0e-300"), "time.step", "too many steps (1.000e300), at most 100000000"),
+        case(
+            "end not a whole number of steps",
+            edit("step = 5.0e-4", "step = 0.3"),
+            "time.step",
+            "not a whole number of steps",
+        ),
+        case(
+            "too many steps",
+            edit("step = 5.0e-4", "step = 1.0e-9"),
+            "time.step",
+            "too many steps (1000000000), at most 100000000",
+        ),
+        case(
+            "a step so small that N overflows",
+            edit("step = 5.0e-4", "step = 1.0e-300"),
+            "time.step",
+            "too many steps (1.000e300), at most 100000000",
+        ),
         // ---- solver and output ----
         case("relaxation 0", edit("relaxation = 1.0", "relaxation = 0.0"), "solver.relaxation", "must be in (0, 1]"),
-        case("relaxation above 1", edit("relaxation = 1.0", "relaxation = 1.5"), "solver.relaxation", "must be in (0, 1]"),
+        case(
+            "relaxation above 1",
+            edit("relaxation = 1.0", "relaxation = 1.5"),
+            "solver.relaxation",
+            "must be in (0, 1]",
+        ),
         case(
             "Newton tolerance 2",
             edit("newton_tolerance = 1.0e-10", "newton_tolerance = 2.0"),
@@ -372,7 +534,12 @@ fn cases() -> Vec<Case> {
             "boundary.dirichlet[0]",
             "no side named \"lft\"",
         ),
-        mesh_case("traction side the mesh lacks", edit("side = \"top\"", "side = \"Top\""), "loads.traction[0].side", "no side named \"Top\""),
+        mesh_case(
+            "traction side the mesh lacks",
+            edit("side = \"top\"", "side = \"Top\""),
+            "loads.traction[0].side",
+            "no side named \"Top\"",
+        ),
         mesh_case(
             "gmsh file that does not exist",
             edits(&[
@@ -405,7 +572,10 @@ fn cases() -> Vec<Case> {
             "every node clamped",
             edit_in(
                 &cut_in(
-                    &edits(&[("cells = [32, 16]", "cells = [1, 1]"), ("dirichlet = [\"left\"]", "dirichlet = [\"left\", \"right\"]")]),
+                    &edits(&[
+                        ("cells = [32, 16]", "cells = [1, 1]"),
+                        ("dirichlet = [\"left\"]", "dirichlet = [\"left\", \"right\"]"),
+                    ]),
                     "[[loads.traction]]\nside = \"right\"",
                     "[initial]",
                 ),
@@ -535,7 +705,8 @@ step = 0.1
     assert!(p.u0.iter().chain(&p.v0).all(|&v| v == 0.0));
 
     // A minimal [contact] section: exact enforcement, capped friction bound, no friction, zero gap.
-    let with_contact = format!("{text}\n[boundary]\ncontact = [\"bottom\"]\n\n[contact]\npenetration_bound = 0.1\ncompliance = 10\n");
+    let with_contact =
+        format!("{text}\n[boundary]\ncontact = [\"bottom\"]\n\n[contact]\npenetration_bound = 0.1\ncompliance = 10\n");
     let s = Scene::from_toml(&with_contact, "minimal-contact.toml").expect("a minimal contact scene is valid");
     let c = s.contact.as_ref().expect("contact section");
     assert_eq!(c.enforcement, Enforcement::Exact);

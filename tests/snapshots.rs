@@ -39,13 +39,22 @@ fn summary(recs: &[StepRecord], times: &[f64], digits: usize, cum_digits: usize)
     let mut s = String::new();
     s.push_str(&format!("peak normal force: {}\n", sig(peak, digits)));
     s.push_str(&format!("first contact at t: {}\n", first_contact.map(|t| sig(t, digits)).unwrap_or("never".into())));
-    s.push_str(&format!("first constraint activation at t: {}\n", first_constraint.map(|t| sig(t, digits)).unwrap_or("never".into())));
+    s.push_str(&format!(
+        "first constraint activation at t: {}\n",
+        first_constraint.map(|t| sig(t, digits)).unwrap_or("never".into())
+    ));
     s.push_str(&format!("total friction dissipation: {}\n", sig(e.friction_dissipation, cum_digits)));
     s.push_str(&format!("total constraint dissipation: {}\n", sig(e.constraint_dissipation, cum_digits)));
-    s.push_str(&format!("final energy (kinetic + elastic + compliance): {}\n", sig(e.kinetic + e.elastic + e.compliance, cum_digits)));
+    s.push_str(&format!(
+        "final energy (kinetic + elastic + compliance): {}\n",
+        sig(e.kinetic + e.elastic + e.compliance, cum_digits)
+    ));
     for &t in times {
         let r = recs.iter().min_by(|a, b| (a.t - t).abs().total_cmp(&(b.t - t).abs())).expect("record");
-        s.push_str(&format!("at t = {t}: contact {}, stick {}, slip {}\n", r.contact_nodes, r.stick_nodes, r.slip_nodes));
+        s.push_str(&format!(
+            "at t = {t}: contact {}, stick {}, slip {}\n",
+            r.contact_nodes, r.stick_nodes, r.slip_nodes
+        ));
     }
     s
 }
@@ -105,7 +114,11 @@ fn snapshot_digits_are_stable_under_tighter_tolerances() {
                 println!("{name}: {la}  | tight: {lb}");
             }
         }
-        assert_eq!(summary(&a, &times, digits, cum), summary(&b, &times, digits, cum), "{name}: the snapshot digits move with the tolerances");
+        assert_eq!(
+            summary(&a, &times, digits, cum),
+            summary(&b, &times, digits, cum),
+            "{name}: the snapshot digits move with the tolerances"
+        );
     }
 }
 

@@ -10,12 +10,12 @@
 
 use dyncontact::fem::assemble::assemble_solid;
 use dyncontact::fem::tet;
+use dyncontact::linalg;
 use dyncontact::mesh::solid::{SolidMesh, Surface};
+use dyncontact::model::MaterialParams;
 use dyncontact::model::contact::Frame;
 use dyncontact::model::material::Material;
-use dyncontact::model::MaterialParams;
 use dyncontact::scene::{MassKind, Plane};
-use dyncontact::linalg;
 use nalgebra::{SMatrix, SymmetricEigen};
 use proptest::prelude::*;
 
@@ -45,7 +45,10 @@ fn rigid_modes(x: &[[f64; 3]]) -> Vec<Vec<f64>> {
 fn tetrahedron() -> impl Strategy<Value = [[f64; 3]; 4]> {
     prop::array::uniform4(prop::array::uniform3(-2.0..2.0f64)).prop_filter("non-degenerate", |x| {
         let Some((_, v)) = tet::gradients(*x) else { return false };
-        let d = (0..4).flat_map(|i| (0..4).map(move |j| (i, j))).map(|(i, j)| (0..3).map(|c| (x[i][c] - x[j][c]).powi(2)).sum::<f64>().sqrt()).fold(0.0, f64::max);
+        let d = (0..4)
+            .flat_map(|i| (0..4).map(move |j| (i, j)))
+            .map(|(i, j)| (0..3).map(|c| (x[i][c] - x[j][c]).powi(2)).sum::<f64>().sqrt())
+            .fold(0.0, f64::max);
         v.abs() >= 0.02 * d.powi(3) && d > 0.1
     })
 }
@@ -150,9 +153,14 @@ fn box_of_tetrahedra_tiles_the_box_with_six_sides() {
     assert!((mesh.volume() - vol).abs() <= 1e-13 * vol, "volume {} against {vol}", mesh.volume());
     let faces = mesh.boundary_faces().len();
     assert_eq!(faces, 2 * 2 * (n[0] * n[1] + n[1] * n[2] + n[0] * n[2]), "boundary faces (conformity)");
-    let expect = [("left", [-1.0, 0.0, 0.0], l[1] * l[2], n[1] * n[2]), ("right", [1.0, 0.0, 0.0], l[1] * l[2], n[1] * n[2]),
-        ("front", [0.0, -1.0, 0.0], l[0] * l[2], n[0] * n[2]), ("back", [0.0, 1.0, 0.0], l[0] * l[2], n[0] * n[2]),
-        ("bottom", [0.0, 0.0, -1.0], l[0] * l[1], n[0] * n[1]), ("top", [0.0, 0.0, 1.0], l[0] * l[1], n[0] * n[1])];
+    let expect = [
+        ("left", [-1.0, 0.0, 0.0], l[1] * l[2], n[1] * n[2]),
+        ("right", [1.0, 0.0, 0.0], l[1] * l[2], n[1] * n[2]),
+        ("front", [0.0, -1.0, 0.0], l[0] * l[2], n[0] * n[2]),
+        ("back", [0.0, 1.0, 0.0], l[0] * l[2], n[0] * n[2]),
+        ("bottom", [0.0, 0.0, -1.0], l[0] * l[1], n[0] * n[1]),
+        ("top", [0.0, 0.0, 1.0], l[0] * l[1], n[0] * n[1]),
+    ];
     for (name, normal, area, cells) in expect {
         let side = mesh.side(name).expect(name);
         assert_eq!(side.faces.len(), 2 * cells, "{name}: faces");
@@ -165,7 +173,11 @@ fn box_of_tetrahedra_tiles_the_box_with_six_sides() {
         // the stored orientation is outward too: (x1 − x0) × (x2 − x0) along the normal
         for f in &side.faces {
             let [p, q, r] = f.map(|v| mesh.nodes[v]);
-            let c = [(q[1] - p[1]) * (r[2] - p[2]) - (q[2] - p[2]) * (r[1] - p[1]), (q[2] - p[2]) * (r[0] - p[0]) - (q[0] - p[0]) * (r[2] - p[2]), (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])];
+            let c = [
+                (q[1] - p[1]) * (r[2] - p[2]) - (q[2] - p[2]) * (r[1] - p[1]),
+                (q[2] - p[2]) * (r[0] - p[0]) - (q[0] - p[0]) * (r[2] - p[2]),
+                (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]),
+            ];
             assert!(c[0] * normal[0] + c[1] * normal[1] + c[2] * normal[2] > 0.0, "{name}: face {f:?} is not outward");
         }
     }
@@ -202,9 +214,18 @@ fn p2_box_operators_have_rigid_kernel_and_total_mass() {
             for mode in rigid_modes(&mesh.nodes) {
                 let r = linalg::mul(a, &mode);
                 let size = linalg::norm_inf(&mode);
-                assert!(linalg::norm_inf(&r) <= 1e-11 * scale * size, "{mass:?}: a rigid mode is not in the kernel: {:.3e}", linalg::norm_inf(&r) / scale);
+                assert!(
+                    linalg::norm_inf(&r) <= 1e-11 * scale * size,
+                    "{mass:?}: a rigid mode is not in the kernel: {:.3e}",
+                    linalg::norm_inf(&r) / scale
+                );
             }
-            let asym = linalg::triplets(a).iter().map(|&(i, j, v)| (v - linalg::triplets(a).iter().find(|t| t.0 == j && t.1 == i).map(|t| t.2).unwrap_or(0.0)).abs()).fold(0.0, f64::max);
+            let asym = linalg::triplets(a)
+                .iter()
+                .map(|&(i, j, v)| {
+                    (v - linalg::triplets(a).iter().find(|t| t.0 == j && t.1 == i).map(|t| t.2).unwrap_or(0.0)).abs()
+                })
+                .fold(0.0, f64::max);
             assert!(asym <= 1e-13 * scale, "not symmetric: {asym:.3e}");
         }
         let vol = 0.25;
@@ -236,9 +257,17 @@ fn solid_mesh_errors_name_the_defect() {
     assert!(e.contains("zero (degenerate)"), "{e}");
 
     // two tetrahedra sharing only the edge (0, 1)
-    let nodes = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
-    let mut bowtie = SolidMesh { nodes, tets: vec![[0, 1, 2, 3], [0, 1, 4, 5]], sides: Vec::new(), source: "bowtie".into(), tags: None };
-    let faces: Vec<[usize; 3]> = bowtie.boundary_faces().into_iter().filter(|f| f.contains(&0) && f.contains(&1)).collect();
+    let nodes =
+        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
+    let mut bowtie = SolidMesh {
+        nodes,
+        tets: vec![[0, 1, 2, 3], [0, 1, 4, 5]],
+        sides: Vec::new(),
+        source: "bowtie".into(),
+        tags: None,
+    };
+    let faces: Vec<[usize; 3]> =
+        bowtie.boundary_faces().into_iter().filter(|f| f.contains(&0) && f.contains(&1)).collect();
     assert_eq!(faces.len(), 4);
     bowtie.sides.push(Surface { name: "contact".into(), faces });
     bowtie.check().expect("each tetrahedron is valid");
@@ -258,7 +287,12 @@ fn tet_rule_is_exact_to_degree_five() {
         for b in 0..=5 - a {
             for c in 0..=5 - a - b {
                 for d in 0..=5 - a - b - c {
-                    let q: f64 = rule.iter().map(|(l, w)| w * l[1].powi(a as i32) * l[2].powi(b as i32) * l[3].powi(c as i32) * l[0].powi(d as i32)).sum();
+                    let q: f64 = rule
+                        .iter()
+                        .map(|(l, w)| {
+                            w * l[1].powi(a as i32) * l[2].powi(b as i32) * l[3].powi(c as i32) * l[0].powi(d as i32)
+                        })
+                        .sum();
                     let exact = 6.0 * fact(a) * fact(b) * fact(c) * fact(d) / fact(a + b + c + d + 3);
                     worst = worst.max((q - exact).abs() / exact);
                 }

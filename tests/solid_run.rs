@@ -54,7 +54,9 @@ fn scene(n: usize, k: f64) -> Scene {
         v[other] = both(format!("{}*x", sign * (4.0 * l + 2.0 * m)), format!("{}*x", sign * (4.0 * t + 2.0 * z)));
         v
     };
-    let traction = |side: &str, v: &[String]| format!("[[loads.traction]]\nside = \"{side}\"\nvalue = [\"{}\", \"{}\", \"{}\"]\n", v[0], v[1], v[2]);
+    let traction = |side: &str, v: &[String]| {
+        format!("[[loads.traction]]\nside = \"{side}\"\nvalue = [\"{}\", \"{}\", \"{}\"]\n", v[0], v[1], v[2])
+    };
     let text = format!(
         r#"
 name = "manufactured3d"
@@ -212,19 +214,31 @@ fn e1_balance_3d_without_contact() {
 /// size, and what 3-D contact does not do yet (N.4/Co.3 with friction), refused with the reason.
 #[test]
 fn box_scene_errors_name_the_key() {
-    let base = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes/cantilever3d.toml")).expect("fixture");
+    let base = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes/cantilever3d.toml"))
+        .expect("fixture");
     let cases = [
         (base.replace("kind = \"box\"", "kind = \"box\"\nplane = \"strain\""), "domain.plane", "2-D key"),
-        (base.replace("body = [\"0\", \"0.5*min(t/0.05, 1)\", \"0\"]", "body = [\"0\", \"1\"]"), "loads.body", "has 2 components; the 3-D domain (kind = \"box\") needs 3"),
-        (base.replace("size = [1.0, 0.25, 0.25]", "size = [1.0, 0.25]"), "domain.size", "a box needs 3 entries [Lx, Ly, Lz], got 2"),
+        (
+            base.replace("body = [\"0\", \"0.5*min(t/0.05, 1)\", \"0\"]", "body = [\"0\", \"1\"]"),
+            "loads.body",
+            "has 2 components; the 3-D domain (kind = \"box\") needs 3",
+        ),
+        (
+            base.replace("size = [1.0, 0.25, 0.25]", "size = [1.0, 0.25]"),
+            "domain.size",
+            "a box needs 3 entries [Lx, Ly, Lz], got 2",
+        ),
         (base.replace("cells = [16, 4, 4]", "cells = [16, 0, 4]"), "domain.cells[1]", "must be >= 1"),
     ];
     for (text, key, what) in cases {
-        let err = Scene::from_toml(&text, "case").and_then(|s| Problem::from_scene(&s, Path::new("."))).err().expect("refused").to_string();
+        let err = Scene::from_toml(&text, "case")
+            .and_then(|s| Problem::from_scene(&s, Path::new(".")))
+            .err()
+            .expect("refused")
+            .to_string();
         assert!(err.contains(key) && err.contains(what), "expected {key}: {what}, got: {err}");
     }
 }
-
 
 /// (B.1) in 3-D: the column of the column_impact3d fixture (ν = 0, so the 1-D wave solution
 /// holds) presses the wall with the mean force ρ c v0 A = 1e-3 N over [0.1, 1.9] (1%, as for the
@@ -240,7 +254,9 @@ fn b1_3d_column_impact_matches_closed_form() {
     let base = std::fs::read_to_string(dir.join("column_impact3d.toml")).expect("fixture");
     let mut deficits = Vec::new();
     for (cells, k) in [("[100, 1, 1]", "2.5e-3"), ("[200, 2, 2]", "1.25e-3")] {
-        let text = base.replace("cells = [100, 1, 1]", &format!("cells = {cells}")).replace("step = 2.5e-3", &format!("step = {k}"));
+        let text = base
+            .replace("cells = [100, 1, 1]", &format!("cells = {cells}"))
+            .replace("step = 2.5e-3", &format!("step = {k}"));
         let p = Problem::from_scene(&Scene::from_toml(&text, "column").expect("scene"), &dir).expect("problem");
         let c = p.contact.as_ref().expect("contact");
         assert_eq!(c.dim, 3);
@@ -262,9 +278,21 @@ fn b1_3d_column_impact_matches_closed_form() {
         let expected = 1.0 * 1.0 * 0.1 * 0.01;
         let speed = mean_vx(&sim);
         let deficit = 1.0 - speed / 0.1;
-        println!("column impact 3-D {cells}: mean force {mean:.6e} (closed form {expected:e}), release {last_contact}, exit speed {speed:.6}, (E.1) {worst:.2e}");
-        common::measured("b1_3d_column_impact_matches_closed_form", &format!("{cells}: mean force / ρ c v0 A − 1"), mean / expected - 1.0, "|·| ≤ 1e-2");
-        common::measured("b1_3d_column_impact_matches_closed_form", &format!("{cells}: exit speed deficit"), deficit, "≤ 2e-2, falling");
+        println!(
+            "column impact 3-D {cells}: mean force {mean:.6e} (closed form {expected:e}), release {last_contact}, exit speed {speed:.6}, (E.1) {worst:.2e}"
+        );
+        common::measured(
+            "b1_3d_column_impact_matches_closed_form",
+            &format!("{cells}: mean force / ρ c v0 A − 1"),
+            mean / expected - 1.0,
+            "|·| ≤ 1e-2",
+        );
+        common::measured(
+            "b1_3d_column_impact_matches_closed_form",
+            &format!("{cells}: exit speed deficit"),
+            deficit,
+            "≤ 2e-2, falling",
+        );
         assert!((mean / expected - 1.0).abs() <= 1e-2, "mean force {mean:e}");
         let h = 1.0 / if cells.starts_with("[100") { 100.0 } else { 200.0 };
         let kk: f64 = k.parse().expect("k");
@@ -310,7 +338,8 @@ fn mean_velocity(sim: &Simulation) -> [f64; 3] {
 #[test]
 fn b3_3d_block_slides_along_an_oblique_pull() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes");
-    let p = Problem::from_scene(&Scene::from_file(&dir.join("sliding_block3d.toml")).expect("fixture"), &dir).expect("problem");
+    let p = Problem::from_scene(&Scene::from_file(&dir.join("sliding_block3d.toml")).expect("fixture"), &dir)
+        .expect("problem");
     let (m, n, ft, a, b, alpha, t0) = (2.0, 10.0, 7.0, 0.6, 0.3, 20.0, 0.1);
     let e = [(std::f64::consts::PI / 6.0).cos(), (std::f64::consts::PI / 6.0).sin()];
     let mut sim = Simulation::new(&p).expect("setup");
@@ -327,9 +356,16 @@ fn b3_3d_block_slides_along_an_oblique_pull() {
     }
     let v = mean_velocity(&sim);
     let (along, across) = (v[0] * e[0] + v[1] * e[1], -v[0] * e[1] + v[1] * e[0]);
-    println!("B.3 in 3-D: worst |v_along − v| = {worst:.3e}; at the end along {along:.5}, across {across:.3e}; (E.1) {worst_e1:.2e}");
+    println!(
+        "B.3 in 3-D: worst |v_along − v| = {worst:.3e}; at the end along {along:.5}, across {across:.3e}; (E.1) {worst_e1:.2e}"
+    );
     common::measured("b3_3d_block_slides_along_an_oblique_pull", "sliding velocity error (absolute)", worst, "≤ 4e-3");
-    common::measured("b3_3d_block_slides_along_an_oblique_pull", "velocity across the pull / speed", across.abs() / along, "≤ 1e-3");
+    common::measured(
+        "b3_3d_block_slides_along_an_oblique_pull",
+        "velocity across the pull / speed",
+        across.abs() / along,
+        "≤ 1e-3",
+    );
     assert!(worst <= 4e-3, "sliding velocity off the closed form by {worst:.3e}");
     assert!(across.abs() <= 1e-3 * along, "the slip turned away from the pull: across {across:.3e}, along {along:.3e}");
     assert!(worst_e1 <= 1e-10, "(E.1) defect {worst_e1:.3e}");
@@ -399,7 +435,9 @@ fn s6_3d_twins_newton_and_conic_agree() {
     );
     let newton_set = NewtonSettings { tolerance: 1e-12, ..NewtonSettings::default() };
     let conic_set = ConicSettings { tolerance: 1e-11, max_rounds: 100, verbose: false };
-    for (name, scene, steps) in [("column impact", column, 300), ("turning pull", turning, 100), ("bound active", bound, 60)] {
+    for (name, scene, steps) in
+        [("column impact", column, 300), ("turning pull", turning, 100), ("bound active", bound, 60)]
+    {
         let p = Problem::from_scene(&scene, &dir).expect("problem");
         let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);
         let (mut slips, mut actives, mut directions) = (0usize, 0usize, Vec::new());
@@ -415,9 +453,12 @@ fn s6_3d_twins_newton_and_conic_agree() {
             let (ra, rb) = (data.forces(&a.y, &a.lambda, &a.t), data.forces(&b.y, &b.lambda, &b.t));
             if linalg::norm_inf(&ra) > 0.0 {
                 let vs = data.velocity_scale(&a.y).max(1e-300);
-                let w_norm = (0..data.delassus.dim()).map(|i| (0..data.delassus.dim()).map(|j| data.delassus[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
+                let w_norm = (0..data.delassus.dim())
+                    .map(|i| (0..data.delassus.dim()).map(|j| data.delassus[(i, j)].abs()).sum::<f64>())
+                    .fold(0.0, f64::max);
                 let fs = linalg::norm_inf(&ra).max(data.velocity_scale(&data.y_free) / w_norm).max(1e-300);
-                let d = |x: &[f64], y: &[f64], s: f64| x.iter().zip(y).fold(0.0f64, |m, (p, q)| m.max((p - q).abs())) / s;
+                let d =
+                    |x: &[f64], y: &[f64], s: f64| x.iter().zip(y).fold(0.0f64, |m, (p, q)| m.max((p - q).abs())) / s;
                 worst_v = worst_v.max(d(&a.y, &b.y, vs));
                 worst_f = worst_f.max(d(&ra, &rb, fs));
             }
@@ -430,14 +471,29 @@ fn s6_3d_twins_newton_and_conic_agree() {
             }
             sim.step().expect("step");
         }
-        let turn = directions.iter().fold(f64::NEG_INFINITY, |m, d| m.max(*d)) - directions.iter().fold(f64::INFINITY, |m, d| m.min(*d));
-        println!("{name}: twins worst velocity {worst_v:.3e}, force {worst_f:.3e}; slip records {slips}, active constraints {actives}, slip direction spans {turn:.2} rad");
-        common::measured("s6_3d_twins_newton_and_conic_agree", &format!("{name}: velocity difference"), worst_v, "≤ 1e-5");
+        let turn = directions.iter().fold(f64::NEG_INFINITY, |m, d| m.max(*d))
+            - directions.iter().fold(f64::INFINITY, |m, d| m.min(*d));
+        println!(
+            "{name}: twins worst velocity {worst_v:.3e}, force {worst_f:.3e}; slip records {slips}, active constraints {actives}, slip direction spans {turn:.2} rad"
+        );
+        common::measured(
+            "s6_3d_twins_newton_and_conic_agree",
+            &format!("{name}: velocity difference"),
+            worst_v,
+            "≤ 1e-5",
+        );
         common::measured("s6_3d_twins_newton_and_conic_agree", &format!("{name}: force difference"), worst_f, "≤ 1e-5");
-        assert!(worst_v <= 1e-5 && worst_f <= 1e-5, "{name}: the twins disagree: velocity {worst_v:.3e}, force {worst_f:.3e}");
+        assert!(
+            worst_v <= 1e-5 && worst_f <= 1e-5,
+            "{name}: the twins disagree: velocity {worst_v:.3e}, force {worst_f:.3e}"
+        );
         match name {
-            "turning pull" => assert!(slips > 0 && turn > 1.0, "the pull did not make the slip turn: {slips} slips, span {turn}"),
-            "bound active" => assert!(actives > 0 && slips > 0, "the bound was never active with slip: {actives}, {slips}"),
+            "turning pull" => {
+                assert!(slips > 0 && turn > 1.0, "the pull did not make the slip turn: {slips} slips, span {turn}")
+            }
+            "bound active" => {
+                assert!(actives > 0 && slips > 0, "the bound was never active with slip: {actives}, {slips}")
+            }
             _ => {}
         }
     }
@@ -490,8 +546,17 @@ step = 1.0e-4
         }
     }
     let mean = sum / count as f64 / area;
-    println!("B.2 in 3-D: worst |δ_h − δ| = {worst:.3e} ({:.3}% of g), mean reaction {mean:.5} (ρ c v0 = {:.5}), (E.1) {worst_e1:.2e}", 100.0 * worst / l.g, l.impedance() * l.v0);
-    common::measured("b2_3d_compliant_layer_penetration_matches_closed_form", "penetration error / g", worst / l.g, "≤ 5e-3");
+    println!(
+        "B.2 in 3-D: worst |δ_h − δ| = {worst:.3e} ({:.3}% of g), mean reaction {mean:.5} (ρ c v0 = {:.5}), (E.1) {worst_e1:.2e}",
+        100.0 * worst / l.g,
+        l.impedance() * l.v0
+    );
+    common::measured(
+        "b2_3d_compliant_layer_penetration_matches_closed_form",
+        "penetration error / g",
+        worst / l.g,
+        "≤ 5e-3",
+    );
     assert!(worst <= 5e-3 * l.g, "penetration off the closed form by {worst:.3e}");
     assert!((mean / (l.impedance() * l.v0) - 1.0).abs() <= 0.01, "mean reaction {mean}");
     assert!(worst_e1 <= 1e-10, "(E.1) defect {worst_e1:.3e}");
@@ -507,12 +572,21 @@ fn outputs_3d_have_the_contract_columns_and_charts() {
     scene.time.end = 0.5;
     let p = Problem::from_scene(&scene, &dir).expect("problem");
     let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("outputs_3d");
-    let opts = dyncontact::run::RunOptions { out: out.clone(), progress: false, checkpoint_every: None, resume: false, stop_after: None, interrupt: None };
+    let opts = dyncontact::run::RunOptions {
+        out: out.clone(),
+        progress: false,
+        checkpoint_every: None,
+        resume: false,
+        stop_after: None,
+        interrupt: None,
+    };
     dyncontact::run::run(&p, &opts).expect("run");
     let contact = std::fs::read_to_string(out.join("contact.csv")).expect("contact.csv");
     assert_eq!(
         contact.lines().next(),
-        Some("step,t,node,x,y,z,u_n,u_t,v_t,p,lambda,friction,status,v_tx,v_ty,v_tz,friction_x,friction_y,friction_z,friction_bound")
+        Some(
+            "step,t,node,x,y,z,u_n,u_t,v_t,p,lambda,friction,status,v_tx,v_ty,v_tz,friction_x,friction_y,friction_z,friction_bound"
+        )
     );
     assert!(contact.lines().skip(1).all(|l| l.split(',').count() == 20), "every row has 20 fields");
     let history = std::fs::read_to_string(out.join("history.csv")).expect("history.csv");
@@ -592,7 +666,13 @@ fn gmsh_3d_scene_runs_and_the_mesh_decides_the_dimension() {
     println!("gmsh_block3d: worst (E.1) defect {worst:.3e}, up to {contact} nodes in contact");
     assert!(worst <= 1e-10 && contact > 0, "(E.1) {worst:.3e}, contact {contact}");
     // 2-component vectors for a 3-D mesh
-    let flat = text.replace("value = [\"0\", \"0\", \"-20*min(t/0.05, 1)\"]", "value = [\"0\", \"-20\"]").replace("value = [\"0\", \"8*min(t/0.05, 1)\", \"0\"]", "value = [\"8\", \"0\"]");
-    let err = Problem::from_scene(&Scene::from_toml(&flat, "flat").expect("scene"), &dir).err().expect("refused").to_string();
-    assert!(err.contains("domain.file") && err.contains("the mesh is 3-D") && err.contains("have 2 components"), "{err}");
+    let flat = text
+        .replace("value = [\"0\", \"0\", \"-20*min(t/0.05, 1)\"]", "value = [\"0\", \"-20\"]")
+        .replace("value = [\"0\", \"8*min(t/0.05, 1)\", \"0\"]", "value = [\"8\", \"0\"]");
+    let err =
+        Problem::from_scene(&Scene::from_toml(&flat, "flat").expect("scene"), &dir).err().expect("refused").to_string();
+    assert!(
+        err.contains("domain.file") && err.contains("the mesh is 3-D") && err.contains("have 2 components"),
+        "{err}"
+    );
 }

@@ -54,7 +54,8 @@ fn lost_fraction(m: &Measured) -> f64 {
 fn quick_sweep_writes_csv_and_svg_with_a_row_per_run() {
     let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("stability_quick");
     let _ = std::fs::remove_dir_all(&out);
-    let report = dyncontact::studies::stability::run(&out, &StabilityOptions { quick: true, jobs: 2 }).expect("quick sweep");
+    let report =
+        dyncontact::studies::stability::run(&out, &StabilityOptions { quick: true, jobs: 2 }).expect("quick sweep");
     println!("{report}");
     let n = cases(true).len();
     assert!(n >= 7 * variants().len(), "the quick sweep has every sweep × every variant, got {n} cases");
@@ -89,7 +90,8 @@ fn classification_follows_the_documented_precedence() {
     use dyncontact::failure::{ContactFailure, InnerFailure, NewtonFailure, NewtonStatus, StepFailureCause};
     let solver = |cause: StepFailureCause| Error::Solver(Box::new(SolverFailure { step: 3, time: 0.1, cause }));
     let newton_failed = || {
-        let inner = InnerFailure::Newton(NewtonFailure { status: NewtonStatus::MaxIterations, iterations: 50, residual: 1e-3 });
+        let inner =
+            InnerFailure::Newton(NewtonFailure { status: NewtonStatus::MaxIterations, iterations: 50, residual: 1e-3 });
         StepFailureCause::Contact(ContactFailure { fixed_point_iteration: 1, inner })
     };
     let mut m = Measured::empty(10, 1e-3);
@@ -101,12 +103,20 @@ fn classification_follows_the_documented_precedence() {
     assert_eq!(classify(Some(&Error::scene("contact.penalty", "must be > 0")), false, &m, true), RunClass::ClearError);
     m.max_defect = 2.0 * DEFECT_TOLERANCE;
     assert_eq!(classify(None, false, &m, true), RunClass::EnergyDefect, "a midpoint defect above 1e-9");
-    assert_eq!(classify(None, false, &m, false), RunClass::Converged, "defects of non-conserving schemes are not judged");
+    assert_eq!(
+        classify(None, false, &m, false),
+        RunClass::Converged,
+        "defects of non-conserving schemes are not judged"
+    );
     m.fp_capped_steps = 1;
     assert_eq!(classify(None, false, &m, true), RunClass::FixedPointCapped);
     m.max_gain = 2.0 * GAIN_TOLERANCE;
     assert_eq!(classify(None, false, &m, true), RunClass::EnergyGrew);
-    assert_eq!(classify(Some(&solver(newton_failed())), false, &m, true), RunClass::NewtonFailed, "a stop beats a gain");
+    assert_eq!(
+        classify(Some(&solver(newton_failed())), false, &m, true),
+        RunClass::NewtonFailed,
+        "a stop beats a gain"
+    );
 }
 
 /// ε = 0 (the limit ε → 0 is Problem P, not a penalty) is refused before any step with a clear
@@ -134,7 +144,11 @@ fn backward_euler_loses_energy_at_a_rate_proportional_to_k() {
             let mut s = base(0.2, k, &be);
             s.contact.as_mut().expect("contact").penetration_bound = NumOrStr::Str("inf".into());
             let m = run(&s, &be);
-            assert!(matches!(m.class, RunClass::Converged), "the run completes with converged fixed points: {}", m.note);
+            assert!(
+                matches!(m.class, RunClass::Converged),
+                "the run completes with converged fixed points: {}",
+                m.note
+            );
             lost_fraction(&m)
         })
         .collect();
@@ -163,7 +177,8 @@ fn backward_euler_loss_with_the_exact_constraint_is_sublinear_in_k() {
 #[test]
 fn midpoint_with_exact_enforcement_never_gains_energy_at_any_k() {
     let mid = var("midpoint");
-    let mut scenes: Vec<Scene> = [1.25e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 4e-3].iter().map(|&k| base(0.3, k, &mid)).collect();
+    let mut scenes: Vec<Scene> =
+        [1.25e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 4e-3].iter().map(|&k| base(0.3, k, &mid)).collect();
     for f in [1.0, 16.0] {
         scenes.push(Case { sweep: Sweep::Impact, value: f, variant: mid }.scene(IMPACT_END).expect("impact scene"));
     }
@@ -185,7 +200,10 @@ fn fixed_point_iterations_rise_with_k_and_the_cap_is_first_hit_beyond_ck() {
     let runs: Vec<Measured> = [2.5e-4, 5e-4, 1e-3].iter().map(|&k| run(&base(0.3, k, &mid), &mid)).collect();
     let ck = runs[0].ck_limit.expect("a (C.k) limit");
     assert!(runs[1].k < ck && runs[2].k > ck, "k = 5e-4 inside and 1e-3 beyond the limit {ck}");
-    assert!(runs[0].fp_mean < runs[1].fp_mean && runs[1].fp_mean < runs[2].fp_mean, "mean iterations do not rise with k");
+    assert!(
+        runs[0].fp_mean < runs[1].fp_mean && runs[1].fp_mean < runs[2].fp_mean,
+        "mean iterations do not rise with k"
+    );
     assert_eq!(runs[0].fp_capped_steps + runs[1].fp_capped_steps, 0, "no capped step inside (C.k)");
     assert!(runs[2].fp_capped_steps >= 1, "k = 1e-3 (beyond C.k) caps at least one step (measured 1)");
     let mut s = base(0.3, 1e-3, &mid);
@@ -320,7 +338,11 @@ fn newton_iteration_cap_of_one_stops_with_newton_failed() {
     };
     let m = cap(1);
     assert_eq!(m.class, RunClass::NewtonFailed, "{}", m.note);
-    assert!(m.steps_completed <= 10, "fails within the first 10 steps (measured 5 completed), got {}", m.steps_completed);
+    assert!(
+        m.steps_completed <= 10,
+        "fails within the first 10 steps (measured 5 completed), got {}",
+        m.steps_completed
+    );
     assert!(m.note.contains("no convergence in 1 iterations"), "{}", m.note);
     assert_eq!(cap(4).class, RunClass::Converged);
 }
@@ -341,7 +363,14 @@ fn sweep_path_gives_the_in_process_numbers() {
         let mut a = run_case(&r.case, true).m;
         let mut b = r.m.clone();
         (a.wall_time_s, b.wall_time_s) = (0.0, 0.0);
-        assert_eq!(format!("{a:?}"), format!("{b:?}"), "{} = {} / {}", r.case.sweep.key(), r.case.value, r.case.variant.name);
+        assert_eq!(
+            format!("{a:?}"),
+            format!("{b:?}"),
+            "{} = {} / {}",
+            r.case.sweep.key(),
+            r.case.value,
+            r.case.variant.name
+        );
     }
     println!("{} runs: the sweep path and the in-process runs agree in every field", rows.len());
 }

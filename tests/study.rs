@@ -26,7 +26,10 @@ fn base(name: &str) -> Base {
 /// monotonically; the study's CSV and SVG are written with one row / point per ε.
 #[test]
 fn e0_penalty_study_penetration_and_error_fall_with_eps() {
-    let coarse = [Override::parse("domain.cells=[16, 8]").expect("override"), Override::parse("time.step=1e-3").expect("override")];
+    let coarse = [
+        Override::parse("domain.cells=[16, 8]").expect("override"),
+        Override::parse("time.step=1e-3").expect("override"),
+    ];
     let eps = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
     let work = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("penalty_sweep");
     let _ = std::fs::remove_dir_all(&work);
@@ -35,11 +38,28 @@ fn e0_penalty_study_penetration_and_error_fall_with_eps() {
         println!("ε = {:.0e}: e_V {:.4e}, e_H {:.4e}, δ {:.4e}, {:.2} s", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s);
     }
     println!("slopes: e_V {:.3}, e_H {:.3}, δ {:.3}", st.slope_e_v, st.slope_e_h, st.slope_delta);
-    common::measured("study::e0_penalty_study_penetration_and_error_fall_with_eps", "E.0 log–log slope of δ(ε)", st.slope_delta, "≥ 0.5");
-    common::measured("study::e0_penalty_study_penetration_and_error_fall_with_eps", "log–log slope of e_V(ε)", st.slope_e_v, "reported (spec/model.md: ½ to 1)");
+    common::measured(
+        "study::e0_penalty_study_penetration_and_error_fall_with_eps",
+        "E.0 log–log slope of δ(ε)",
+        st.slope_delta,
+        "≥ 0.5",
+    );
+    common::measured(
+        "study::e0_penalty_study_penetration_and_error_fall_with_eps",
+        "log–log slope of e_V(ε)",
+        st.slope_e_v,
+        "reported (spec/model.md: ½ to 1)",
+    );
     assert!(st.slope_delta >= 0.5, "δ falls slower than ε^½: slope {}", st.slope_delta);
     for w in st.rows.windows(2) {
-        assert!(w[1].e_v < w[0].e_v, "e_V does not decrease from ε = {} to {}: {} → {}", w[0].eps, w[1].eps, w[0].e_v, w[1].e_v);
+        assert!(
+            w[1].e_v < w[0].e_v,
+            "e_V does not decrease from ε = {} to {}: {} → {}",
+            w[0].eps,
+            w[1].eps,
+            w[0].e_v,
+            w[1].e_v
+        );
     }
     let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("study");
     st.write(&out, "coarse academic").expect("write");
@@ -56,6 +76,8 @@ fn e0_penalty_study_penetration_and_error_fall_with_eps() {
 fn penalty_study_needs_a_finite_bound() {
     let work = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("penalty_sweep_refused");
     let short = [Override::parse("time.end=0.01").expect("override")];
-    let e = penalty_study(&base("sliding_block"), &short, Some(&[1e-3]), &work, 1).expect_err("must refuse g = inf").to_string();
+    let e = penalty_study(&base("sliding_block"), &short, Some(&[1e-3]), &work, 1)
+        .expect_err("must refuse g = inf")
+        .to_string();
     assert!(e.starts_with("contact.penetration_bound"), "{e}");
 }

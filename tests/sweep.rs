@@ -10,10 +10,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use dyncontact::overrides::Override;
-use dyncontact::scene::{FrictionLaw, Scene, DEFAULT_SCENE};
-use dyncontact::sweep::collect::{self, FIGURES};
-use dyncontact::sweep::runner::{run_points, Outcome, RunnerOptions};
+use dyncontact::scene::{DEFAULT_SCENE, FrictionLaw, Scene};
 use dyncontact::sweep::Plan;
+use dyncontact::sweep::collect::{self, FIGURES};
+use dyncontact::sweep::runner::{Outcome, RunnerOptions, run_points};
 
 const BIN: &str = env!("CARGO_BIN_EXE_dyncontact");
 
@@ -77,7 +77,12 @@ fn set_errors_name_the_key() {
         assert!(e.contains(key) && e.contains(what), "{sets:?}: expected {key} / {what}, got {e}");
     }
     // the same key-path message as the same mistake in a file
-    let in_file = Scene::from_toml(&DEFAULT_SCENE.replace("penetration_bound = 0.02", "penetration_bound = 0.02\npenaltyy = 1e-5"), "f").expect_err("refused").to_string();
+    let in_file = Scene::from_toml(
+        &DEFAULT_SCENE.replace("penetration_bound = 0.02", "penetration_bound = 0.02\npenaltyy = 1e-5"),
+        "f",
+    )
+    .expect_err("refused")
+    .to_string();
     let by_set = with(&["contact.penaltyy=1e-5"]).expect_err("refused").to_string();
     let tail = |m: &str| m.rsplit('|').next().unwrap_or_default().trim().to_string();
     assert_eq!(tail(&in_file), tail(&by_set), "file: {in_file}\n--set: {by_set}");
@@ -91,11 +96,20 @@ fn set_errors_name_the_key() {
 #[test]
 fn cli_run_and_check_take_set() {
     let out = tmp("set_run");
-    let o = Command::new(BIN).args(["run", "--set", "time.end=0.01", "--set", "domain.cells=[8,4]", "--set", "output.every=100", "--out"]).arg(&out).output().expect("spawn");
+    let o = Command::new(BIN)
+        .args(["run", "--set", "time.end=0.01", "--set", "domain.cells=[8,4]", "--set", "output.every=100", "--out"])
+        .arg(&out)
+        .output()
+        .expect("spawn");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let history = std::fs::read_to_string(out.join("history.csv")).expect("history");
     assert_eq!(history.lines().count(), 1 + 1 + 20, "header, t = 0 and 20 steps of 5e-4");
-    let o = Command::new(BIN).args(["check"]).arg(root().join("fixtures/scenes/academic.toml")).args(["--set", "contact.friction.decayy=3"]).output().expect("spawn");
+    let o = Command::new(BIN)
+        .args(["check"])
+        .arg(root().join("fixtures/scenes/academic.toml"))
+        .args(["--set", "contact.friction.decayy=3"])
+        .output()
+        .expect("spawn");
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("contact.friction.decayy") && err.contains("with --set"), "{err}");
@@ -129,7 +143,14 @@ fn six_point_sweep_matches_separate_runs_and_resumes() {
     assert_eq!(&header[..5], &["point", "contact.penalty", "time.step", "status", "wall_time_s"]);
     assert!(FIGURES.iter().all(|f| header.contains(f)) && header.last() == Some(&"reason"));
     assert_eq!(csv.lines().count(), 7);
-    let expected = [("0.001", "0.001"), ("0.001", "0.0005"), ("0.0001", "0.001"), ("0.0001", "0.0005"), ("0.00001", "0.001"), ("0.00001", "0.0005")];
+    let expected = [
+        ("0.001", "0.001"),
+        ("0.001", "0.0005"),
+        ("0.0001", "0.001"),
+        ("0.0001", "0.0005"),
+        ("0.00001", "0.001"),
+        ("0.00001", "0.0005"),
+    ];
     for (r, (pen, k)) in rows.iter().zip(expected) {
         assert_eq!((r.axes[0].as_str(), r.axes[1].as_str(), r.status.as_str()), (pen, k, "completed"), "{}", r.point);
         assert!(r.figures.iter().all(|f| !f.is_empty()), "{}: a figure is missing", r.point);
@@ -140,7 +161,8 @@ fn six_point_sweep_matches_separate_runs_and_resumes() {
         let sets = ["contact.enforcement=\"penalty\"", "domain.cells=[16, 8]", "time.end=0.3", "output.every=100"];
         let mut cmd = Command::new(BIN);
         cmd.arg("run");
-        for s in sets.iter().map(|s| s.to_string()).chain([format!("contact.penalty={pen}"), format!("time.step={k}")]) {
+        for s in sets.iter().map(|s| s.to_string()).chain([format!("contact.penalty={pen}"), format!("time.step={k}")])
+        {
             cmd.args(["--set", &s]);
         }
         let o = cmd.arg("--out").arg(&out).output().expect("spawn");
@@ -156,20 +178,31 @@ fn six_point_sweep_matches_separate_runs_and_resumes() {
     }
     println!("6 points: sweep.csv rows and figures equal separate runs");
     // resume: nothing runs again
-    let stamp = |id: &str| std::fs::metadata(dir.join("points").join(id).join("history.csv")).and_then(|m| m.modified()).expect("mtime");
+    let stamp = |id: &str| {
+        std::fs::metadata(dir.join("points").join(id).join("history.csv")).and_then(|m| m.modified()).expect("mtime")
+    };
     let before = stamp("p003");
     let again = run_sweep(&plan, &dir, 2);
     assert!(again.iter().all(|o| *o == Outcome::Skipped), "{again:?}");
     assert_eq!(stamp("p003"), before, "a skipped point's files were rewritten");
     std::fs::remove_file(dir.join("points/p002/summary.json")).expect("remove");
     let partial = run_sweep(&plan, &dir, 2);
-    let ran: Vec<usize> = partial.iter().enumerate().filter(|(_, o)| **o == Outcome::Completed).map(|(i, _)| i).collect();
+    let ran: Vec<usize> =
+        partial.iter().enumerate().filter(|(_, o)| **o == Outcome::Completed).map(|(i, _)| i).collect();
     assert_eq!(ran, vec![2], "{partial:?}");
     let (_, again_rows) = collect::collect(&dir).expect("collect");
-    assert_eq!(again_rows.iter().map(|r| &r.figures).collect::<Vec<_>>(), rows.iter().map(|r| &r.figures).collect::<Vec<_>>(), "the rerun point's figures changed");
+    assert_eq!(
+        again_rows.iter().map(|r| &r.figures).collect::<Vec<_>>(),
+        rows.iter().map(|r| &r.figures).collect::<Vec<_>>(),
+        "the rerun point's figures changed"
+    );
     // the cluster files: a rule per point, one collector, a resource entry per point
     let snakefile = std::fs::read_to_string(dir.join("Snakefile")).expect("Snakefile");
-    assert!(snakefile.contains("rule point:") && snakefile.contains("rule collect:") && snakefile.contains("sweep collect ."));
+    assert!(
+        snakefile.contains("rule point:")
+            && snakefile.contains("rule collect:")
+            && snakefile.contains("sweep collect .")
+    );
     let config = std::fs::read_to_string(dir.join("config.yaml")).expect("config.yaml");
     assert_eq!(config.lines().filter(|l| l.trim_start().starts_with('p') && l.contains("mem_mb")).count(), 6);
 }
@@ -195,7 +228,9 @@ values = [50, 1, 40]
     )
     .expect("write");
     // the base path is relative to the sweep file: resolve from the test's temporary folder
-    let sweep_text = std::fs::read_to_string(&file).expect("read").replace("../../../fixtures", &root().join("fixtures").display().to_string());
+    let sweep_text = std::fs::read_to_string(&file)
+        .expect("read")
+        .replace("../../../fixtures", &root().join("fixtures").display().to_string());
     std::fs::write(&file, sweep_text).expect("write");
     let plan = Plan::from_file(&file, &[]).expect("plan");
     let outcomes = run_sweep(&plan, &dir.join("out"), 2);
@@ -219,22 +254,38 @@ fn a_bad_point_refuses_the_sweep_before_anything_runs() {
         std::fs::write(&f, text).expect("write");
         Plan::from_file(&f, &[]).expect_err("refused").to_string()
     };
-    let e = bad("p.toml", "name = \"p\"\n[[axis]]\nkey = \"contact.penalty\"\nvalues = [1e-3, -1.0]\n[set]\n\"contact.enforcement\" = \"penalty\"\n");
+    let e = bad(
+        "p.toml",
+        "name = \"p\"\n[[axis]]\nkey = \"contact.penalty\"\nvalues = [1e-3, -1.0]\n[set]\n\"contact.enforcement\" = \"penalty\"\n",
+    );
     println!("{e}");
-    assert!(e.contains("point p001 (contact.penalty = -1)") && e.contains("contact.penalty: must be a finite number > 0"), "{e}");
+    assert!(
+        e.contains("point p001 (contact.penalty = -1)") && e.contains("contact.penalty: must be a finite number > 0"),
+        "{e}"
+    );
     assert!(!dir.join("out").exists());
     let e = bad("k.toml", "name = \"k\"\n[[axis]]\nkey = \"time.stepp\"\nvalues = [1e-3]\n");
     assert!(e.contains("point p000 (time.stepp = 0.001)") && e.contains("unknown field `stepp`"), "{e}");
     let e = bad("u.toml", "name = \"u\"\nmodee = \"grid\"\n");
     assert!(e.contains("modee"), "{e}");
-    let e = bad("z.toml", "name = \"z\"\nmode = \"zip\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-3, 5e-4]\n[[axis]]\nkey = \"contact.compliance\"\nvalues = [1.0]\n");
+    let e = bad(
+        "z.toml",
+        "name = \"z\"\nmode = \"zip\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-3, 5e-4]\n[[axis]]\nkey = \"contact.compliance\"\nvalues = [1.0]\n",
+    );
     assert!(e.contains("\"zip\" needs axes of one length"), "{e}");
-    let e = bad("s.toml", "name = \"s\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-3]\n[set]\n\"time.step\" = 5e-4\n");
+    let e =
+        bad("s.toml", "name = \"s\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-3]\n[set]\n\"time.step\" = 5e-4\n");
     assert!(e.contains("time.step and time.step of [set] set the same value"), "{e}");
     // two axes, or an axis and a key below it in [set], touching one value
-    let e = bad("a.toml", "name = \"a\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-3]\n[[axis]]\nname = \"v\"\nsets = [{ \"time.step\" = 2e-3 }]\n");
+    let e = bad(
+        "a.toml",
+        "name = \"a\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-3]\n[[axis]]\nname = \"v\"\nsets = [{ \"time.step\" = 2e-3 }]\n",
+    );
     assert!(e.contains("time.step and time.step of axis[0]"), "{e}");
-    let e = bad("f.toml", "name = \"f\"\n[[axis]]\nkey = \"contact.friction\"\nvalues = [{ decay = 5.0 }, { decay = 10.0 }]\n[set]\n\"contact.friction.decay\" = 5.0\n");
+    let e = bad(
+        "f.toml",
+        "name = \"f\"\n[[axis]]\nkey = \"contact.friction\"\nvalues = [{ decay = 5.0 }, { decay = 10.0 }]\n[set]\n\"contact.friction.decay\" = 5.0\n",
+    );
     assert!(e.contains("contact.friction and contact.friction.decay of [set] set the same value"), "{e}");
     // name and labels go with `sets`; the columns of sweep.csv are taken; an empty set says nothing
     let e = bad("n.toml", "name = \"n\"\n[[axis]]\nkey = \"time.step\"\nname = \"k\"\nvalues = [1e-3]\n");
@@ -249,7 +300,8 @@ fn a_bad_point_refuses_the_sweep_before_anything_runs() {
     // `--set` on a value an axis sets
     let f = dir.join("six.toml");
     std::fs::copy(six_points(), &f).expect("copy");
-    let e = Plan::from_file(&f, &[Override::parse("time.step=1e-3").expect("override")]).expect_err("refused").to_string();
+    let e =
+        Plan::from_file(&f, &[Override::parse("time.step=1e-3").expect("override")]).expect_err("refused").to_string();
     assert!(e.contains("of --set set the same value"), "{e}");
     assert!(Override::parse("domain.cells[1=0").is_err(), "an unclosed index");
 }
@@ -285,7 +337,11 @@ fn points_moved_by_a_changed_axis_keep_their_runs() {
     let second = write("[2e-3, 1e-3, 5e-4]");
     let outcomes = run_sweep(&second, &out, 2);
     assert_eq!(outcomes, vec![Outcome::Completed, Outcome::Skipped, Outcome::Skipped]);
-    assert_eq!(std::fs::read(out.join("points/p002/history.csv")).expect("moved history"), history, "k = 5e-4 moved from p001 to p002");
+    assert_eq!(
+        std::fs::read(out.join("points/p002/history.csv")).expect("moved history"),
+        history,
+        "k = 5e-4 moved from p001 to p002"
+    );
 }
 
 /// `dyncontact sweep` from the command line: `--plan-only` writes the folder (a scene per point,
@@ -294,10 +350,28 @@ fn points_moved_by_a_changed_axis_keep_their_runs() {
 #[test]
 fn cli_sweep_plan_run_and_collect() {
     let dir = tmp("sweep_cli");
-    let o = Command::new(BIN).arg("sweep").arg(six_points()).arg("--out").arg(&dir).arg("--plan-only").output().expect("spawn");
+    let o = Command::new(BIN)
+        .arg("sweep")
+        .arg(six_points())
+        .arg("--out")
+        .arg(&dir)
+        .arg("--plan-only")
+        .output()
+        .expect("spawn");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(dir.join("points/p005/scene.toml").is_file() && dir.join("Snakefile").is_file() && !dir.join("sweep.csv").exists());
-    let o = Command::new(BIN).arg("sweep").arg(six_points()).arg("--out").arg(&dir).args(["--jobs", "2"]).output().expect("spawn");
+    assert!(
+        dir.join("points/p005/scene.toml").is_file()
+            && dir.join("Snakefile").is_file()
+            && !dir.join("sweep.csv").exists()
+    );
+    let o = Command::new(BIN)
+        .arg("sweep")
+        .arg(six_points())
+        .arg("--out")
+        .arg(&dir)
+        .args(["--jobs", "2"])
+        .output()
+        .expect("spawn");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let first = std::fs::read_to_string(dir.join("sweep.csv")).expect("sweep.csv");
     for axis in ["contact.penalty", "time.step"] {

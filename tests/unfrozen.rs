@@ -30,13 +30,24 @@ struct Agreement {
 fn compare(p: &Problem, tol: f64) -> Agreement {
     let mut sim = Simulation::new(p).expect("setup");
     let set = NewtonSettings::default();
-    let mut a = Agreement { steps: 0, worst_v: 0.0, worst_f: 0.0, differing: 0, fallbacks: 0, newton_f1: 0, newton_unfrozen: 0 };
-    for rec in sim.steps().before_each(|sim| {
+    let mut a = Agreement {
+        steps: 0,
+        worst_v: 0.0,
+        worst_f: 0.0,
+        differing: 0,
+        fallbacks: 0,
+        newton_f1: 0,
+        newton_unfrozen: 0,
+    };
+    for rec in sim
+        .steps()
+        .before_each(|sim| {
             let (w, _) = sim.free_velocity();
             let c = p.contact.as_ref().expect("contact");
             let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
             let (f1, _, r1) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).expect("F.1");
-            let (un, _, r2) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).expect("unfrozen");
+            let (un, _, r2) =
+                sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).expect("unfrozen");
             a.newton_f1 += r1.inner_iterations;
             a.newton_unfrozen += r2.inner_iterations;
             a.fallbacks += usize::from(r2.fallback.is_some());
@@ -52,7 +63,9 @@ fn compare(p: &Problem, tol: f64) -> Agreement {
                 a.worst_f = a.worst_f.max(df);
             }
             a.steps += 1;
-    }).take(p.steps) {
+        })
+        .take(p.steps)
+    {
         rec.expect("step");
     }
     a
@@ -85,7 +98,12 @@ fn n4_unfrozen_newton_agrees_with_f1_under_ck() {
     for (name, s) in [("academic, k = 2.5e-4", academic), ("impact_friction", fixture("impact_friction"))] {
         let p = problem(s);
         let a = agree_under_ck("unfrozen::n4_unfrozen_newton_agrees_with_f1_under_ck", name, &p);
-        common::measured("unfrozen::n4_unfrozen_newton_agrees_with_f1_under_ck", &format!("N.4 vs F.1 velocity difference ({name})"), a.worst_v, "≤ 1e-6");
+        common::measured(
+            "unfrozen::n4_unfrozen_newton_agrees_with_f1_under_ck",
+            &format!("N.4 vs F.1 velocity difference ({name})"),
+            a.worst_v,
+            "≤ 1e-6",
+        );
     }
 }
 
@@ -122,7 +140,12 @@ fn n4_unfrozen_newton_agrees_with_f1_in_3d() {
     finer.time.end = 0.3;
     for (name, s) in [("academic3d 8×4×4", coarse), ("academic3d 12×8×4", finer)] {
         let a = agree_under_ck("unfrozen::n4_unfrozen_newton_agrees_with_f1_in_3d", name, &problem(s));
-        common::measured("unfrozen::n4_unfrozen_newton_agrees_with_f1_in_3d", &format!("N.4 vs F.1 force difference ({name})"), a.worst_f, "≤ 1e-6");
+        common::measured(
+            "unfrozen::n4_unfrozen_newton_agrees_with_f1_in_3d",
+            &format!("N.4 vs F.1 force difference ({name})"),
+            a.worst_f,
+            "≤ 1e-6",
+        );
         assert_eq!(a.fallbacks, 0, "{name}: the unfrozen Newton fell back to F.1");
     }
 }

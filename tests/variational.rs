@@ -11,7 +11,7 @@ mod common;
 use common::{fixture, problem};
 use dyncontact::scene::EnforcementKind as Enforcement;
 use dyncontact::simulation::Simulation;
-use dyncontact::variational::{admissible, hemivariational_margin, variational_margin, StepPair};
+use dyncontact::variational::{StepPair, admissible, hemivariational_margin, variational_margin};
 
 /// xorshift64*: reproducible random test functions without a dependency.
 struct Rng(u64);
@@ -60,7 +60,10 @@ fn check_steps(p: &dyncontact::problem::Problem, seed: u64, per_step: usize, exa
             }
             let (m, scale) = variational_margin(&pair, &z);
             let expected = -c.omega[i] * rec.nodes[i].lambda;
-            assert!((m - expected).abs() <= 1e-8 * scale, "inadmissible z: margin {m:.6e}, expected −ωλ = {expected:.6e}");
+            assert!(
+                (m - expected).abs() <= 1e-8 * scale,
+                "inadmissible z: margin {m:.6e}, expected −ωλ = {expected:.6e}"
+            );
             bites += 1;
         }
         (u0, v0) = (sim.state.u.clone(), sim.state.v.clone());
@@ -79,7 +82,12 @@ fn v1_penalty_steps_satisfy_the_hemivariational_inequality() {
     let p = problem(s);
     let (worst, checked, _) = check_steps(&p, 0x9e37_79b9_7f4a_7c15, 20, false);
     println!("V.1: {checked} random test functions, smallest relative margin {worst:.3e}");
-    common::measured("variational::v1_penalty_steps_satisfy_the_hemivariational_inequality", "V.1 smallest relative margin", worst, "≥ −1e-7");
+    common::measured(
+        "variational::v1_penalty_steps_satisfy_the_hemivariational_inequality",
+        "V.1 smallest relative margin",
+        worst,
+        "≥ −1e-7",
+    );
 }
 
 /// (V.2) Problem P (exact constraint) on the frictional impact: every step satisfies the
@@ -91,8 +99,15 @@ fn v2_exact_steps_satisfy_the_variational_inequality() {
     let p = problem(fixture("impact_friction"));
     let (worst, checked, bites) = check_steps(&p, 0x0123_4567_89ab_cdef, 20, true);
     assert!(bites > 0, "the constraint was never active");
-    println!("V.2: {checked} admissible random test functions, smallest relative margin {worst:.3e}; {bites} inadmissible checks gave −ωλ");
-    common::measured("variational::v2_exact_steps_satisfy_the_variational_inequality", "V.2 smallest relative margin", worst, "≥ −1e-7");
+    println!(
+        "V.2: {checked} admissible random test functions, smallest relative margin {worst:.3e}; {bites} inadmissible checks gave −ωλ"
+    );
+    common::measured(
+        "variational::v2_exact_steps_satisfy_the_variational_inequality",
+        "V.2 smallest relative margin",
+        worst,
+        "≥ −1e-7",
+    );
 }
 
 /// (V.1) (V.2) in 3-D: the academic3d fixture at 8×4×4 cells (friction on the disk, the constraint reached at
@@ -114,7 +129,14 @@ fn v1_v2_3d_steps_satisfy_the_inequalities() {
         let p = problem(s);
         let (worst, checked, bites) = check_steps(&p, 0x5151_2727_9e37_79b9, 10, !penalty);
         assert!(penalty || bites > 0, "the constraint was never active");
-        println!("{label} in 3-D: {checked} random test functions, smallest relative margin {worst:.3e}; {bites} inadmissible checks gave −ωλ");
-        common::measured("variational::v1_v2_3d_steps_satisfy_the_inequalities", &format!("{label}: smallest relative margin"), worst, "≥ −1e-7");
+        println!(
+            "{label} in 3-D: {checked} random test functions, smallest relative margin {worst:.3e}; {bites} inadmissible checks gave −ωλ"
+        );
+        common::measured(
+            "variational::v1_v2_3d_steps_satisfy_the_inequalities",
+            &format!("{label}: smallest relative margin"),
+            worst,
+            "≥ −1e-7",
+        );
     }
 }

@@ -5,8 +5,8 @@ use crate::error::{Error, Result};
 use crate::linalg::{self, SpMat};
 use crate::mesh::solid::SolidMesh;
 use crate::mesh::{Geometry, Mesh};
-use crate::model::material::Material;
 use crate::model::kinds::MassKind;
+use crate::model::material::Material;
 
 use super::{element, tet};
 
@@ -71,7 +71,11 @@ impl Dofs {
     /// Nodal vectors with three components (z = 0 in 2-D) from a free-DOF vector (zero on Γ̄1).
     pub fn expand_dim(&self, x: &[f64]) -> Vec<[f64; 3]> {
         (0..self.n_nodes)
-            .map(|k| std::array::from_fn(|c| if c < self.dim { self.map[self.dim * k + c].map(|i| x[i]).unwrap_or(0.0) } else { 0.0 }))
+            .map(|k| {
+                std::array::from_fn(|c| {
+                    if c < self.dim { self.map[self.dim * k + c].map(|i| x[i]).unwrap_or(0.0) } else { 0.0 }
+                })
+            })
             .collect()
     }
 
@@ -166,13 +170,20 @@ pub fn assemble_solid(mesh: &SolidMesh, mat: &Material, mass: MassKind) -> Resul
     let (mut tm, mut tk, mut tc) = (Vec::with_capacity(cap), Vec::with_capacity(cap), Vec::with_capacity(cap));
     for (t, tet) in mesh.tets.iter().enumerate() {
         let x = tet.map(|v| mesh.nodes[v]);
-        let degenerate = || Error::mesh(&mesh.source, format!("{} is degenerate", crate::mesh::cell_name(mesh.tags.as_ref(), "tetrahedron", t)));
+        let degenerate = || {
+            Error::mesh(
+                &mesh.source,
+                format!("{} is degenerate", crate::mesh::cell_name(mesh.tags.as_ref(), "tetrahedron", t)),
+            )
+        };
         let volume = tet::gradients(x).ok_or_else(degenerate)?.1.abs();
         let ke = tet::operator_matrix(x, &db).ok_or_else(degenerate)?;
         let ce = tet::operator_matrix(x, &da).ok_or_else(degenerate)?;
         let me = match mass {
             MassKind::Consistent => tet::consistent_mass(volume, mat.rho),
-            MassKind::Lumped | MassKind::Modified => nalgebra::SMatrix::<f64, 12, 12>::from_diagonal_element(tet::vertex_mass(volume, mat.rho)),
+            MassKind::Lumped | MassKind::Modified => {
+                nalgebra::SMatrix::<f64, 12, 12>::from_diagonal_element(tet::vertex_mass(volume, mat.rho))
+            }
         };
         let element = Element { nodes: tet, dim: 3, k: ke.as_slice(), c: ce.as_slice(), m: me.as_slice() };
         element.scatter(mat.has_viscosity(), (&mut tm, &mut tk, &mut tc));
@@ -182,17 +193,21 @@ pub fn assemble_solid(mesh: &SolidMesh, mat: &Material, mass: MassKind) -> Resul
 
 /// The submatrix on free DOFs.
 pub fn restrict(a: &SpMat, dofs: &Dofs) -> Result<SpMat> {
-    let trip: Vec<(usize, usize, f64)> = linalg::triplets(a)
-        .into_iter()
-        .filter_map(|(i, j, v)| Some((dofs.map[i]?, dofs.map[j]?, v)))
-        .collect();
+    let trip: Vec<(usize, usize, f64)> =
+        linalg::triplets(a).into_iter().filter_map(|(i, j, v)| Some((dofs.map[i]?, dofs.map[j]?, v))).collect();
     linalg::from_triplets(dofs.n_free, dofs.n_free, &trip)
 }
 
 impl Operators {
     /// The operators of a scene; `contact_nodes` are the mesh nodes of Γ̄3 \ Γ̄1 (used by the
     /// modified mass).
-    pub fn new(mesh: &Geometry, mat: &Material, mass: MassKind, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Operators> {
+    pub fn new(
+        mesh: &Geometry,
+        mat: &Material,
+        mass: MassKind,
+        dofs: &Dofs,
+        contact_nodes: &[usize],
+    ) -> Result<Operators> {
         let kind = if mass == MassKind::Modified { MassKind::Lumped } else { mass };
         let (m, k, c) = match mesh {
             Geometry::Plane(mesh) => assemble_full(mesh, mat, kind)?,
@@ -210,7 +225,13 @@ impl Operators {
 }
 
 /// The diagonal (lumped or modified) nodal mass per free DOF, the m_i of (C.k).
-pub fn nodal_masses(mesh: &Geometry, mat: &Material, mass: MassKind, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Vec<f64>> {
+pub fn nodal_masses(
+    mesh: &Geometry,
+    mat: &Material,
+    mass: MassKind,
+    dofs: &Dofs,
+    contact_nodes: &[usize],
+) -> Result<Vec<f64>> {
     match (mesh, mass) {
         (_, MassKind::Modified) => Ok(per_dof(&modified_masses(mesh, mat, dofs, contact_nodes)?, dofs)),
         (Geometry::Plane(m), _) => Ok(lumped_masses(m, mat, dofs)),
@@ -297,7 +318,10 @@ pub fn modified_masses(mesh: &Geometry, mat: &Material, dofs: &Dofs, contact_nod
                 }
                 front = next;
             }
-            cand.extend(seen.into_iter().filter(|&l| l != i && !is_contact[l] && free(l) && distance(i, l) <= reach * (1.0 + 1e-12)));
+            cand.extend(
+                seen.into_iter()
+                    .filter(|&l| l != i && !is_contact[l] && free(l) && distance(i, l) <= reach * (1.0 + 1e-12)),
+            );
         }
         let xi = mesh.point(i);
         // least Σ w²/m subject to A w = b: w = D Aᵀ (A D Aᵀ)⁻¹ b, A = [1; x − x_i; y − y_i (; z − z_i)];
@@ -323,7 +347,11 @@ pub fn modified_masses(mesh: &Geometry, mat: &Material, dofs: &Dofs, contact_nod
                     ),
                 )
             })?;
-            let change: Vec<f64> = rows.iter().zip(&cand).map(|(r, &j)| original[i] * original[j] * (0..=dim).map(|k| r[k] * lam[k]).sum::<f64>()).collect();
+            let change: Vec<f64> = rows
+                .iter()
+                .zip(&cand)
+                .map(|(r, &j)| original[i] * original[j] * (0..=dim).map(|k| r[k] * lam[k]).sum::<f64>())
+                .collect();
             let worst = (0..cand.len())
                 .map(|q| ((mass[cand[q]] + change[q]) / original[cand[q]], q))
                 .filter(|(ratio, _)| *ratio < crate::defaults::MODIFIED_MASS_FLOOR)
@@ -332,7 +360,11 @@ pub fn modified_masses(mesh: &Geometry, mat: &Material, dofs: &Dofs, contact_nod
             let weights: Vec<f64> = change.iter().map(|c| c / original[i]).collect();
             let reach = rows.iter().map(|r| r[1].abs().max(r[2].abs()).max(r[3].abs())).fold(0.0, f64::max);
             let defect = (0..=dim)
-                .map(|k| (rows.iter().zip(&weights).map(|(r, w)| r[k] * w).sum::<f64>() - if k == 0 { 1.0 } else { 0.0 }).abs() / if k == 0 { 1.0 } else { reach })
+                .map(|k| {
+                    (rows.iter().zip(&weights).map(|(r, w)| r[k] * w).sum::<f64>() - if k == 0 { 1.0 } else { 0.0 })
+                        .abs()
+                        / if k == 0 { 1.0 } else { reach }
+                })
                 .fold(0.0, f64::max);
             match worst {
                 Some((_, q)) if cand.len() > dim + 1 => {

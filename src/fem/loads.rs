@@ -2,8 +2,8 @@
 //! Parts that do not depend on t are integrated once and cached.
 
 use crate::error::{Error, Result};
-use crate::mesh::solid::SolidMesh;
 use crate::mesh::Mesh;
+use crate::mesh::solid::SolidMesh;
 use crate::model::expr::VecExpr;
 
 use super::Dofs;
@@ -52,7 +52,12 @@ impl LoadVector {
     }
 
     /// The same on a tetrahedral mesh: `surface` lists (faces, f2, key path) per loaded side.
-    pub fn solid(mesh: &SolidMesh, dofs: &Dofs, body: &VecExpr, surface: &[(Vec<[usize; 3]>, VecExpr, String)]) -> LoadVector {
+    pub fn solid(
+        mesh: &SolidMesh,
+        dofs: &Dofs,
+        body: &VecExpr,
+        surface: &[(Vec<[usize; 3]>, VecExpr, String)],
+    ) -> LoadVector {
         let mut terms = Vec::new();
         if !body.is_zero() {
             terms.push(Term { field: body.clone(), points: tet_points(mesh), path: "loads.body".into() });
@@ -103,13 +108,18 @@ impl LoadVector {
                 if !v.iter().all(|c| c.is_finite()) {
                     let d = term.field.dim();
                     let (vals, at) = if d == 3 {
-                        (format!("({}, {}, {})", v[0], v[1], v[2]), format!("x = {}, y = {}, z = {}", q.x[0], q.x[1], q.x[2]))
+                        (
+                            format!("({}, {}, {})", v[0], v[1], v[2]),
+                            format!("x = {}, y = {}, z = {}", q.x[0], q.x[1], q.x[2]),
+                        )
                     } else {
                         (format!("({}, {})", v[0], v[1]), format!("x = {}, y = {}", q.x[0], q.x[1]))
                     };
                     return Err(Error::Expression {
                         path: term.path.clone(),
-                        message: format!("evaluates to {vals} at {at}, t = {t}; loads must be finite on the whole mesh and time interval"),
+                        message: format!(
+                            "evaluates to {vals} at {at}, t = {t}; loads must be finite on the whole mesh and time interval"
+                        ),
                     });
                 }
             }
@@ -139,7 +149,10 @@ fn body_points(mesh: &Mesh) -> Vec<QPoint> {
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
             let (p, q) = (mesh.nodes[a], mesh.nodes[b]);
-            pts.push(QPoint { x: [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.0], nodes: vec![(a, 0.5 * w), (b, 0.5 * w)] });
+            pts.push(QPoint {
+                x: [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.0],
+                nodes: vec![(a, 0.5 * w), (b, 0.5 * w)],
+            });
         }
     }
     pts
@@ -190,7 +203,10 @@ fn face_points(mesh: &SolidMesh, faces: &[[usize; 3]]) -> Vec<QPoint> {
         for k in 0..3 {
             let (a, b) = (f[k], f[(k + 1) % 3]);
             let (xa, xb) = (mesh.nodes[a], mesh.nodes[b]);
-            pts.push(QPoint { x: std::array::from_fn(|c| 0.5 * (xa[c] + xb[c])), nodes: vec![(a, 0.5 * w), (b, 0.5 * w)] });
+            pts.push(QPoint {
+                x: std::array::from_fn(|c| 0.5 * (xa[c] + xb[c])),
+                nodes: vec![(a, 0.5 * w), (b, 0.5 * w)],
+            });
         }
     }
     pts

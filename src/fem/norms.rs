@@ -3,8 +3,8 @@
 //! error is far below the discretization error measured.
 
 use super::element;
-use crate::mesh::solid::SolidMesh;
 use crate::mesh::Mesh;
+use crate::mesh::solid::SolidMesh;
 use crate::model::material::Material;
 
 /// Barycentric points and weights (weights sum to 1) of the degree-5 rule.
@@ -125,7 +125,14 @@ pub fn error_norms_3d(
             let ge = grad_u(p);
             let e = |i: usize, j: usize| gh[i][j] - ge[i][j];
             // Voigt (ε_xx, ε_yy, ε_zz, γ_yz, γ_xz, γ_xy), the order of tet::strain_matrix
-            let ev = nalgebra::Vector6::new(e(0, 0), e(1, 1), e(2, 2), e(1, 2) + e(2, 1), e(0, 2) + e(2, 0), e(0, 1) + e(1, 0));
+            let ev = nalgebra::Vector6::new(
+                e(0, 0),
+                e(1, 1),
+                e(2, 2),
+                e(1, 2) + e(2, 1),
+                e(0, 2) + e(2, 0),
+                e(0, 1) + e(1, 0),
+            );
             en += w * volume * ev.dot(&(d * ev));
         }
     }

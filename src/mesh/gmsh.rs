@@ -15,7 +15,9 @@ use crate::error::{Error, Result};
 pub fn read(path: &Path) -> Result<Mesh> {
     match read_any(path)? {
         Geometry::Plane(m) => Ok(m),
-        Geometry::Solid(m) => Err(Error::mesh(&m.source, "holds tetrahedra (a 3-D mesh) where a 2-D mesh of triangles is expected")),
+        Geometry::Solid(m) => {
+            Err(Error::mesh(&m.source, "holds tetrahedra (a 3-D mesh) where a 2-D mesh of triangles is expected"))
+        }
     }
 }
 
@@ -38,11 +40,17 @@ fn check_first_line(path: &Path) -> Result<()> {
     std::fs::File::open(path).and_then(|f| f.take(4096).read_to_end(&mut head)).map_err(|e| Error::read(path, e))?;
     let text = String::from_utf8_lossy(&head);
     let Some((n, first)) = text.lines().enumerate().find(|(_, l)| !l.trim().is_empty()) else {
-        return Err(Error::mesh(path.display().to_string(), "is empty (or starts with 4 KiB of blank lines): not a Gmsh mesh"));
+        return Err(Error::mesh(
+            path.display().to_string(),
+            "is empty (or starts with 4 KiB of blank lines): not a Gmsh mesh",
+        ));
     };
     if first.trim() != "$MeshFormat" {
         let shown: String = first.trim().chars().take(40).collect();
-        return Err(Error::mesh(path.display().to_string(), format!("line {}: a Gmsh mesh starts with $MeshFormat, found {shown:?}", n + 1)));
+        return Err(Error::mesh(
+            path.display().to_string(),
+            format!("line {}: a Gmsh mesh starts with $MeshFormat, found {shown:?}", n + 1),
+        ));
     }
     Ok(())
 }
@@ -95,20 +103,22 @@ impl<'a> Cursor<'a> {
 #[derive(Default)]
 struct Raw {
     version: String,
-    names: HashMap<(i64, i64), String>,        // (dim, physical tag) -> name
+    names: HashMap<(i64, i64), String>,         // (dim, physical tag) -> name
     entity_phys: HashMap<(i64, i64), Vec<i64>>, // (dim, entity tag) -> physical tags (4.1)
     nodes: HashMap<i64, [f64; 3]>,
     node_order: Vec<i64>,
     triangles: Vec<(i64, Vec<i64>, [i64; 3])>, // element tag, physical tags, node tags
-    lines: Vec<(i64, Vec<i64>, [i64; 2])>,    // element tag, physical tags, node tags
-    tets: Vec<(i64, [i64; 4])>,               // element tag, node tags
+    lines: Vec<(i64, Vec<i64>, [i64; 2])>,     // element tag, physical tags, node tags
+    tets: Vec<(i64, [i64; 4])>,                // element tag, node tags
 }
 
 /// Parse the text of a 2-D `.msh` file; `file` names it in messages.
 pub fn parse(text: &str, file: &str) -> Result<Mesh> {
     match parse_any(text, file)? {
         Geometry::Plane(m) => Ok(m),
-        Geometry::Solid(_) => Err(Error::mesh(file, "holds tetrahedra (a 3-D mesh) where a 2-D mesh of triangles is expected")),
+        Geometry::Solid(_) => {
+            Err(Error::mesh(file, "holds tetrahedra (a 3-D mesh) where a 2-D mesh of triangles is expected"))
+        }
     }
 }
 
@@ -129,7 +139,9 @@ pub fn parse_any(text: &str, file: &str) -> Result<Geometry> {
                 match it.next() {
                     Some("0") => {}
                     Some("1") => {
-                        return Err(c.err("binary .msh files are not supported; save as ASCII (Gmsh: File > Export, uncheck binary)"));
+                        return Err(c.err(
+                            "binary .msh files are not supported; save as ASCII (Gmsh: File > Export, uncheck binary)",
+                        ));
                     }
                     _ => {
                         return Err(c.err(format!(
@@ -139,7 +151,9 @@ pub fn parse_any(text: &str, file: &str) -> Result<Geometry> {
                     }
                 }
                 if !(raw.version.starts_with("2.") || raw.version.starts_with("4.1")) {
-                    return Err(c.err(format!("format version {} is not supported; save as 4.1 or 2.2 ASCII", raw.version)));
+                    return Err(
+                        c.err(format!("format version {} is not supported; save as 4.1 or 2.2 ASCII", raw.version))
+                    );
                 }
                 c.expect("$EndMeshFormat")?;
             }
@@ -148,7 +162,8 @@ pub fn parse_any(text: &str, file: &str) -> Result<Geometry> {
                 for _ in 0..n.first().copied().unwrap_or(0) {
                     let l = c.next_line()?;
                     // dim tag "name": the name may contain spaces, the separators may be runs
-                    let bad = || c.err(format!("a physical name line should read: dim tag \"name\", found {:?}", l.trim()));
+                    let bad =
+                        || c.err(format!("a physical name line should read: dim tag \"name\", found {:?}", l.trim()));
                     let (dim, rest) = l.trim().split_once(char::is_whitespace).ok_or_else(bad)?;
                     let (tag, name) = rest.trim_start().split_once(char::is_whitespace).ok_or_else(bad)?;
                     let dim: i64 = dim.parse().map_err(|_| bad())?;
@@ -189,7 +204,11 @@ pub fn parse_any(text: &str, file: &str) -> Result<Geometry> {
     if raw.version.is_empty() {
         return Err(Error::mesh(file, "no $MeshFormat section: is this a Gmsh .msh file?"));
     }
-    if raw.tets.is_empty() { build(raw, file).map(Geometry::Plane) } else { build_solid(raw, file).map(Geometry::Solid) }
+    if raw.tets.is_empty() {
+        build(raw, file).map(Geometry::Plane)
+    } else {
+        build_solid(raw, file).map(Geometry::Solid)
+    }
 }
 
 fn read_entities(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
@@ -207,7 +226,9 @@ fn read_entities(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
             let np = *w.get(at).ok_or_else(short)?;
             if !(np >= 0.0 && np.fract() == 0.0 && np <= w.len() as f64) {
                 let np = if np.abs() < 1e15 { format!("{np}") } else { format!("{np:e}") };
-                return Err(c.err(format!("entity {tag} (dim {dim}) lists {np} physical tags, which this line cannot hold")));
+                return Err(
+                    c.err(format!("entity {tag} (dim {dim}) lists {np} physical tags, which this line cannot hold"))
+                );
             }
             let np = np as usize;
             let phys: Vec<i64> = w.get(at + 1..at + 1 + np).ok_or_else(short)?.iter().map(|v| *v as i64).collect();
@@ -242,8 +263,9 @@ fn insert_node(c: &Cursor, raw: &mut Raw, tag: i64, x: [f64; 3]) -> Result<()> {
 
 /// The count of a 4.1 block header, checked against what the section header announced.
 fn block_count(c: &Cursor, what: &str, b: &[i64], left: &mut usize) -> Result<usize> {
-    let count = usize::try_from(b[3])
-        .map_err(|_| c.err(format!("{what} block (dim {}, entity {}) has count {}; it must be >= 0", b[0], b[1], b[3])))?;
+    let count = usize::try_from(b[3]).map_err(|_| {
+        c.err(format!("{what} block (dim {}, entity {}) has count {}; it must be >= 0", b[0], b[1], b[3]))
+    })?;
     if count > *left {
         return Err(c.err(format!(
             "{what} block (dim {}, entity {}) holds {count} {what}s, more than the section header announces; the file is corrupt",
@@ -365,7 +387,10 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
         nodes.push([x[0], x[1]]);
     }
     let lookup = |t: i64, what: &str| {
-        index.get(&t).copied().ok_or_else(|| Error::mesh(file, format!("{what} refers to node {t}, which is not in $Nodes")))
+        index
+            .get(&t)
+            .copied()
+            .ok_or_else(|| Error::mesh(file, format!("{what} refers to node {t}, which is not in $Nodes")))
     };
     let mut triangles = Vec::with_capacity(raw.triangles.len());
     let mut tags = Vec::with_capacity(raw.triangles.len());
@@ -390,7 +415,13 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
             }
         }
     }
-    let mut mesh = Mesh { nodes, triangles, sides, source: file.to_string(), tags: Some(super::Tags { nodes: raw.node_order.clone(), cells: tags.clone() }) };
+    let mut mesh = Mesh {
+        nodes,
+        triangles,
+        sides,
+        source: file.to_string(),
+        tags: Some(super::Tags { nodes: raw.node_order.clone(), cells: tags.clone() }),
+    };
     orient(&mut mesh, &tags, file)?;
     check_duplicates(&mesh, &raw.node_order, file)?;
     check_unreferenced(&mesh, &raw.node_order, file)?;
@@ -412,7 +443,10 @@ fn build_solid(raw: Raw, file: &str) -> Result<SolidMesh> {
         nodes.push(raw.nodes[tag]);
     }
     let lookup = |t: i64, what: &str| {
-        index.get(&t).copied().ok_or_else(|| Error::mesh(file, format!("{what} refers to node {t}, which is not in $Nodes")))
+        index
+            .get(&t)
+            .copied()
+            .ok_or_else(|| Error::mesh(file, format!("{what} refers to node {t}, which is not in $Nodes")))
     };
     let mut tets = Vec::with_capacity(raw.tets.len());
     for (tag, t) in &raw.tets {
@@ -432,7 +466,13 @@ fn build_solid(raw: Raw, file: &str) -> Result<SolidMesh> {
         }
     }
     let tags: Vec<i64> = raw.tets.iter().map(|(tag, _)| *tag).collect();
-    let mut mesh = SolidMesh { nodes, tets, sides, source: file.to_string(), tags: Some(super::Tags { nodes: raw.node_order.clone(), cells: tags.clone() }) };
+    let mut mesh = SolidMesh {
+        nodes,
+        tets,
+        sides,
+        source: file.to_string(),
+        tags: Some(super::Tags { nodes: raw.node_order.clone(), cells: tags.clone() }),
+    };
     orient_solid(&mut mesh, &tags, file)?;
     mesh.check()?;
     Ok(mesh)
@@ -447,7 +487,12 @@ fn orient_solid(mesh: &mut SolidMesh, tags: &[i64], file: &str) -> Result<()> {
     let negative = signs.iter().filter(|v| **v < 0.0).count();
     let positive = signs.iter().filter(|v| **v > 0.0).count();
     if negative > 0 && positive > 0 {
-        let t = if negative <= positive { signs.iter().position(|v| *v < 0.0) } else { signs.iter().position(|v| *v > 0.0) }.unwrap_or(0);
+        let t = if negative <= positive {
+            signs.iter().position(|v| *v < 0.0)
+        } else {
+            signs.iter().position(|v| *v > 0.0)
+        }
+        .unwrap_or(0);
         return Err(Error::mesh(
             file,
             format!(
@@ -473,7 +518,10 @@ fn orient(mesh: &mut Mesh, tags: &[i64], file: &str) -> Result<()> {
     let signs: Vec<f64> = (0..mesh.triangles.len()).map(|t| mesh.signed_area(t)).collect();
     let scale = 1e-14 * mesh.bbox_diameter().powi(2);
     if let Some(t) = signs.iter().position(|a| !a.is_finite()) {
-        return Err(Error::mesh(file, format!("the area of triangle {} overflows: the coordinates are too large; give them in metres", tags[t])));
+        return Err(Error::mesh(
+            file,
+            format!("the area of triangle {} overflows: the coordinates are too large; give them in metres", tags[t]),
+        ));
     }
     if let Some(t) = signs.iter().position(|a| a.abs() <= scale) {
         return Err(Error::mesh(file, format!("triangle {} has zero area (degenerate); remove or fix it", tags[t])));
@@ -515,7 +563,9 @@ fn check_duplicates(mesh: &Mesh, node_tags: &[i64], file: &str) -> Result<()> {
         let (cx, cy) = cell(p);
         for (dx, dy) in [-1i64, 0, 1].into_iter().flat_map(|dx| [-1i64, 0, 1].map(|dy| (dx, dy))) {
             let near = grid.get(&(cx.saturating_add(dx), cy.saturating_add(dy))).map(|v| v.as_slice()).unwrap_or(&[]);
-            if let Some(&j) = near.iter().find(|&&j| (mesh.nodes[j][0] - p[0]).abs() <= tol && (mesh.nodes[j][1] - p[1]).abs() <= tol) {
+            if let Some(&j) =
+                near.iter().find(|&&j| (mesh.nodes[j][0] - p[0]).abs() <= tol && (mesh.nodes[j][1] - p[1]).abs() <= tol)
+            {
                 return Err(Error::mesh(
                     file,
                     format!(

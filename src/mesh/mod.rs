@@ -191,7 +191,8 @@ impl Mesh {
                 }
             }
         }
-        let mut nodes: Vec<usize> = acc.keys().copied().filter(|&v| !exclude.get(v).copied().unwrap_or(false)).collect();
+        let mut nodes: Vec<usize> =
+            acc.keys().copied().filter(|&v| !exclude.get(v).copied().unwrap_or(false)).collect();
         nodes.sort_unstable();
         let mut out = SideNodes::default();
         for v in nodes {
@@ -200,7 +201,10 @@ impl Mesh {
             if !(norm > 1e-12 * w) {
                 return Err(Error::mesh(
                     &self.source,
-                    format!("{} sits where adjacent side edges have opposite normals; its nodal normal is undefined", node_name(self.tags.as_ref(), v)),
+                    format!(
+                        "{} sits where adjacent side edges have opposite normals; its nodal normal is undefined",
+                        node_name(self.tags.as_ref(), v)
+                    ),
                 ));
             }
             out.nodes.push(v);
@@ -229,7 +233,15 @@ impl Mesh {
     /// every node used by a triangle, side edges on the boundary.
     pub fn check(&self) -> Result<()> {
         let names = CellNames { one: "triangle", many: "triangles", measure: "area", zero: "zero" };
-        check_cells(&self.source, self.nodes.len(), &self.triangles, |t| self.signed_area(t), self.bbox_diameter().powi(2), &names, self.tags.as_ref())?;
+        check_cells(
+            &self.source,
+            self.nodes.len(),
+            &self.triangles,
+            |t| self.signed_area(t),
+            self.bbox_diameter().powi(2),
+            &names,
+            self.tags.as_ref(),
+        )?;
         for s in &self.sides {
             self.edge_geometry(s)?;
         }
@@ -285,17 +297,28 @@ pub(crate) fn check_cells<const N: usize>(
         }
         let a = measure(t);
         if !a.is_finite() {
-            return Err(Error::mesh(source, format!("the {what} of {} overflows: the coordinates are too large; give them in metres", cell(t))));
+            return Err(Error::mesh(
+                source,
+                format!("the {what} of {} overflows: the coordinates are too large; give them in metres", cell(t)),
+            ));
         }
         if !(a > 1e-14 * scale) {
             return Err(Error::mesh(
                 source,
-                format!("{} ({}) has {} {what} {a:.3e}; fix or remove it", cell(t), node_list(tags, c), if a < 0.0 { "negative (inverted)" } else { zero }),
+                format!(
+                    "{} ({}) has {} {what} {a:.3e}; fix or remove it",
+                    cell(t),
+                    node_list(tags, c),
+                    if a < 0.0 { "negative (inverted)" } else { zero }
+                ),
             ));
         }
     }
     if let Some(v) = used.iter().position(|u| !u) {
-        return Err(Error::mesh(source, format!("{} is not a vertex of any {one}; remove unreferenced nodes", node_name(tags, v))));
+        return Err(Error::mesh(
+            source,
+            format!("{} is not a vertex of any {one}; remove unreferenced nodes", node_name(tags, v)),
+        ));
     }
     Ok(())
 }
@@ -398,7 +421,11 @@ impl Geometry {
         Ok(match self {
             Geometry::Plane(m) => {
                 let s = m.side_nodes(names, exclude)?;
-                BoundaryNodes { nodes: s.nodes, normals: s.normals.iter().map(|n| [n[0], n[1], 0.0]).collect(), omega: s.omega }
+                BoundaryNodes {
+                    nodes: s.nodes,
+                    normals: s.normals.iter().map(|n| [n[0], n[1], 0.0]).collect(),
+                    omega: s.omega,
+                }
             }
             Geometry::Solid(m) => {
                 let s = m.side_nodes(names, exclude)?;

@@ -90,7 +90,13 @@ impl SolidMesh {
                 }
             }
         }
-        let mut mesh = SolidMesh { nodes, tets, sides: Vec::new(), tags: None, source: format!("box {}x{}x{}, {nx}x{ny}x{nz} cells", l[0], l[1], l[2]) };
+        let mut mesh = SolidMesh {
+            nodes,
+            tets,
+            sides: Vec::new(),
+            tags: None,
+            source: format!("box {}x{}x{}, {nx}x{ny}x{nz} cells", l[0], l[1], l[2]),
+        };
         mesh.orient();
         // boundary faces of the tetrahedra, sorted to the six sides by the coordinate they share
         let faces = mesh.boundary_faces();
@@ -166,7 +172,9 @@ impl SolidMesh {
     }
 
     fn named(&self, name: &str) -> Result<&Surface> {
-        self.side(name).ok_or_else(|| Error::mesh(&self.source, format!("no side named {name:?}; the mesh has {}", self.side_list())))
+        self.side(name).ok_or_else(|| {
+            Error::mesh(&self.source, format!("no side named {name:?}; the mesh has {}", self.side_list()))
+        })
     }
 
     /// For every face of a side, the outward unit normal and the area; errors if a face is not
@@ -236,7 +244,8 @@ impl SolidMesh {
                 ),
             ));
         }
-        let mut nodes: Vec<usize> = acc.keys().copied().filter(|&v| !exclude.get(v).copied().unwrap_or(false)).collect();
+        let mut nodes: Vec<usize> =
+            acc.keys().copied().filter(|&v| !exclude.get(v).copied().unwrap_or(false)).collect();
         nodes.sort_unstable();
         let mut out = SurfaceNodes::default();
         for v in nodes {
@@ -245,7 +254,10 @@ impl SolidMesh {
             if !(norm > 1e-12 * w) {
                 return Err(Error::mesh(
                     &self.source,
-                    format!("{} sits where adjacent side faces have opposite normals; its nodal normal is undefined", super::node_name(self.tags.as_ref(), v)),
+                    format!(
+                        "{} sits where adjacent side faces have opposite normals; its nodal normal is undefined",
+                        super::node_name(self.tags.as_ref(), v)
+                    ),
                 ));
             }
             out.nodes.push(v);
@@ -269,8 +281,17 @@ impl SolidMesh {
     /// Structural checks: indices in range, every tetrahedron positively oriented with a volume
     /// above round-off, every node used, side faces on the boundary.
     pub fn check(&self) -> Result<()> {
-        let names = super::CellNames { one: "tetrahedron", many: "tetrahedra", measure: "volume", zero: "zero (degenerate)" };
-        super::check_cells(&self.source, self.nodes.len(), &self.tets, |t| self.signed_volume(t), self.bbox_diameter().powi(3), &names, self.tags.as_ref())?;
+        let names =
+            super::CellNames { one: "tetrahedron", many: "tetrahedra", measure: "volume", zero: "zero (degenerate)" };
+        super::check_cells(
+            &self.source,
+            self.nodes.len(),
+            &self.tets,
+            |t| self.signed_volume(t),
+            self.bbox_diameter().powi(3),
+            &names,
+            self.tags.as_ref(),
+        )?;
         for s in &self.sides {
             self.face_geometry(s)?;
         }

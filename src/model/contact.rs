@@ -4,9 +4,9 @@
 
 use crate::mesh::BoundaryNodes;
 
+use super::Enforcement;
 use super::kinds::{Bound, BoundAt, FrictionBound};
 use super::laws::{FrictionBoundLaw, FrictionCoefficient, NormalLaw};
-use super::Enforcement;
 
 /// The local frame of a contact node: the outward unit normal ν and d − 1 unit tangents τ_j,
 /// stored with three components (z = 0 in two dimensions) so that the same code serves d = 2, 3.
@@ -31,7 +31,9 @@ impl Frame {
         let axis = (0..3).min_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs())).unwrap_or(0);
         let mut e = [0.0; 3];
         e[axis] = 1.0;
-        let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+        let cross = |a: [f64; 3], b: [f64; 3]| {
+            [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+        };
         let t1 = cross(e, n);
         let norm = (t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]).sqrt();
         let t1 = t1.map(|c| c / norm);
@@ -170,7 +172,11 @@ impl ContactModel {
         ContactModel {
             dim,
             nodes: side.nodes,
-            frames: side.normals.iter().map(|&n| if dim == 3 { Frame::spatial(n) } else { Frame::planar([n[0], n[1]]) }).collect(),
+            frames: side
+                .normals
+                .iter()
+                .map(|&n| if dim == 3 { Frame::spatial(n) } else { Frame::planar([n[0], n[1]]) })
+                .collect(),
             omega: side.omega,
             gap,
             dofs: node_dofs,

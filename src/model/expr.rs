@@ -226,9 +226,7 @@ fn lex(src: &str) -> std::result::Result<Vec<(Tok, usize)>, String> {
                 }
             }
             let text = &src[start..i];
-            let v: f64 = text
-                .parse()
-                .map_err(|_| format!("bad number `{text}` at column {col}"))?;
+            let v: f64 = text.parse().map_err(|_| format!("bad number `{text}` at column {col}"))?;
             out.push((Tok::Num(v), col));
             continue;
         }
@@ -813,7 +811,11 @@ impl VecExpr {
     }
     /// One expression per component (d of them); `path[c]` names component c in errors.
     pub fn parse(src: &[String], vars: &[&str], path: &str) -> Result<VecExpr> {
-        src.iter().enumerate().map(|(c, s)| Expr::parse(s, vars, &format!("{path}[{c}]"))).collect::<Result<Vec<_>>>().map(VecExpr)
+        src.iter()
+            .enumerate()
+            .map(|(c, s)| Expr::parse(s, vars, &format!("{path}[{c}]")))
+            .collect::<Result<Vec<_>>>()
+            .map(VecExpr)
     }
     /// The zero field with `dim` components.
     pub fn zero(dim: usize) -> VecExpr {
@@ -933,7 +935,11 @@ mod tests {
         ];
         for (src, want) in cases {
             let e = Expr::parse(&src, XYT, "loads.body[0]").unwrap_err().to_string();
-            assert!(e.contains(want) && !e.contains('\n') && e.len() < 400, "`{}` gave `{e}`, want `{want}`", &src[..src.len().min(40)]);
+            assert!(
+                e.contains(want) && !e.contains('\n') && e.len() < 400,
+                "`{}` gave `{e}`, want `{want}`",
+                &src[..src.len().min(40)]
+            );
         }
         // the limits leave room for real expressions
         assert_eq!(Expr::parse(&deep("(", ")", 60), XYT, "p").unwrap().eval(2.0, 0.0, 0.0), 2.0);

@@ -154,7 +154,11 @@ impl FrictionBoundLaw {
 #[derive(Debug, Clone, PartialEq)]
 pub enum FrictionCoefficient {
     /// μ(r) = (a − b) e^{−α r} + b
-    Exponential { a: f64, b: f64, alpha: f64 },
+    Exponential {
+        a: f64,
+        b: f64,
+        alpha: f64,
+    },
     Constant(f64),
     /// piecewise linear through (r_k, μ_k), constant beyond the last point
     Table(Vec<[f64; 2]>),
@@ -206,10 +210,9 @@ impl FrictionCoefficient {
         match self {
             FrictionCoefficient::Exponential { a, b, alpha } => alpha * (a - b).abs(),
             FrictionCoefficient::Constant(_) => 0.0,
-            FrictionCoefficient::Table(pts) => pts
-                .windows(2)
-                .map(|w| ((w[1][1] - w[0][1]) / (w[1][0] - w[0][0])).abs())
-                .fold(0.0, f64::max),
+            FrictionCoefficient::Table(pts) => {
+                pts.windows(2).map(|w| ((w[1][1] - w[0][1]) / (w[1][0] - w[0][0])).abs()).fold(0.0, f64::max)
+            }
         }
     }
 

@@ -4,8 +4,8 @@
 
 use nalgebra::{Matrix3, Matrix6};
 
-use super::kinds::Plane;
 use super::MaterialParams;
+use super::kinds::Plane;
 
 /// Lamé constants (λ, μ_L) from Young's modulus E and Poisson's ratio ν.
 pub fn lame(young: f64, poisson: f64) -> (f64, f64) {

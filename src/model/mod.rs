@@ -9,7 +9,10 @@ pub mod laws;
 pub mod material;
 
 use expr::{Expr, VecExpr};
-use kinds::{Bound, BoundAt, ContactSolve, EnergyResidualAction, FixedPointAcceleration, FrictionBound, InnerSolver, MassKind, Plane, SchemeKind};
+use kinds::{
+    Bound, BoundAt, ContactSolve, EnergyResidualAction, FixedPointAcceleration, FrictionBound, InnerSolver, MassKind,
+    Plane, SchemeKind,
+};
 use laws::FrictionCoefficient;
 
 /// A validated scene: every range checked, every expression parsed, every law built. It is
@@ -60,7 +63,9 @@ impl Domain {
     /// The mesh file a `gmsh` domain reads (a relative path resolved against `scene_dir`).
     pub fn mesh_path(&self, scene_dir: &std::path::Path) -> Option<std::path::PathBuf> {
         match self {
-            Domain::Gmsh { file } => Some(if std::path::Path::new(file).is_absolute() { file.into() } else { scene_dir.join(file) }),
+            Domain::Gmsh { file } => {
+                Some(if std::path::Path::new(file).is_absolute() { file.into() } else { scene_dir.join(file) })
+            }
             _ => None,
         }
     }

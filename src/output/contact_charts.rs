@@ -74,7 +74,9 @@ fn arc_length(mesh: &Mesh, sides: &[String], nodes: &[usize]) -> Vec<f64> {
     let mut starts: Vec<usize> = (0..n).filter(|&v| !adj[v].is_empty()).collect();
     // chain ends first (degree ≠ 2), leftmost first; then any node of a closed loop
     starts.sort_by(|&a, &b| {
-        (adj[a].len() == 2).cmp(&(adj[b].len() == 2)).then(key(a).partial_cmp(&key(b)).unwrap_or(std::cmp::Ordering::Equal))
+        (adj[a].len() == 2)
+            .cmp(&(adj[b].len() == 2))
+            .then(key(a).partial_cmp(&key(b)).unwrap_or(std::cmp::Ordering::Equal))
     });
     let mut arc = vec![f64::NAN; n];
     let mut total = 0.0;
@@ -105,8 +107,13 @@ pub enum Category {
 }
 
 impl Category {
-    pub const ALL: [Category; 5] =
-        [Category::Separated, Category::ComplianceStick, Category::ComplianceSlip, Category::ConstraintStick, Category::ConstraintSlip];
+    pub const ALL: [Category; 5] = [
+        Category::Separated,
+        Category::ComplianceStick,
+        Category::ComplianceSlip,
+        Category::ConstraintStick,
+        Category::ConstraintSlip,
+    ];
 
     /// The category of a node record: separated, else by the constraint (λ > 0) and stick/slip.
     pub fn of(r: &NodeRecord) -> Category {
@@ -180,17 +187,20 @@ pub fn forces(rows: &[ChartRow], reference: Option<f64>) -> Result<String, Strin
 pub fn normal_stress(frames: &[Frame], along: &Along, p_g: Option<f64>) -> Result<String, String> {
     let loaded: Vec<&Frame> = frames.iter().filter(|f| f.2.iter().any(|r| r.p + r.lambda > 0.0)).collect();
     let pool: Vec<&Frame> = if loaded.len() >= 5 { loaded } else { frames.iter().collect() };
-    let mut picks: Vec<usize> = (0..5).map(|j| (j * pool.len().saturating_sub(1) + 2) / 4).filter(|&k| k < pool.len()).collect();
+    let mut picks: Vec<usize> =
+        (0..5).map(|j| (j * pool.len().saturating_sub(1) + 2) / 4).filter(|&k| k < pool.len()).collect();
     picks.dedup();
     let series: Vec<Series> = picks
         .iter()
         .map(|&k| {
             let (_, t, recs) = pool[k];
-            let points = along.order.iter().filter_map(|&i| Some((along.s[i], recs.get(i).map(|r| r.p + r.lambda)?))).collect();
+            let points =
+                along.order.iter().filter_map(|&i| Some((along.s[i], recs.get(i).map(|r| r.p + r.lambda)?))).collect();
             Series { name: format!("t = {t:.4} s"), points }
         })
         .collect();
-    let hlines: Vec<(String, f64)> = p_g.map(|p| (format!("p(g) = {p:.4} Pa (compliance bound)"), p)).into_iter().collect();
+    let hlines: Vec<(String, f64)> =
+        p_g.map(|p| (format!("p(g) = {p:.4} Pa (compliance bound)"), p)).into_iter().collect();
     let opts = Options { markers: true, legend: SeriesLabelPosition::UpperRight, headroom: 0.35 };
     plots::line_chart_with(
         "Normal stress q + λ along Γ3 (frames with contact load)",
@@ -238,8 +248,11 @@ pub fn contact_status(frames: &[Frame], along: &Along) -> Result<String, String>
         let root = SVGBackend::with_string(&mut svg, (1100, 600)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let (left, legend) = root.split_horizontally(800);
-        let title =
-            if stride > 1 { format!("Contact status along Γ3 (one frame in {stride})") } else { "Contact status along Γ3".to_string() };
+        let title = if stride > 1 {
+            format!("Contact status along Γ3 (one frame in {stride})")
+        } else {
+            "Contact status along Γ3".to_string()
+        };
         let mut chart = ChartBuilder::on(&left)
             .caption(title, ("sans-serif", 20))
             .margin(12)
@@ -261,7 +274,10 @@ pub fn contact_status(frames: &[Frame], along: &Along) -> Result<String, String>
             for (row, (_, _, recs)) in rows.iter().enumerate() {
                 for (col, &i) in along.order.iter().enumerate() {
                     if recs.get(i).is_some_and(|r| Category::of(r) == cat) {
-                        cells.push(Rectangle::new([(xe[col], te[row]), (xe[col + 1], te[row + 1])], cat.color().filled()));
+                        cells.push(Rectangle::new(
+                            [(xe[col], te[row]), (xe[col + 1], te[row + 1])],
+                            cat.color().filled(),
+                        ));
                     }
                 }
             }
@@ -274,8 +290,11 @@ pub fn contact_status(frames: &[Frame], along: &Along) -> Result<String, String>
     Ok(svg)
 }
 
-type Chart2d<'a, 'b> =
-    ChartContext<'a, SVGBackend<'b>, Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>>;
+type Chart2d<'a, 'b> = ChartContext<
+    'a,
+    SVGBackend<'b>,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
 
 /// The axes of the deformed-mesh chart (built twice: once to measure the plotting area).
 fn deformed_frame<'a, 'b>(
@@ -298,8 +317,11 @@ type Edge = (usize, usize);
 
 /// The edges of a triangulation, each once, and the boundary edges (those of one triangle).
 fn mesh_edges(mesh: &Mesh) -> (Vec<Edge>, Vec<Edge>) {
-    let mut edges: Vec<Edge> =
-        mesh.triangles.iter().flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])))).collect();
+    let mut edges: Vec<Edge> = mesh
+        .triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
+        .collect();
     edges.sort_unstable();
     let (mut unique, mut outline) = (Vec::with_capacity(edges.len() / 2 + 1), Vec::new());
     for (k, &e) in edges.iter().enumerate() {
@@ -337,7 +359,9 @@ pub fn deformed(mesh: &Mesh, u: &[[f64; 2]], t: f64) -> Result<String, String> {
     let ((mut x0, mut x1), (mut y0, mut y1)) = (plots::range(xs.into_iter()), plots::range(ys.into_iter()));
     // equal scales on both axes: widen the narrower range to the plotting area's aspect
     let (w, h) = (960u32, ((960.0 * (y1 - y0) / (x1 - x0)) as u32).clamp(360, 900));
-    let title = format!("Deformed mesh at t = {t:.4} s, displacement × {scale:.3} (largest |u| = {u_max:.3e} m); grey: undeformed outline");
+    let title = format!(
+        "Deformed mesh at t = {t:.4} s, displacement × {scale:.3} (largest |u| = {u_max:.3e} m); grey: undeformed outline"
+    );
     let (pw, ph) = {
         let mut scratch = String::new();
         let area = SVGBackend::with_string(&mut scratch, (w, h)).into_drawing_area();
@@ -347,7 +371,8 @@ pub fn deformed(mesh: &Mesh, u: &[[f64; 2]], t: f64) -> Result<String, String> {
     let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
     let per_px = ((x1 - x0) / pw).max((y1 - y0) / ph);
     if per_px.is_finite() && per_px > 0.0 {
-        (x0, x1, y0, y1) = (cx - 0.5 * per_px * pw, cx + 0.5 * per_px * pw, cy - 0.5 * per_px * ph, cy + 0.5 * per_px * ph);
+        (x0, x1, y0, y1) =
+            (cx - 0.5 * per_px * pw, cx + 0.5 * per_px * pw, cy - 0.5 * per_px * ph, cy + 0.5 * per_px * ph);
     }
     let mut svg = String::new();
     {
@@ -365,7 +390,9 @@ pub fn deformed(mesh: &Mesh, u: &[[f64; 2]], t: f64) -> Result<String, String> {
             .map_err(|e| e.to_string())?;
         let grey = RGBColor(160, 160, 160).stroke_width(2);
         let node = |v: usize| (mesh.nodes[v][0], mesh.nodes[v][1]);
-        chart.draw_series(outline.iter().map(|&(a, b)| PathElement::new(vec![node(a), node(b)], grey))).map_err(|e| e.to_string())?;
+        chart
+            .draw_series(outline.iter().map(|&(a, b)| PathElement::new(vec![node(a), node(b)], grey)))
+            .map_err(|e| e.to_string())?;
         let blue = plots::PALETTE[0].stroke_width(1);
         let drawn = unique.iter().filter_map(|&(a, b)| Some(PathElement::new(vec![moved[a]?, moved[b]?], blue)));
         chart.draw_series(drawn).map_err(|e| e.to_string())?;
@@ -384,7 +411,9 @@ pub fn status_fractions(frames: &[Frame]) -> Result<String, String> {
             points: frames
                 .iter()
                 .filter(|f| !f.2.is_empty())
-                .map(|(_, t, recs)| (*t, recs.iter().filter(|r| Category::of(r) == cat).count() as f64 / recs.len() as f64))
+                .map(|(_, t, recs)| {
+                    (*t, recs.iter().filter(|r| Category::of(r) == cat).count() as f64 / recs.len() as f64)
+                })
                 .collect(),
         })
         .collect();
@@ -439,7 +468,10 @@ pub fn status_maps(frames: &[Frame], xy: &[[f64; 2]]) -> Result<String, String> 
             let squares = recs.iter().zip(xy).map(|(r, p)| {
                 let cat = Category::of(r);
                 counts[cat as usize] += 1;
-                Rectangle::new([(p[0] - 0.45 * side, p[1] - 0.45 * side), (p[0] + 0.45 * side, p[1] + 0.45 * side)], cat.color().filled())
+                Rectangle::new(
+                    [(p[0] - 0.45 * side, p[1] - 0.45 * side), (p[0] + 0.45 * side, p[1] + 0.45 * side)],
+                    cat.color().filled(),
+                )
             });
             chart.draw_series(squares.collect::<Vec<_>>()).map_err(|e| e.to_string())?;
         }

@@ -6,11 +6,11 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::fem::assemble::{assemble_full, Dofs};
+use crate::fem::assemble::{Dofs, assemble_full};
 use crate::linalg::{self, SpMat};
 use crate::model::expr::VecExpr;
 use crate::model::kinds;
-use crate::problem::{build_loads, Problem};
+use crate::problem::{Problem, build_loads};
 
 use super::{vtu, write_atomic};
 
@@ -29,7 +29,10 @@ fn matrix_market(a: &SpMat) -> String {
 /// the problem's own (f0, f2 and f3, assembled by `problem::build_loads`) on all 2N DOFs.
 pub fn export_operators(p: &Problem, dir: &Path) -> Result<()> {
     let Some(mesh) = p.mesh.plane() else {
-        return Err(Error::scene("domain", "export-operators writes 2-D meshes only (the 3-D operators are cross-checked by tests/crosscheck.rs)"));
+        return Err(Error::scene(
+            "domain",
+            "export-operators writes 2-D meshes only (the 3-D operators are cross-checked by tests/crosscheck.rs)",
+        ));
     };
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let n = mesh.nodes.len();

@@ -22,7 +22,8 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 
 /// Files at the top of a run folder that a run writes.
-pub const OWNED: [&str; 7] = ["summary.json", "history.csv", "contact.csv", "checkpoint.json", "trajectory.f64", "series.pvd", "run.lock"];
+pub const OWNED: [&str; 7] =
+    ["summary.json", "history.csv", "contact.csv", "checkpoint.json", "trajectory.f64", "series.pvd", "run.lock"];
 /// Subfolders whose files of the given extension a run writes.
 const OWNED_IN: [(&str, &str); 2] = [("frames", "vtu"), ("plots", "svg")];
 /// Whether a file at the top of a run folder is one the run keeps without owning it: a scene
@@ -94,7 +95,9 @@ pub fn lock(dir: &Path, name: &str) -> Result<Lock> {
         Ok(()) => Ok(Lock { _file: file }),
         Err(std::fs::TryLockError::WouldBlock) => Err(Error::folder(
             dir,
-            format!("another dyncontact process is writing this folder (it holds {name}); wait for it to end or choose another folder"),
+            format!(
+                "another dyncontact process is writing this folder (it holds {name}); wait for it to end or choose another folder"
+            ),
         )),
         Err(std::fs::TryLockError::Error(_)) => Ok(Lock { _file: file }),
     }

@@ -28,7 +28,7 @@ use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::simulation::{NodeRecord, State, StepRecord};
 
-pub use fs::{write_atomic, AppendFile};
+pub use fs::{AppendFile, write_atomic};
 pub use summary::{ModelInfo, Summary};
 
 /// A history.csv value: a real or a count (written with Rust's shortest round-trip format).
@@ -91,8 +91,7 @@ pub fn history_header() -> String {
 pub const CONTACT_COLUMNS: &str = "step,t,node,x,y,u_n,u_t,v_t,p,lambda,friction,status,friction_bound";
 /// The 3-D contact.csv columns (SCENES.md, "Three dimensions"): z after y, magnitudes in the
 /// tangent plane, then the global components of v̄ and of the friction traction.
-pub const CONTACT_COLUMNS_3D: &str =
-    "step,t,node,x,y,z,u_n,u_t,v_t,p,lambda,friction,status,v_tx,v_ty,v_tz,friction_x,friction_y,friction_z,friction_bound";
+pub const CONTACT_COLUMNS_3D: &str = "step,t,node,x,y,z,u_n,u_t,v_t,p,lambda,friction,status,v_tx,v_ty,v_tz,friction_x,friction_y,friction_z,friction_bound";
 
 /// The contact.csv header for a problem of dimension d.
 pub fn contact_columns(dim: usize) -> &'static str {
@@ -157,7 +156,8 @@ impl Writer {
         let contact = problem.contact.is_some().then_some(contact);
         let mut w = Writer::new(dir, problem, history, contact, Vec::new(), Vec::new(), Vec::new());
         if problem.model.output_trajectory {
-            w.trajectory = Some(trajectory::TrajectoryWriter::create(&dir.join("trajectory.f64"), problem.dofs.n_free)?);
+            w.trajectory =
+                Some(trajectory::TrajectoryWriter::create(&dir.join("trajectory.f64"), problem.dofs.n_free)?);
         }
         Ok(w)
     }
@@ -304,7 +304,10 @@ impl Writer {
             let svg = svg.map_err(|e| Error::Output(format!("{file}: {e}")))?;
             write_atomic(&self.dir.join(&file), svg.as_bytes())
         };
-        let s = |name: &str, f: fn(&ChartRow) -> f64| Series { name: name.into(), points: self.rows.iter().map(|r| (r.t, f(r))).collect() };
+        let s = |name: &str, f: fn(&ChartRow) -> f64| Series {
+            name: name.into(),
+            points: self.rows.iter().map(|r| (r.t, f(r))).collect(),
+        };
         let terms = [
             s("kinetic", |r| r.kinetic),
             s("elastic", |r| r.elastic),
@@ -317,8 +320,28 @@ impl Writer {
         let residual = [s("(E.1) residual", |r| r.residual)];
         let energy = plots::stacked_chart(
             &[
-                (plots::Panel { title: "Energy balance (E.1)", x_desc: "t [s]", y_desc: "energy [J/m]", series: &terms, hlines: &[], log: (false, false) }, 2.0),
-                (plots::Panel { title: "(E.1) residual per step", x_desc: "t [s]", y_desc: "residual [J/m]", series: &residual, hlines: &[], log: (false, false) }, 1.0),
+                (
+                    plots::Panel {
+                        title: "Energy balance (E.1)",
+                        x_desc: "t [s]",
+                        y_desc: "energy [J/m]",
+                        series: &terms,
+                        hlines: &[],
+                        log: (false, false),
+                    },
+                    2.0,
+                ),
+                (
+                    plots::Panel {
+                        title: "(E.1) residual per step",
+                        x_desc: "t [s]",
+                        y_desc: "residual [J/m]",
+                        series: &residual,
+                        hlines: &[],
+                        log: (false, false),
+                    },
+                    1.0,
+                ),
             ],
             &plots::Options::default(),
         );

@@ -92,7 +92,13 @@ pub struct Panel<'a> {
 }
 
 /// A line chart as an SVG document. `hlines` are labelled horizontal reference lines.
-pub fn line_chart(title: &str, x_desc: &str, y_desc: &str, series: &[Series], hlines: &[(String, f64)]) -> Result<String, String> {
+pub fn line_chart(
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[Series],
+    hlines: &[(String, f64)],
+) -> Result<String, String> {
     line_chart_with(title, x_desc, y_desc, series, hlines, &Options::default())
 }
 
@@ -138,11 +144,29 @@ pub fn stacked_chart(panels: &[(Panel, f64)], opts: &Options) -> Result<String, 
 }
 
 /// Draw one panel on `area`.
-fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>, p: &Panel, opts: &Options) -> Result<(), String> {
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    p: &Panel,
+    opts: &Options,
+) -> Result<(), String> {
     // on a logarithmic axis the values' log10 is drawn (NaN, so left out, for v ≤ 0)
-    let axis = |log: bool| move |v: f64| if !log { v } else if v > 0.0 { v.log10() } else { f64::NAN };
+    let axis = |log: bool| {
+        move |v: f64| {
+            if !log {
+                v
+            } else if v > 0.0 {
+                v.log10()
+            } else {
+                f64::NAN
+            }
+        }
+    };
     let (fx, fy) = (axis(p.log.0), axis(p.log.1));
-    let drawn: Vec<Series> = p.series.iter().map(|s| Series { name: s.name.clone(), points: s.points.iter().map(|q| (fx(q.0), fy(q.1))).collect() }).collect();
+    let drawn: Vec<Series> = p
+        .series
+        .iter()
+        .map(|s| Series { name: s.name.clone(), points: s.points.iter().map(|q| (fx(q.0), fy(q.1))).collect() })
+        .collect();
     let hlines: Vec<(String, f64)> = p.hlines.iter().map(|h| (h.0.clone(), fy(h.1))).collect();
     let (x0, x1) = range(drawn.iter().flat_map(|s| s.points.iter().map(|q| q.0)));
     let (y0, mut y1) = range(drawn.iter().flat_map(|s| s.points.iter().map(|q| q.1)).chain(hlines.iter().map(|h| h.1)));

@@ -9,7 +9,7 @@
 
 use std::path::Path;
 
-use super::{history_header, write_atomic, AppendFile, ChartRow, Writer};
+use super::{AppendFile, ChartRow, Writer, history_header, write_atomic};
 use crate::checkpoint::Checkpoint;
 use crate::error::{Error, Result};
 use crate::problem::Problem;
@@ -45,8 +45,17 @@ fn frame_steps(problem: &Problem, step: usize) -> Vec<usize> {
 /// Prove, reading only, that the files in `dir` belong to the checkpoint `cp` (see the module
 /// documentation); Err names the file and the mismatch.
 pub fn check(dir: &Path, problem: &Problem, cp: &Checkpoint) -> Result<()> {
-    let refuse = |file: &str, m: String| Error::folder(dir.join(file), format!("{m}; the checkpoint (step {}) and this file do not belong together, so the run is not resumed", cp.step));
-    let read = |file: &str| std::fs::read_to_string(dir.join(file)).map_err(|e| refuse(file, format!("cannot be read ({e})")));
+    let refuse = |file: &str, m: String| {
+        Error::folder(
+            dir.join(file),
+            format!(
+                "{m}; the checkpoint (step {}) and this file do not belong together, so the run is not resumed",
+                cp.step
+            ),
+        )
+    };
+    let read =
+        |file: &str| std::fs::read_to_string(dir.join(file)).map_err(|e| refuse(file, format!("cannot be read ({e})")));
     // history.csv: rows 0, 1, …, at least through the checkpoint's step, whole
     let text = read("history.csv")?;
     let mut lines = text.lines();
@@ -64,11 +73,23 @@ pub fn check(dir: &Path, problem: &Problem, cp: &Checkpoint) -> Result<()> {
             if i > cp.step {
                 break;
             }
-            return Err(refuse("history.csv", format!("row {} (step {i}) has {} fields, not {}", i + 2, fields.len(), columns.len())));
+            return Err(refuse(
+                "history.csv",
+                format!("row {} (step {i}) has {} fields, not {}", i + 2, fields.len(), columns.len()),
+            ));
         }
         match fields[0].parse::<usize>() {
             Ok(s) if s == i => {}
-            Ok(s) => return Err(refuse("history.csv", format!("row {} is step {s} where step {i} belongs: the rows of steps {i}..{} are missing", i + 2, s.saturating_sub(1)))),
+            Ok(s) => {
+                return Err(refuse(
+                    "history.csv",
+                    format!(
+                        "row {} is step {s} where step {i} belongs: the rows of steps {i}..{} are missing",
+                        i + 2,
+                        s.saturating_sub(1)
+                    ),
+                ));
+            }
             Err(_) => return Err(refuse("history.csv", format!("row {} does not start with a step number", i + 2))),
         }
         if i == cp.step {
@@ -83,7 +104,13 @@ pub fn check(dir: &Path, problem: &Problem, cp: &Checkpoint) -> Result<()> {
         let Some(c) = columns.iter().position(|c| *c == name) else { continue };
         let got = row[c].parse::<f64>().ok();
         if got.map(f64::to_bits) != Some(want.to_bits()) {
-            return Err(refuse("history.csv", format!("the row of step {} does not hold the checkpoint's state ({name} = {} there, {want} in checkpoint.json)", cp.step, row[c])));
+            return Err(refuse(
+                "history.csv",
+                format!(
+                    "the row of step {} does not hold the checkpoint's state ({name} = {} there, {want} in checkpoint.json)",
+                    cp.step, row[c]
+                ),
+            ));
         }
     }
     // contact.csv and frames/: exactly the frames of the steps up to the checkpoint's
@@ -100,7 +127,12 @@ pub fn check(dir: &Path, problem: &Problem, cp: &Checkpoint) -> Result<()> {
         if steps != expected {
             let missing: Vec<usize> = expected.iter().copied().filter(|s| !steps.contains(s)).take(5).collect();
             let extra: Vec<usize> = steps.iter().copied().filter(|s| !expected.contains(s)).take(5).collect();
-            return Err(refuse("contact.csv", format!("holds the frames of steps that are not this run's (missing: {missing:?}, unexpected: {extra:?})")));
+            return Err(refuse(
+                "contact.csv",
+                format!(
+                    "holds the frames of steps that are not this run's (missing: {missing:?}, unexpected: {extra:?})"
+                ),
+            ));
         }
     }
     for s in expected {
@@ -148,7 +180,8 @@ impl Writer {
     /// Reopen `dir` to continue after checkpoint step `step` ([`check`] has accepted it).
     pub fn reopen(dir: &Path, problem: &Problem, step: usize) -> Result<Writer> {
         let hp = dir.join("history.csv");
-        let header = std::fs::read_to_string(&hp).map_err(|e| Error::io(&hp, e))?.lines().next().unwrap_or("").to_string();
+        let header =
+            std::fs::read_to_string(&hp).map_err(|e| Error::io(&hp, e))?.lines().next().unwrap_or("").to_string();
         let rows = cut_csv(&hp, step)?;
         let chart_rows = chart_rows(&header, &rows)?;
         let cp = dir.join("contact.csv");
@@ -158,7 +191,11 @@ impl Writer {
         let contact = if problem.contact.is_some() { Some(AppendFile::open(&cp)?) } else { None };
         let mut w = Writer::new(dir, problem, AppendFile::open(&hp)?, contact, frames, chart_rows, contact_frames);
         if problem.model.output_trajectory {
-            w.trajectory = Some(super::trajectory::TrajectoryWriter::reopen(&dir.join("trajectory.f64"), problem.dofs.n_free, step)?);
+            w.trajectory = Some(super::trajectory::TrajectoryWriter::reopen(
+                &dir.join("trajectory.f64"),
+                problem.dofs.n_free,
+                step,
+            )?);
         }
         Ok(w)
     }

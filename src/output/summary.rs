@@ -5,11 +5,11 @@ use serde::Serialize;
 
 use crate::failure::RunStatus;
 use crate::fem::assemble::nodal_masses;
-use crate::model::laws::FrictionCoefficient;
-use crate::problem::Problem;
 use crate::model::contact::ContactModel;
 use crate::model::kinds::{self, Bound, BoundAt, ContactSolve, FixedPointAcceleration, FrictionBound};
+use crate::model::laws::FrictionCoefficient;
 use crate::model::{ContactParams, Enforcement};
+use crate::problem::Problem;
 use crate::scheme::ContactKinematics;
 
 /// The model a scene switches on — printed by `dyncontact check`, stored in summary.json.
@@ -56,7 +56,10 @@ impl ModelInfo {
         let s = &p.model;
         let m = &s.material;
         let material = if m.theta > 0.0 || m.zeta > 0.0 {
-            format!("Kelvin–Voigt: E = {}, ν = {}, ρ = {}, θ = {}, ζ = {}", m.young, m.poisson, m.density, m.theta, m.zeta)
+            format!(
+                "Kelvin–Voigt: E = {}, ν = {}, ρ = {}, θ = {}, ζ = {}",
+                m.young, m.poisson, m.density, m.theta, m.zeta
+            )
         } else {
             format!("elastic (no viscosity): E = {}, ν = {}, ρ = {}", m.young, m.poisson, m.density)
         };
@@ -100,8 +103,13 @@ impl ModelInfo {
         let m = c.dim * c.n();
         let form = match p.model.solver.contact_solve {
             ContactSolve::Dense => format!("dense Delassus operator W ({m} × {m})"),
-            ContactSolve::Sparse => format!("sparse Delassus operator W ({m} × {m}, probed, entries below {:e} of the diagonal dropped)", crate::defaults::DELASSUS_TRUNCATION),
-            ContactSolve::Auto if m < crate::defaults::SPARSE_FROM => format!("dense Delassus operator W ({m} × {m}; auto: below {} unknowns)", crate::defaults::SPARSE_FROM),
+            ContactSolve::Sparse => format!(
+                "sparse Delassus operator W ({m} × {m}, probed, entries below {:e} of the diagonal dropped)",
+                crate::defaults::DELASSUS_TRUNCATION
+            ),
+            ContactSolve::Auto if m < crate::defaults::SPARSE_FROM => {
+                format!("dense Delassus operator W ({m} × {m}; auto: below {} unknowns)", crate::defaults::SPARSE_FROM)
+            }
             ContactSolve::Auto => format!(
                 "auto: W ({m} × {m}) probed at setup, sparse if its decay keeps ≤ {}% of the entries, else dense (summary.json says which)",
                 100.0 * crate::defaults::SPARSE_DENSITY
@@ -127,7 +135,9 @@ impl ModelInfo {
             (Some(g), Enforcement::Exact) if cs.compliance == 0.0 && g == 0.0 => {
                 "Signorini (g = 0, p ≡ 0): exact, one multiplier λ per contact node".into()
             }
-            (Some(g), Enforcement::Exact) => format!("u_ν ≤ g = {g}, exact (Problem P): one multiplier λ per contact node"),
+            (Some(g), Enforcement::Exact) => {
+                format!("u_ν ≤ g = {g}, exact (Problem P): one multiplier λ per contact node")
+            }
             (Some(g), Enforcement::Penalty { epsilon }) => {
                 format!("penalty (Problem P_ε): p_ε = p + (r − {g})_+/ε with ε = {epsilon}, no multipliers")
             }
@@ -176,13 +186,15 @@ impl ModelInfo {
                 String::new()
             };
         } else if c.friction_bound == FrictionBound::Total {
-            self.ck_note = "the total bound follows the contact force, which no constant bounds: (C.k) gives no limit; F.1 \
+            self.ck_note =
+                "the total bound follows the contact force, which no constant bounds: (C.k) gives no limit; F.1 \
                             iterates on S"
-                .into();
+                    .into();
         } else if !c.p_tau.sup().is_finite() && c.friction.as_ref().is_some_and(|m| m.lipschitz() > 0.0) {
-            self.ck_note = "p_τ is unbounded (g = inf or uncapped): no step size makes the step problem convex for every \
+            self.ck_note =
+                "p_τ is unbounded (g = inf or uncapped): no step size makes the step problem convex for every \
                             state; F.1 still applies (a majorization–minimization for velocity-weakening μ)"
-                .into();
+                    .into();
         } else {
             self.ck_note = "μ is constant or p_τ ≡ 0: every step problem is convex".into();
         }
@@ -207,8 +219,15 @@ impl ModelInfo {
             format!(
                 "sizes          : {} nodes, {}, {} velocity unknowns, {} contact nodes, {} multipliers, {} friction unknowns",
                 self.nodes,
-                if self.dim == 3 { format!("{} tetrahedra", self.tetrahedra) } else { format!("{} triangles", self.triangles) },
-                self.velocity_unknowns, self.contact_nodes, self.multipliers, self.friction_unknowns
+                if self.dim == 3 {
+                    format!("{} tetrahedra", self.tetrahedra)
+                } else {
+                    format!("{} triangles", self.triangles)
+                },
+                self.velocity_unknowns,
+                self.contact_nodes,
+                self.multipliers,
+                self.friction_unknowns
             ),
             format!("time           : {} steps of k = {}", self.steps, self.step),
         ];
@@ -249,8 +268,7 @@ impl ModelInfo {
             format!(
                 "time.step = {} exceeds the (C.k) limit {k:.4e} ({}): the unfrozen step problem may be nonconvex; \
                  F.1 may need more iterations or relaxation < 1",
-                self.step,
-                self.ck_limiting_name
+                self.step, self.ck_limiting_name
             )
         })
     }

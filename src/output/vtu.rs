@@ -27,7 +27,10 @@ pub struct Frame<'a> {
 
 /// One inline binary DataArray of `vtk_type` with the little-endian bytes `data`.
 fn array(out: &mut String, vtk_type: &str, name: &str, comps: usize, data: &[u8]) {
-    let _ = writeln!(out, "<DataArray type=\"{vtk_type}\" Name=\"{name}\" NumberOfComponents=\"{comps}\" format=\"binary\">");
+    let _ = writeln!(
+        out,
+        "<DataArray type=\"{vtk_type}\" Name=\"{name}\" NumberOfComponents=\"{comps}\" format=\"binary\">"
+    );
     let mut bytes = Vec::with_capacity(8 + data.len());
     bytes.extend_from_slice(&(data.len() as u64).to_le_bytes());
     bytes.extend_from_slice(data);
@@ -115,7 +118,9 @@ pub fn vtu(frame: &Frame) -> String {
 
 /// The PVD collection listing (time, file) pairs.
 pub fn pvd(frames: &[(f64, String)]) -> String {
-    let mut s = String::from("<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n<Collection>\n");
+    let mut s = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n<Collection>\n",
+    );
     for (t, f) in frames {
         let _ = writeln!(s, "<DataSet timestep=\"{t:e}\" group=\"\" part=\"0\" file=\"{f}\"/>");
     }

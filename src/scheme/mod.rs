@@ -8,8 +8,8 @@
 use crate::error::Result;
 use crate::fem::Operators;
 use crate::linalg::{self, Cholesky};
-use crate::model::laws::NormalForceRule;
 use crate::model::kinds::SchemeKind;
+use crate::model::laws::NormalForceRule;
 
 /// How the contact quantities of one step depend on the unknown contact velocity y = H w:
 /// d^{n+1} = d^n + a_d (y_ν + b_d v_ν^n) and v̄ = a_v (y_τ + b_v v_τ^n).
@@ -63,7 +63,9 @@ impl StepOperator {
     /// (A = M/k + C + k K for backward Euler), factored once by sparse Cholesky.
     pub fn new(ops: &Operators, kind: SchemeKind, k: f64) -> Result<StepOperator> {
         let a = match kind {
-            SchemeKind::Midpoint | SchemeKind::Trapezoid => linalg::combine(&[(1.0 / k, &ops.m), (0.5, &ops.c), (0.25 * k, &ops.k)])?,
+            SchemeKind::Midpoint | SchemeKind::Trapezoid => {
+                linalg::combine(&[(1.0 / k, &ops.m), (0.5, &ops.c), (0.25 * k, &ops.k)])?
+            }
             SchemeKind::BackwardEuler => linalg::combine(&[(1.0 / k, &ops.m), (1.0, &ops.c), (k, &ops.k)])?,
         };
         Ok(StepOperator { kind, k, a: Cholesky::new(&a, "the step matrix A_k")? })
@@ -128,10 +130,33 @@ impl ContactKinematics {
     /// terms at t_{n+1} for backward Euler.
     pub fn of(kind: SchemeKind, k: f64) -> ContactKinematics {
         match kind {
-            SchemeKind::Midpoint => ContactKinematics { a_d: 0.5 * k, b_d: 1.0, a_v: 0.5, b_v: 1.0, force: NormalForceRule::DiscreteGradient, p_d: 0.5 * k, p_w: 0.5 },
-            SchemeKind::Trapezoid => ContactKinematics { a_d: 0.5 * k, b_d: 1.0, a_v: 0.5, b_v: 1.0, force: NormalForceRule::Average, p_d: 0.5 * k, p_w: 0.5 },
-            SchemeKind::BackwardEuler => ContactKinematics { a_d: k, b_d: 0.0, a_v: 1.0, b_v: 0.0, force: NormalForceRule::EndPoint, p_d: k, p_w: 1.0 },
+            SchemeKind::Midpoint => ContactKinematics {
+                a_d: 0.5 * k,
+                b_d: 1.0,
+                a_v: 0.5,
+                b_v: 1.0,
+                force: NormalForceRule::DiscreteGradient,
+                p_d: 0.5 * k,
+                p_w: 0.5,
+            },
+            SchemeKind::Trapezoid => ContactKinematics {
+                a_d: 0.5 * k,
+                b_d: 1.0,
+                a_v: 0.5,
+                b_v: 1.0,
+                force: NormalForceRule::Average,
+                p_d: 0.5 * k,
+                p_w: 0.5,
+            },
+            SchemeKind::BackwardEuler => ContactKinematics {
+                a_d: k,
+                b_d: 0.0,
+                a_v: 1.0,
+                b_v: 0.0,
+                force: NormalForceRule::EndPoint,
+                p_d: k,
+                p_w: 1.0,
+            },
         }
     }
 }
-

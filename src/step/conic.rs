@@ -31,8 +31,8 @@ use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverSt
 
 use super::{ContactSolution, NodeStatus, StepData};
 use crate::defaults::{
-    CLARABEL_MAX_ITER, CLARABEL_STATIC_REGULARIZATION, CLARABEL_TOL_KTRATIO, CONIC_FAR as FAR, CONIC_MAX_ROUNDS, CONIC_SEPARATION_FLOOR as SEPARATION_FLOOR,
-    CONIC_STICK_FLOOR as STICK_FLOOR, NEWTON_TOLERANCE,
+    CLARABEL_MAX_ITER, CLARABEL_STATIC_REGULARIZATION, CLARABEL_TOL_KTRATIO, CONIC_FAR as FAR, CONIC_MAX_ROUNDS,
+    CONIC_SEPARATION_FLOOR as SEPARATION_FLOOR, CONIC_STICK_FLOOR as STICK_FLOOR, NEWTON_TOLERANCE,
 };
 use crate::failure::{ConicFailure, ConicStatus};
 use crate::linalg;
@@ -54,7 +54,6 @@ impl Default for ConicSettings {
         ConicSettings { tolerance: NEWTON_TOLERANCE, max_rounds: CONIC_MAX_ROUNDS, verbose: false }
     }
 }
-
 
 /// A growing sparse problem: variables, objective, and constraint rows by cone.
 #[derive(Default)]
@@ -190,10 +189,13 @@ pub fn solve(step: &StepData, s: &[f64], set: &ConicSettings) -> Result<ContactS
     let mut active = Active {
         bound: (0..n).map(|i| step.beta(i).is_some_and(|b| b / v_scale <= FAR)).collect(),
         quad: (0..n * nh).map(|j| z0(j / nh, j % nh) >= -FAR).collect(),
-        piece: pieces.iter().map(|m| {
-            let h = step.law.hinges.iter().position(|h| h.s == m.s && h.c == m.c).unwrap_or(0);
-            if m.a > 0.0 { z0(m.node, h) <= FAR } else { z0(m.node, h) >= -FAR }
-        }).collect(),
+        piece: pieces
+            .iter()
+            .map(|m| {
+                let h = step.law.hinges.iter().position(|h| h.s == m.s && h.c == m.c).unwrap_or(0);
+                if m.a > 0.0 { z0(m.node, h) <= FAR } else { z0(m.node, h) >= -FAR }
+            })
+            .collect(),
     };
     let mut iterations = 0usize;
     let mut moved = f64::INFINITY;
@@ -276,9 +278,16 @@ fn solve_once(
         .max_iter(CLARABEL_MAX_ITER)
         .static_regularization_constant(CLARABEL_STATIC_REGULARIZATION)
         .build()
-        .map_err(|e| ConicFailure { status: ConicStatus::Settings(format!("{e:?}")), iterations: 0, residual: f64::NAN })?;
-    let mut solver = DefaultSolver::new(&p, &q, &a, &bb, &cones, settings)
-        .map_err(|e| ConicFailure { status: ConicStatus::Setup(format!("{e:?}")), iterations: 0, residual: f64::NAN })?;
+        .map_err(|e| ConicFailure {
+            status: ConicStatus::Settings(format!("{e:?}")),
+            iterations: 0,
+            residual: f64::NAN,
+        })?;
+    let mut solver = DefaultSolver::new(&p, &q, &a, &bb, &cones, settings).map_err(|e| ConicFailure {
+        status: ConicStatus::Setup(format!("{e:?}")),
+        iterations: 0,
+        residual: f64::NAN,
+    })?;
     solver.solve();
     let sol = &solver.solution;
     match sol.status {
@@ -298,7 +307,14 @@ fn solve_once(
 
 /// The program of [`solve_once`]: variables r (forces) and y (contact velocities), the
 /// objective ½ rᵀ W r + friction + normal-force pieces, and the constraints by cone.
-fn program(step: &StepData, s: &[f64], pieces: &[Majorized], z_l: &[f64], v: f64, active: &Active) -> (Builder, Vec<usize>, Vec<usize>) {
+fn program(
+    step: &StepData,
+    s: &[f64],
+    pieces: &[Majorized],
+    z_l: &[f64],
+    v: f64,
+    active: &Active,
+) -> (Builder, Vec<usize>, Vec<usize>) {
     let n = step.n();
     let m = step.m();
     let mut b = Builder::default();
@@ -389,10 +405,14 @@ fn finish(step: &StepData, s: &[f64], y: Vec<f64>, r: Vec<f64>, iterations: usiz
     let scale = step.velocity_scale(&y);
     let q: Vec<f64> = (0..n).map(|i| step.q(i, &y)).collect();
     let lambda: Vec<f64> = (0..n)
-        .map(|i| if step.nodes[i].bound.is_some() { (r[step.nu(i)] / step.nodes[i].omega - q[i]).max(0.0) } else { 0.0 })
+        .map(
+            |i| if step.nodes[i].bound.is_some() { (r[step.nu(i)] / step.nodes[i].omega - q[i]).max(0.0) } else { 0.0 },
+        )
         .collect();
     let td = step.tdim();
-    let t: Vec<f64> = (0..n * td).map(|l| if step.friction { r[step.tau_j(l / td, l % td)] / step.nodes[l / td].omega } else { 0.0 }).collect();
+    let t: Vec<f64> = (0..n * td)
+        .map(|l| if step.friction { r[step.tau_j(l / td, l % td)] / step.nodes[l / td].omega } else { 0.0 })
+        .collect();
     // an interior point reaches the active sets only to its tolerance: a node is separated when
     // its force is below SEPARATION_FLOOR of the largest, in stick when |v̄| ≤ STICK_FLOOR a_v V
     let f_max = (0..n).fold(0.0f64, |m, i| m.max(q[i] + lambda[i]));
@@ -405,5 +425,13 @@ fn finish(step: &StepData, s: &[f64], y: Vec<f64>, r: Vec<f64>, iterations: usiz
     // relative consistency of y with y_free − W r (the equality constraint)
     let resp = step.response(&r);
     let res = y.iter().zip(&resp).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-    ContactSolution { y, lambda, t, q, status, iterations, residual: if scale > 0.0 { res / scale } else { linalg::norm_inf(&resp) } }
+    ContactSolution {
+        y,
+        lambda,
+        t,
+        q,
+        status,
+        iterations,
+        residual: if scale > 0.0 { res / scale } else { linalg::norm_inf(&resp) },
+    }
 }

@@ -17,10 +17,10 @@ use std::cell::RefCell;
 use std::collections::HashMap;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::matrix_free::conjugate_gradient::{conjugate_gradient, conjugate_gradient_scratch, CgParams};
-use faer::matrix_free::{InitialGuessStatus, LinOp, Precond};
 use faer::linalg::solvers::{DenseSolveCore, Llt, Solve};
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering};
+use faer::matrix_free::conjugate_gradient::{CgParams, conjugate_gradient, conjugate_gradient_scratch};
+use faer::matrix_free::{InitialGuessStatus, LinOp, Precond};
+use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
 
@@ -176,7 +176,12 @@ pub fn build(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], choic
 
 /// [`build`], and for the dense form the responses G = A_k⁻¹ Hᵀ when they fit in
 /// [`RESPONSES_BYTES`](crate::defaults::RESPONSES_BYTES).
-pub fn build_with_responses(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], choice: ContactSolve) -> (Delassus, Option<Mat<f64>>) {
+pub fn build_with_responses(
+    a: &Cholesky,
+    contact: &ContactModel,
+    positions: &[[f64; 3]],
+    choice: ContactSolve,
+) -> (Delassus, Option<Mat<f64>>) {
     let m = contact.dim * contact.n();
     let truncation = crate::defaults::DELASSUS_TRUNCATION;
     let probe = match choice {
@@ -214,7 +219,9 @@ impl Probe {
         let (d, nc) = (contact.dim, contact.n());
         let m = d * nc;
         let centroid: Vec<f64> = (0..3).map(|k| positions.iter().map(|p| p[k]).sum::<f64>() / nc as f64).collect();
-        let i0 = (0..nc).min_by(|&a, &b| distance(&positions[a], &centroid).total_cmp(&distance(&positions[b], &centroid))).unwrap_or(0);
+        let i0 = (0..nc)
+            .min_by(|&a, &b| distance(&positions[a], &centroid).total_cmp(&distance(&positions[b], &centroid)))
+            .unwrap_or(0);
         let columns = responses(a, contact, &(0..d).map(|c| unit(m, d * i0 + c)).collect::<Vec<_>>());
         let mut radius = 0.0f64;
         for (c, col) in columns.iter().enumerate() {
@@ -362,8 +369,10 @@ pub fn sparse(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], prob
         }
     }
     // symmetrize: average W_ij and W_ji (both are kept: the neighbour relation is symmetric)
-    let sym: Vec<Triplet<usize, usize, f64>> =
-        triplets.iter().flat_map(|t| [Triplet::new(t.row, t.col, 0.5 * t.val), Triplet::new(t.col, t.row, 0.5 * t.val)]).collect();
+    let sym: Vec<Triplet<usize, usize, f64>> = triplets
+        .iter()
+        .flat_map(|t| [Triplet::new(t.row, t.col, 0.5 * t.val), Triplet::new(t.col, t.row, 0.5 * t.val)])
+        .collect();
     let w = SparseColMat::<usize, f64>::try_new_from_triplets(m, m, &sym).ok()?;
     // 3. the kept operator against an exact solve on a pseudo-random force
     let x: Vec<f64> = (0..m).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
@@ -372,13 +381,18 @@ pub fn sparse(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], prob
     for (l, &xl) in x.iter().enumerate() {
         column_add(&w, l, xl, &mut kept);
     }
-    let apply_error = kept.iter().zip(exact).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / crate::linalg::norm_inf(exact).max(f64::MIN_POSITIVE);
+    let apply_error = kept.iter().zip(exact).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
+        / crate::linalg::norm_inf(exact).max(f64::MIN_POSITIVE);
     let density = w.compute_nnz() as f64 / (m * m) as f64;
     let rank = factorize_symbolic_cholesky(w.symbolic(), Side::Lower, SymmetricOrdering::Amd, Default::default())
         .ok()
         .and_then(|sym| sym.perm().map(|p| p.arrays().1.to_vec()))
         .unwrap_or_else(|| (0..m).collect());
-    Some(SparseDelassus { w, rank, stats: SparseStats { truncation, radius, colours, solves: d * (colours + 1) + 1, density, apply_error } })
+    Some(SparseDelassus {
+        w,
+        rank,
+        stats: SparseStats { truncation, radius, colours, solves: d * (colours + 1) + 1, density, apply_error },
+    })
 }
 
 /// The tangent frames the Newton matrices read each slipping node in (3-D): node i's tangential
@@ -568,14 +582,29 @@ impl SparseFactor {
 impl DelassusFactors {
     /// Solve (W'_UU + D) x = b in place, U = `unknown` (indices of local components), D = `diag`,
     /// W' = W read in `frames`. None when the matrix is not numerically positive definite.
-    pub fn solve(&self, w: &Delassus, frames: &SlipFrames, unknown: &[usize], diag: &[f64], b: &mut [f64]) -> Option<()> {
+    pub fn solve(
+        &self,
+        w: &Delassus,
+        frames: &SlipFrames,
+        unknown: &[usize],
+        diag: &[f64],
+        b: &mut [f64],
+    ) -> Option<()> {
         self.solve_to(w, frames, unknown, diag, crate::defaults::PCG_TOLERANCE, b)
     }
 
     /// [`solve`](Self::solve), where conjugate gradients may stop at the relative residual
     /// `forcing` (≥ [`PCG_TOLERANCE`](crate::defaults::PCG_TOLERANCE)): Newton's inexact
     /// directions far from its solution (Eisenstat–Walker forcing).
-    pub fn solve_to(&self, w: &Delassus, frames: &SlipFrames, unknown: &[usize], diag: &[f64], forcing: f64, b: &mut [f64]) -> Option<()> {
+    pub fn solve_to(
+        &self,
+        w: &Delassus,
+        frames: &SlipFrames,
+        unknown: &[usize],
+        diag: &[f64],
+        forcing: f64,
+        b: &mut [f64],
+    ) -> Option<()> {
         let mut last = self.last.borrow_mut();
         let hit = last.as_ref().is_some_and(|f| f.unknown == unknown && f.diag == diag && f.frames == *frames);
         if hit {
@@ -586,16 +615,26 @@ impl DelassusFactors {
         // a nearby matrix: conjugate gradients preconditioned by the kept factor, on the
         // unknowns the two share (the others by their diagonal)
         let large = unknown.len() >= crate::defaults::PCG_FROM;
-        if let Some(f) = last.as_ref().filter(|f| f.unknown == unknown && (large || frames.any()) || large && Preconditioner::close(f, unknown)) {
+        if let Some(f) = last
+            .as_ref()
+            .filter(|f| f.unknown == unknown && (large || frames.any()) || large && Preconditioner::close(f, unknown))
+        {
             let prec = Preconditioner::new(f, w, frames, unknown, diag);
-            if let Some(iterations) = pcg(w, frames, unknown, diag, &prec, forcing.max(crate::defaults::PCG_TOLERANCE), b) {
+            if let Some(iterations) =
+                pcg(w, frames, unknown, diag, &prec, forcing.max(crate::defaults::PCG_TOLERANCE), b)
+            {
                 let mut c = self.counts.borrow_mut();
                 c.pcg_solves += 1;
                 c.pcg_iterations += iterations;
                 return b.iter().all(|v| v.is_finite()).then_some(());
             }
         }
-        *last = Some(Factor { unknown: unknown.to_vec(), diag: diag.to_vec(), frames: frames.clone(), llt: factor(w, frames, unknown, diag)? });
+        *last = Some(Factor {
+            unknown: unknown.to_vec(),
+            diag: diag.to_vec(),
+            frames: frames.clone(),
+            llt: factor(w, frames, unknown, diag)?,
+        });
         self.counts.borrow_mut().factorizations += 1;
         last.as_ref()?.llt.solve_in_place(b);
         b.iter().all(|v| v.is_finite()).then_some(())
@@ -620,7 +659,10 @@ impl DelassusFactors {
         if key.unknown.iter().any(|&l| l >= m) || key.diag.len() != key.unknown.len() {
             return None;
         }
-        let frames = SlipFrames { dim: key.frames_dim, zhat: key.frames.iter().map(|z| z.map(|z| z.map(f64::from_bits))).collect() };
+        let frames = SlipFrames {
+            dim: key.frames_dim,
+            zhat: key.frames.iter().map(|z| z.map(|z| z.map(f64::from_bits))).collect(),
+        };
         if frames.zhat.len() * frames.dim.max(1) > m {
             return None;
         }
@@ -702,9 +744,22 @@ impl<'f> Preconditioner<'f> {
 /// by `prec`, from the initial guess in `x`, to the relative residual `tolerance` within
 /// `max_iterations`: the iterations, or None (x unspecified) when they did not get there or met
 /// a non-positive curvature.
-fn conjugate_gradients(op: &impl LinOp<f64>, prec: &impl Precond<f64>, b: &[f64], x: &mut [f64], tolerance: f64, max_iterations: usize) -> Option<usize> {
+fn conjugate_gradients(
+    op: &impl LinOp<f64>,
+    prec: &impl Precond<f64>,
+    b: &[f64],
+    x: &mut [f64],
+    tolerance: f64,
+    max_iterations: usize,
+) -> Option<usize> {
     let n = b.len();
-    let params = CgParams { initial_guess: InitialGuessStatus::MaybeNonZero, abs_tolerance: 0.0, rel_tolerance: tolerance, max_iters: max_iterations, ..CgParams::default() };
+    let params = CgParams {
+        initial_guess: InitialGuessStatus::MaybeNonZero,
+        abs_tolerance: 0.0,
+        rel_tolerance: tolerance,
+        max_iters: max_iterations,
+        ..CgParams::default()
+    };
     let mut mem = MemBuffer::new(conjugate_gradient_scratch(prec, op, 1, Par::Seq));
     let info = conjugate_gradient(
         faer::MatMut::from_column_major_slice_mut(x, n, 1),
@@ -788,7 +843,15 @@ impl Precond<f64> for Preconditioner<'_> {}
 /// preconditioned right-hand side; x in place of b. The number of iterations, or None (b
 /// untouched) when the relative residual did not reach `tolerance` within
 /// [`PCG_MAX_ITERATIONS`](crate::defaults::PCG_MAX_ITERATIONS).
-fn pcg(w: &Delassus, frames: &SlipFrames, unknown: &[usize], diag: &[f64], prec: &Preconditioner, tolerance: f64, b: &mut [f64]) -> Option<usize> {
+fn pcg(
+    w: &Delassus,
+    frames: &SlipFrames,
+    unknown: &[usize],
+    diag: &[f64],
+    prec: &Preconditioner,
+    tolerance: f64,
+    b: &mut [f64],
+) -> Option<usize> {
     let mut x = b.to_vec();
     prec.apply_to(&mut x);
     let op = ForceMatrix { w, frames, unknown, diag };
@@ -802,7 +865,9 @@ fn factor(w: &Delassus, frames: &SlipFrames, unknown: &[usize], diag: &[f64]) ->
     let k = unknown.len();
     match w {
         Delassus::Dense(_) => {
-            let a = Mat::<f64>::from_fn(k, k, |i, j| w.entry_in(frames, unknown[i], unknown[j]) + if i == j { diag[i] } else { 0.0 });
+            let a = Mat::<f64>::from_fn(k, k, |i, j| {
+                w.entry_in(frames, unknown[i], unknown[j]) + if i == j { diag[i] } else { 0.0 }
+            });
             a.llt(Side::Lower).ok().map(FactorKind::Dense)
         }
         Delassus::Sparse(s) => {
@@ -830,11 +895,21 @@ fn factor(w: &Delassus, frames: &SlipFrames, unknown: &[usize], diag: &[f64]) ->
                 }
             }
             let a = SparseColMat::<usize, f64>::try_new_from_triplets(k, k, &trip).ok()?;
-            let symbolic = factorize_symbolic_cholesky(a.symbolic(), Side::Upper, SymmetricOrdering::Identity, Default::default()).ok()?;
+            let symbolic =
+                factorize_symbolic_cholesky(a.symbolic(), Side::Upper, SymmetricOrdering::Identity, Default::default())
+                    .ok()?;
             let mut values = vec![0.0; symbolic.len_val()];
             let mut mem = MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
             symbolic
-                .factorize_numeric_llt(&mut values, a.as_ref(), Side::Upper, Default::default(), Par::Seq, MemStack::new(&mut mem), Default::default())
+                .factorize_numeric_llt(
+                    &mut values,
+                    a.as_ref(),
+                    Side::Upper,
+                    Default::default(),
+                    Par::Seq,
+                    MemStack::new(&mut mem),
+                    Default::default(),
+                )
                 .ok()?;
             Some(FactorKind::Sparse(SparseFactor { order, symbolic, values }))
         }
@@ -874,7 +949,8 @@ impl InverseDelassus {
         let free: Vec<usize> = (0..m).collect();
         let blocks = vec![None; m / dim];
         let mut x = vec![0.0; m];
-        inv.trial_iterations = inv.solve(&free, &vec![0.0; m], &blocks, &b, 1e-10, crate::defaults::VELOCITY_FORM_TRIAL, &mut x)?;
+        inv.trial_iterations =
+            inv.solve(&free, &vec![0.0; m], &blocks, &b, 1e-10, crate::defaults::VELOCITY_FORM_TRIAL, &mut x)?;
         Some(inv)
     }
 
@@ -984,7 +1060,12 @@ struct NodeBlocks {
 
 impl NodeBlocks {
     /// None when a node's block is not positive definite.
-    fn new(inverse: &InverseDelassus, is_free: &[bool], diag: &[f64], blocks: &[Option<[[f64; 2]; 2]>]) -> Option<NodeBlocks> {
+    fn new(
+        inverse: &InverseDelassus,
+        is_free: &[bool],
+        diag: &[f64],
+        blocks: &[Option<[[f64; 2]; 2]>],
+    ) -> Option<NodeBlocks> {
         let (m, d) = (is_free.len(), inverse.dim);
         let mut out = Vec::new();
         for i in 0..m / d {

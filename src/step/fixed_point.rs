@@ -65,7 +65,13 @@ impl StepReport {
 }
 
 /// One frozen-S solve with the chosen inner solver.
-fn inner_solve(step: &StepData, s_bound: &[f64], lambda0: &[f64], t0: &[f64], inner: &Inner) -> Result<ContactSolution, InnerFailure> {
+fn inner_solve(
+    step: &StepData,
+    s_bound: &[f64],
+    lambda0: &[f64],
+    t0: &[f64],
+    inner: &Inner,
+) -> Result<ContactSolution, InnerFailure> {
     match inner {
         Inner::Newton(set) => newton::solve(step, s_bound, lambda0, t0, set).map_err(InnerFailure::Newton),
         Inner::Conic(set) => conic::solve(step, s_bound, set).map_err(InnerFailure::Conic),
@@ -114,7 +120,13 @@ pub fn bound_at_iterate(step: &StepData, law: &FrictionBoundLaw, weight: f64, i:
 /// (S.5) The friction bound S_i = μ(‖v̄_i‖) N_i, with v̄_i the slip rate of the contact
 /// velocities y and N_i the normal part (p_τ at the predictor, at the iterate's midpoint, or
 /// the whole contact force q_i + λ_i).
-pub fn friction_bound(step: &StepData, mu: &FrictionCoefficient, normal: &NormalPart, y: &[f64], lambda: &[f64]) -> Vec<f64> {
+pub fn friction_bound(
+    step: &StepData,
+    mu: &FrictionCoefficient,
+    normal: &NormalPart,
+    y: &[f64],
+    lambda: &[f64],
+) -> Vec<f64> {
     (0..step.n()).map(|i| mu.mu(step.slip_norm(i, y)) * normal.at(step, i, y, lambda)).collect()
 }
 
@@ -238,7 +250,9 @@ fn iterate(
         let s_used = s_bound.clone();
         let residual: Vec<f64> = s_new.iter().zip(&s_used).map(|(g, s)| g - s).collect();
         let extrapolated = match &history {
-            Some((g_prev, f_prev)) if fp.anderson && fp.relaxation == 1.0 => anderson(&s_new, &residual, g_prev, f_prev),
+            Some((g_prev, f_prev)) if fp.anderson && fp.relaxation == 1.0 => {
+                anderson(&s_new, &residual, g_prev, f_prev)
+            }
             _ => None,
         };
         match extrapolated {

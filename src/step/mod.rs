@@ -15,7 +15,6 @@ pub mod delassus;
 pub mod fixed_point;
 pub mod newton;
 
-
 use crate::model::laws::{NormalForceRule, NormalLaw};
 
 /// Data of one contact node for one step.
@@ -152,11 +151,18 @@ impl StepData<'_> {
     }
     /// v̄_i(y) in the tangent plane: d − 1 components (the rest 0).
     pub fn slip_vec(&self, i: usize, y: &[f64]) -> [f64; 2] {
-        std::array::from_fn(|j| if j < self.tdim() { self.nodes[i].v_aff[j] + self.a_v * y[self.tau_j(i, j)] } else { 0.0 })
+        std::array::from_fn(
+            |j| if j < self.tdim() { self.nodes[i].v_aff[j] + self.a_v * y[self.tau_j(i, j)] } else { 0.0 },
+        )
     }
     /// ‖v̄_i(y)‖ (|v̄_i| in 2-D).
     pub fn slip_norm(&self, i: usize, y: &[f64]) -> f64 {
-        if self.dim == 2 { self.slip(i, y).abs() } else { let v = self.slip_vec(i, y); v[0].hypot(v[1]) }
+        if self.dim == 2 {
+            self.slip(i, y).abs()
+        } else {
+            let v = self.slip_vec(i, y);
+            v[0].hypot(v[1])
+        }
     }
     /// q_i(y)
     pub fn q(&self, i: usize, y: &[f64]) -> f64 {
@@ -208,7 +214,10 @@ impl StepData<'_> {
     pub fn velocity_scale(&self, y: &[f64]) -> f64 {
         let mut s = crate::linalg::norm_inf(&self.y_free).max(crate::linalg::norm_inf(y));
         for nd in &self.nodes {
-            s = s.max((nd.v_aff[0] / self.a_v).abs()).max((nd.v_aff[1] / self.a_v).abs()).max(((nd.d_aff - nd.d_n) / self.a_d).abs());
+            s = s
+                .max((nd.v_aff[0] / self.a_v).abs())
+                .max((nd.v_aff[1] / self.a_v).abs())
+                .max(((nd.d_aff - nd.d_n) / self.a_d).abs());
         }
         s
     }

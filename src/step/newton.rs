@@ -81,7 +81,11 @@ impl FrictionBound<'_> {
             FrictionBound::Coulomb { mu } => {
                 let n = step.q(i, y) + lambda[i];
                 let (m, dm) = mu_at(mu);
-                if n > 0.0 { BoundAt { s: m * n, ds_dv: dm * n, ds_dn: m } } else { BoundAt { s: 0.0, ds_dv: 0.0, ds_dn: 0.0 } }
+                if n > 0.0 {
+                    BoundAt { s: m * n, ds_dv: dm * n, ds_dn: m }
+                } else {
+                    BoundAt { s: 0.0, ds_dv: 0.0, ds_dn: 0.0 }
+                }
             }
         }
     }
@@ -108,10 +112,15 @@ pub struct NewtonSettings {
 
 impl Default for NewtonSettings {
     fn default() -> Self {
-        NewtonSettings { tolerance: NEWTON_TOLERANCE, max_iterations: MAX_ITERATIONS, scale_normal: 1.0, scale_tangent: 1.0, reduced: true }
+        NewtonSettings {
+            tolerance: NEWTON_TOLERANCE,
+            max_iterations: MAX_ITERATIONS,
+            scale_normal: 1.0,
+            scale_tangent: 1.0,
+            reduced: true,
+        }
     }
 }
-
 
 struct Params {
     rho_n: Vec<f64>,
@@ -165,12 +174,22 @@ fn residual(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &
     if step.tdim() == 1 {
         for i in 0..n {
             let vbar = step.slip(i, y);
-            f.push(if step.friction { friction_residual(t[i], vbar, s.at(step, i, y, lambda).s, p.rho_t[i], step.a_v) } else { 0.0 });
+            f.push(if step.friction {
+                friction_residual(t[i], vbar, s.at(step, i, y, lambda).s, p.rho_t[i], step.a_v)
+            } else {
+                0.0
+            });
         }
     } else {
         for i in 0..n {
             let ft = if step.friction {
-                friction_residual_disk(t_of(step, t, i), step.slip_vec(i, y), s.at(step, i, y, lambda).s, p.rho_t[i], step.a_v)
+                friction_residual_disk(
+                    t_of(step, t, i),
+                    step.slip_vec(i, y),
+                    s.at(step, i, y, lambda).s,
+                    p.rho_t[i],
+                    step.a_v,
+                )
             } else {
                 [0.0; 2]
             };
@@ -181,7 +200,14 @@ fn residual(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &
 }
 
 /// Active normal constraints and stick nodes at an iterate.
-fn sets(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> (Vec<bool>, Vec<bool>) {
+fn sets(
+    step: &StepData,
+    s: &FrictionBound,
+    p: &Params,
+    y: &[f64],
+    lambda: &[f64],
+    t: &[f64],
+) -> (Vec<bool>, Vec<bool>) {
     let n = step.n();
     let active = (0..n)
         .map(|i| step.beta(i).is_some_and(|beta| lambda[i] + p.rho_n[i] * (y[step.nu(i)] - beta) > 0.0))
@@ -306,14 +332,17 @@ impl Params {
     fn new(step: &StepData, set: &NewtonSettings) -> Params {
         let n = step.n();
         Params {
-            rho_n: (0..n).map(|i| set.scale_normal / (step.nodes[i].omega * step.delassus[(step.nu(i), step.nu(i))])).collect(),
+            rho_n: (0..n)
+                .map(|i| set.scale_normal / (step.nodes[i].omega * step.delassus[(step.nu(i), step.nu(i))]))
+                .collect(),
             rho_t: (0..n)
                 .map(|i| {
                     // the mean of the node's tangential diagonal entries (one in 2-D)
                     let w_tt = if step.tdim() == 1 {
                         step.delassus[(step.tau(i), step.tau(i))]
                     } else {
-                        (0..step.tdim()).map(|j| step.delassus[(step.tau_j(i, j), step.tau_j(i, j))]).sum::<f64>() / step.tdim() as f64
+                        (0..step.tdim()).map(|j| step.delassus[(step.tau_j(i, j), step.tau_j(i, j))]).sum::<f64>()
+                            / step.tdim() as f64
                     };
                     set.scale_tangent / (step.a_v * step.nodes[i].omega * w_tt)
                 })
@@ -326,7 +355,8 @@ impl Params {
 /// contact velocities they give.
 fn initial_iterate(step: &StepData, s: &FrictionBound, p: &Params, lambda0: &[f64], t0: &[f64]) -> Iterate {
     let n = step.n();
-    let lambda: Vec<f64> = (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda0[i].max(0.0) } else { 0.0 }).collect();
+    let lambda: Vec<f64> =
+        (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda0[i].max(0.0) } else { 0.0 }).collect();
     let s_start = s.values(step, &step.y_free, &lambda);
     let t: Vec<f64> = if step.tdim() == 1 {
         (0..n).map(|i| if step.friction { t0[i].clamp(-s_start[i], s_start[i]) } else { 0.0 }).collect()
@@ -336,7 +366,13 @@ fn initial_iterate(step: &StepData, s: &FrictionBound, p: &Params, lambda0: &[f6
             .flat_map(|i| {
                 let ti = t_of(step, t0, i);
                 let norm = ti[0].hypot(ti[1]);
-                let scale = if !step.friction { 0.0 } else if norm > s_start[i] { s_start[i] / norm } else { 1.0 };
+                let scale = if !step.friction {
+                    0.0
+                } else if norm > s_start[i] {
+                    s_start[i] / norm
+                } else {
+                    1.0
+                };
                 [scale * ti[0], scale * ti[1]]
             })
             .collect()
@@ -412,12 +448,18 @@ impl DiskSlip {
     /// gain Π + a_v ∂S/∂‖v̄‖ ẑẑᵀ: ∂t/∂y_τ with v̂ taken as ẑ (equal at the solution), symmetric.
     fn symmetric_block(&self) -> [[f64; 2]; 2] {
         let z = self.zhat;
-        std::array::from_fn(|j| std::array::from_fn(|k| self.gain * (f64::from(u8::from(j == k)) - z[j] * z[k]) + self.ds_dspeed * z[j] * z[k]))
+        std::array::from_fn(|j| {
+            std::array::from_fn(|k| {
+                self.gain * (f64::from(u8::from(j == k)) - z[j] * z[k]) + self.ds_dspeed * z[j] * z[k]
+            })
+        })
     }
     /// ∂t/∂y_τ = gain Π + ẑ ds_dyᵀ (a 2 × 2 block; symmetric when frozen).
     fn block(&self) -> [[f64; 2]; 2] {
         let z = self.zhat;
-        std::array::from_fn(|j| std::array::from_fn(|k| self.gain * (f64::from(u8::from(j == k)) - z[j] * z[k]) + z[j] * self.ds_dy[k]))
+        std::array::from_fn(|j| {
+            std::array::from_fn(|k| self.gain * (f64::from(u8::from(j == k)) - z[j] * z[k]) + z[j] * self.ds_dy[k])
+        })
     }
 }
 
@@ -481,7 +523,12 @@ fn direction(
     }
     // Eisenstat–Walker: a direction by conjugate gradients only as exact as the residual is small
     let scale = step.velocity_scale(y);
-    let forcing = if scale > 0.0 { (crate::defaults::PCG_FORCING * linalg::norm_inf(&f[..m]).max(linalg::norm_inf(f)) / scale).min(crate::defaults::PCG_FORCING_MAX) } else { 0.0 };
+    let forcing = if scale > 0.0 {
+        (crate::defaults::PCG_FORCING * linalg::norm_inf(&f[..m]).max(linalg::norm_inf(f)) / scale)
+            .min(crate::defaults::PCG_FORCING_MAX)
+    } else {
+        0.0
+    };
     let coupled = coupling.iter().any(|c| *c != [0.0; 2]) || slips.iter().any(|d| d.ds_dn != 0.0);
     if let (true, false, Some(inverse)) = (reduced, coupled, step.inverse) {
         if let Some(d) = velocity_direction(step, inverse, f, &prescribed, &g, &slips, &dy, &dm, forcing) {
@@ -613,7 +660,15 @@ fn velocity_direction(
         b[l] = -u0[l] - r_k[l];
     }
     let mut x = vec![0.0; m];
-    let iterations = inverse.solve(&free, &diag, &blocks, &b, forcing.max(crate::defaults::PCG_TOLERANCE), crate::defaults::VELOCITY_FORM_MAX_ITERATIONS, &mut x)?;
+    let iterations = inverse.solve(
+        &free,
+        &diag,
+        &blocks,
+        &b,
+        forcing.max(crate::defaults::PCG_TOLERANCE),
+        crate::defaults::VELOCITY_FORM_MAX_ITERATIONS,
+        &mut x,
+    )?;
     step.factors.record_velocity_solve(iterations);
     for &l in &free {
         dy[l] = x[l];
@@ -654,7 +709,16 @@ fn velocity_direction(
 /// kept and reused by `step.factors` (exactly while U, D and the frames hold; as the
 /// preconditioner of conjugate gradients while U holds). Returns the unknown of each component
 /// (Δm on P, Δy elsewhere), None when W'_UU + D is not numerically positive definite.
-fn reduced_direction(step: &StepData, frames: &SlipFrames, f: &[f64], prescribed: &[bool], g: &[f64], dy: &[f64], dm: &[f64], forcing: f64) -> Option<Vec<f64>> {
+fn reduced_direction(
+    step: &StepData,
+    frames: &SlipFrames,
+    f: &[f64],
+    prescribed: &[bool],
+    g: &[f64],
+    dy: &[f64],
+    dm: &[f64],
+    forcing: f64,
+) -> Option<Vec<f64>> {
     let m = step.m();
     let w = step.delassus;
     let omega = |l: usize| step.nodes[step.node_of(l)].omega;
@@ -767,10 +831,13 @@ fn line_search(step: &StepData, s: &FrictionBound, p: &Params, x: Iterate, dy: &
     let (n, m) = (step.n(), step.m());
     let at = |alpha: f64| {
         let y: Vec<f64> = (0..m).map(|l| x.y[l] + alpha * dy[l]).collect();
-        let lambda: Vec<f64> =
-            (0..n).map(|i| if step.nodes[i].bound.is_some() { x.lambda[i] + alpha * dm[step.nu(i)] } else { 0.0 }).collect();
+        let lambda: Vec<f64> = (0..n)
+            .map(|i| if step.nodes[i].bound.is_some() { x.lambda[i] + alpha * dm[step.nu(i)] } else { 0.0 })
+            .collect();
         let td = step.tdim();
-        let t: Vec<f64> = (0..n * td).map(|l| if step.friction { x.t[l] + alpha * dm[step.tau_j(l / td, l % td)] } else { 0.0 }).collect();
+        let t: Vec<f64> = (0..n * td)
+            .map(|l| if step.friction { x.t[l] + alpha * dm[step.tau_j(l / td, l % td)] } else { 0.0 })
+            .collect();
         let f = residual(step, s, p, &y, &lambda, &t);
         Iterate { y, lambda, t, f }
     };

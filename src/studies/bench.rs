@@ -34,11 +34,11 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::output::plots::PALETTE;
 use crate::failure::ContactFailure;
-use crate::model::kinds::{self, InnerSolver, MassKind, SchemeKind};
 use crate::model::Model;
-use crate::output::{write_atomic, ModelInfo};
+use crate::model::kinds::{self, InnerSolver, MassKind, SchemeKind};
+use crate::output::plots::PALETTE;
+use crate::output::{ModelInfo, write_atomic};
 use crate::problem::Problem;
 use crate::scene::Scene;
 use crate::simulation::Simulation;
@@ -46,7 +46,7 @@ use crate::step::fixed_point::Inner;
 use crate::step::newton::NewtonSettings;
 
 use super::convergence::{
-    displacement_error, force_errors, impulse_error, joint_levels, probe_dofs, simulate, Level, RunStats, Trajectory,
+    Level, RunStats, Trajectory, displacement_error, force_errors, impulse_error, joint_levels, probe_dofs, simulate,
 };
 use super::harness::{self, loglog_slope};
 
@@ -156,7 +156,15 @@ struct RunSpec {
 
 impl RunSpec {
     fn label(&self) -> String {
-        format!("{}/{}/{} {}x{} k={:e}", kinds::name(&self.scheme), kinds::name(&self.inner), kinds::name(&self.mass), self.level.cells[0], self.level.cells[1], self.level.k)
+        format!(
+            "{}/{}/{} {}x{} k={:e}",
+            kinds::name(&self.scheme),
+            kinds::name(&self.inner),
+            kinds::name(&self.mass),
+            self.level.cells[0],
+            self.level.cells[1],
+            self.level.k
+        )
     }
 
     /// The academic scene at this configuration, shortened to `t_end`, validated.
@@ -196,7 +204,6 @@ impl WorkRow {
         (self.spec.scheme, self.spec.inner, self.spec.mass)
     }
 }
-
 
 /// Run one configuration and measure its errors against the reference; a failed run becomes a
 /// row whose status says why (the conic twin can stall, and that is a result).
@@ -313,7 +320,13 @@ fn group_color(r: &WorkRow) -> RGBColor {
 type Measure = fn(&WorkRow) -> f64;
 
 /// One log–log panel of work_precision.svg: `error` of each group against wall time.
-fn work_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, rows: &[WorkRow], error: Measure, y_desc: &str, legend: bool) -> Result<()> {
+fn work_panel(
+    area: &DrawingArea<SVGBackend<'_>, Shift>,
+    rows: &[WorkRow],
+    error: Measure,
+    y_desc: &str,
+    legend: bool,
+) -> Result<()> {
     let err = harness::chart_error("work_precision.svg");
     let ok: Vec<&WorkRow> = rows.iter().filter(|r| r.ok()).collect();
     let (x0, x1) = harness::log_range(ok.iter().map(|r| r.stats.wall_time_s));
@@ -334,7 +347,12 @@ fn work_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, rows: &[WorkRow], error
         .draw()
         .map_err(|e| err(&e))?;
     for g in groups(rows) {
-        let pts: Vec<(f64, f64)> = g.iter().filter(|r| r.ok()).map(|r| (r.stats.wall_time_s, error(r))).filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.1.is_finite()).collect();
+        let pts: Vec<(f64, f64)> = g
+            .iter()
+            .filter(|r| r.ok())
+            .map(|r| (r.stats.wall_time_s, error(r)))
+            .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.1.is_finite())
+            .collect();
         if pts.is_empty() {
             continue;
         }
@@ -377,8 +395,20 @@ fn work_svg(rows: &[WorkRow], title: &str) -> Result<String> {
         root.fill(&WHITE).map_err(|e| err(&e))?;
         let root = root.titled(title, ("sans-serif", 20)).map_err(|e| err(&e))?;
         let panels = root.split_evenly((1, 3));
-        work_panel(&panels[0], rows, |r| r.error_force[0], "contact force (F_ν, F_τ) per step: relative L² error", true)?;
-        work_panel(&panels[1], rows, |r| r.error_impulse, "force averaged over the coarsest step: relative L² error", false)?;
+        work_panel(
+            &panels[0],
+            rows,
+            |r| r.error_force[0],
+            "contact force (F_ν, F_τ) per step: relative L² error",
+            true,
+        )?;
+        work_panel(
+            &panels[1],
+            rows,
+            |r| r.error_impulse,
+            "force averaged over the coarsest step: relative L² error",
+            false,
+        )?;
         work_panel(&panels[2], rows, |r| r.error_disp, "probe displacements: relative L² error", false)?;
         root.present().map_err(|e| err(&e))?;
     }
@@ -419,13 +449,20 @@ fn race_model(race: &RacePlan, decay: f64, k: f64, inner: InnerSolver) -> Result
     s.time.end = race.t_end;
     s.time.step = k;
     s.solver.inner = inner;
-    s.contact.as_mut().ok_or_else(|| Error::scene("contact", "the race needs the academic scene's contact"))?.friction.decay = Some(decay);
+    s.contact
+        .as_mut()
+        .ok_or_else(|| Error::scene("contact", "the race needs the academic scene's contact"))?
+        .friction
+        .decay = Some(decay);
     s.validate()
 }
 
 /// The scene's own friction decay α (the race's base law).
 fn base_decay() -> Result<f64> {
-    Scene::default_scene().contact.and_then(|c| c.friction.decay).ok_or_else(|| Error::scene("contact.friction.decay", "the race needs an exponential law"))
+    Scene::default_scene()
+        .contact
+        .and_then(|c| c.friction.decay)
+        .ok_or_else(|| Error::scene("contact.friction.decay", "the race needs an exponential law"))
 }
 
 /// The largest step 1e-3 / 2^j inside the (C.k) limit (a whole number of steps over T).
@@ -484,9 +521,13 @@ fn agreement(p: &Problem) -> Result<Agreement> {
         {
             let sim = steps.simulation();
             let (v_free, _) = sim.free_velocity();
-            let (data, p_hat) = sim.step_data(c.restrict(&v_free)).ok_or_else(|| Error::Output("bench race: no contact data".into()))?;
-            let (f1, _, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).map_err(inner_failure)?;
-            let (un, _, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).map_err(inner_failure)?;
+            let (data, p_hat) = sim
+                .step_data(c.restrict(&v_free))
+                .ok_or_else(|| Error::Output("bench race: no contact data".into()))?;
+            let (f1, _, _) =
+                sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).map_err(inner_failure)?;
+            let (un, _, _) =
+                sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).map_err(inner_failure)?;
             let vs = data.velocity_scale(&f1.y).max(1e-300);
             let (ra, rb) = (data.forces(&f1.y, &f1.lambda, &f1.t), data.forces(&un.y, &un.lambda, &un.t));
             let fs = crate::linalg::norm_inf(&ra).max(1e-300);
@@ -571,9 +612,18 @@ fn race_csv(rows: &[RaceRow]) -> String {
 }
 
 /// One bar panel of race.csv: `value` per case, F.1 and N.4 side by side.
-fn race_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, rows: &[RaceRow], value: fn(&RaceRow) -> f64, y_desc: &str) -> Result<()> {
+fn race_panel(
+    area: &DrawingArea<SVGBackend<'_>, Shift>,
+    rows: &[RaceRow],
+    value: fn(&RaceRow) -> f64,
+    y_desc: &str,
+) -> Result<()> {
     let err = harness::chart_error("race.svg");
-    let labels: Vec<String> = rows.iter().step_by(2).map(|r| format!("{}{}", r.case.label, if r.inside() == Some(true) { " (C.k)" } else { "" })).collect();
+    let labels: Vec<String> = rows
+        .iter()
+        .step_by(2)
+        .map(|r| format!("{}{}", r.case.label, if r.inside() == Some(true) { " (C.k)" } else { "" }))
+        .collect();
     let y1 = rows.iter().map(value).filter(|v| v.is_finite()).fold(0.0f64, f64::max).max(1e-12) * 1.15;
     let n = labels.len();
     let mut chart = ChartBuilder::on(area)
@@ -585,7 +635,11 @@ fn race_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, rows: &[RaceRow], value
         .map_err(|e| err(&e))?;
     let fmt = |v: &f64| {
         let i = v.round();
-        if (v - i).abs() < 1e-6 && i >= 0.0 { labels.get(i as usize).cloned().unwrap_or_default() } else { String::new() }
+        if (v - i).abs() < 1e-6 && i >= 0.0 {
+            labels.get(i as usize).cloned().unwrap_or_default()
+        } else {
+            String::new()
+        }
     };
     chart
         .configure_mesh()
@@ -596,14 +650,18 @@ fn race_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, rows: &[RaceRow], value
         .y_desc(y_desc)
         .draw()
         .map_err(|e| err(&e))?;
-    for (m, (method, color)) in [(InnerSolver::Newton, PALETTE[0]), (InnerSolver::NewtonUnfrozen, PALETTE[1])].into_iter().enumerate() {
+    for (m, (method, color)) in
+        [(InnerSolver::Newton, PALETTE[0]), (InnerSolver::NewtonUnfrozen, PALETTE[1])].into_iter().enumerate()
+    {
         let x_off = if m == 0 { -0.38 } else { 0.02 };
         let bars: Vec<Rectangle<(f64, f64)>> = rows
             .iter()
             .filter(|r| r.method == method)
             .enumerate()
             .filter(|(_, r)| value(r).is_finite())
-            .map(|(i, r)| Rectangle::new([(i as f64 + x_off, 0.0), (i as f64 + x_off + 0.36, value(r))], color.filled()))
+            .map(|(i, r)| {
+                Rectangle::new([(i as f64 + x_off, 0.0), (i as f64 + x_off + 0.36, value(r))], color.filled())
+            })
             .collect();
         let name = if method == InnerSolver::Newton { "newton (F.1)" } else { "newton-unfrozen (N.4)" };
         chart
@@ -655,12 +713,25 @@ fn work_report(plan: &Plan, rows: &[WorkRow], ref_stats: &RunStats) -> String {
         plan.t_end, r.cells[0], r.cells[1], r.k, ref_stats.steps, ref_stats.wall_time_s
     );
     if plan.inners.contains(&InnerSolver::Conic) && plan.conic_levels < plan.levels.len() {
-        let _ = writeln!(s, "conic runs only on the {} coarsest levels (it is ~30x slower than newton)", plan.conic_levels);
+        let _ =
+            writeln!(s, "conic runs only on the {} coarsest levels (it is ~30x slower than newton)", plan.conic_levels);
     }
     let _ = writeln!(
         s,
         "{:<38} {:>6} {:>9} {:>8} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>6}",
-        "run", "steps", "wall[s]", "step[ms]", "floor[ms]", "step/flr", "e_force", "e_Fn", "e_Ft", "e_imp", "e_disp", "newton", "fp"
+        "run",
+        "steps",
+        "wall[s]",
+        "step[ms]",
+        "floor[ms]",
+        "step/flr",
+        "e_force",
+        "e_Fn",
+        "e_Ft",
+        "e_imp",
+        "e_disp",
+        "newton",
+        "fp"
     );
     for w in rows {
         let st = &w.stats;
@@ -699,7 +770,8 @@ fn work_report(plan: &Plan, rows: &[WorkRow], ref_stats: &RunStats) -> String {
          is one level finer, so for the reference's own scheme the last pair is biased upward by -log2(1 - 2^-p):"
     );
     let list = |v: &[f64]| v.iter().map(|x| format!("{x:5.2}")).collect::<Vec<_>>().join(" ");
-    let measures: [(&str, Measure); 3] = [("force", |r| r.error_force[0]), ("impulse", |r| r.error_impulse), ("disp", |r| r.error_disp)];
+    let measures: [(&str, Measure); 3] =
+        [("force", |r| r.error_force[0]), ("impulse", |r| r.error_impulse), ("disp", |r| r.error_disp)];
     for g in groups(rows) {
         let parts: Vec<String> = measures
             .iter()
@@ -724,7 +796,19 @@ fn race_report(race: &RacePlan, rows: &[RaceRow]) -> String {
     let _ = writeln!(
         s,
         "{:<22} {:>10} {:>7} {:<16} {:>9} {:>11} {:>9} {:>7} {:>8} {:>9} {:>9} {:>9} {:>5}",
-        "case", "(C.k) k<=", "inside", "method", "step[ms]", "contact[ms]", "newton/st", "fp/st", "unfrozen", "fallbacks", "max|dy|", "max|dr|", "diff"
+        "case",
+        "(C.k) k<=",
+        "inside",
+        "method",
+        "step[ms]",
+        "contact[ms]",
+        "newton/st",
+        "fp/st",
+        "unfrozen",
+        "fallbacks",
+        "max|dy|",
+        "max|dr|",
+        "diff"
     );
     for r in rows {
         let st = &r.stats;
@@ -785,7 +869,10 @@ fn floor_runs(plan: &Plan) -> Result<Vec<FloorRun>> {
 fn floor_runs_3d(plan: &Plan) -> Result<(Vec<FloorRun>, Vec<FloorRun>)> {
     let academic = Scene::from_toml(include_str!("../../fixtures/scenes/academic3d.toml"), "academic3d.toml")?;
     let block = Scene::from_toml(include_str!("../../fixtures/scenes/sliding_block3d.toml"), "sliding_block3d.toml")?;
-    Ok((floor_runs_of(plan.floor3d_repeats, plan.floor3d_end, academic)?, floor_runs_of(plan.floor_repeats, plan.floor_end, block)?))
+    Ok((
+        floor_runs_of(plan.floor3d_repeats, plan.floor3d_end, academic)?,
+        floor_runs_of(plan.floor_repeats, plan.floor_end, block)?,
+    ))
 }
 
 /// floor3d.csv (both 3-D scenes, a `scene` column first) and their printed lines.
@@ -812,14 +899,21 @@ fn floor_runs_of(repeats: usize, end: Option<f64>, mut scene: Scene) -> Result<V
         .map(|_| {
             let (_, stats) = simulate(&p, &[])?;
             let steps = stats.steps as f64;
-            Ok(FloorRun { per_step: stats.step_time_s / steps, floor: stats.floor_s, contact_per_step: stats.contact_time_s / steps, stats })
+            Ok(FloorRun {
+                per_step: stats.step_time_s / steps,
+                floor: stats.floor_s,
+                contact_per_step: stats.contact_time_s / steps,
+                stats,
+            })
         })
         .collect()
 }
 
 /// floor.csv and the printed lines of the floor part: min and median over the repetitions.
 fn floor_report(runs: &[FloorRun], what: &str) -> (String, String) {
-    let mut csv = String::from("run,steps,time_per_step_s,floor_s,ratio_to_floor,contact_per_step_s,newton_iterations,fixed_point_iterations,factorizations,factor_reuses\n");
+    let mut csv = String::from(
+        "run,steps,time_per_step_s,floor_s,ratio_to_floor,contact_per_step_s,newton_iterations,fixed_point_iterations,factorizations,factor_reuses\n",
+    );
     for (i, r) in runs.iter().enumerate() {
         let st = &r.stats;
         let _ = writeln!(
@@ -879,7 +973,11 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     let clock = Instant::now();
     let plan = if opts.quick { Plan::quick() } else { Plan::full() };
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    let bk_plan = if opts.quick { super::bookkeeping::BookkeepingPlan::quick() } else { super::bookkeeping::BookkeepingPlan::full() };
+    let bk_plan = if opts.quick {
+        super::bookkeeping::BookkeepingPlan::quick()
+    } else {
+        super::bookkeeping::BookkeepingPlan::full()
+    };
     if opts.bookkeeping_only {
         let rows = super::bookkeeping::run_part(&bk_plan, out)?;
         write(out, "bookkeeping.csv", &super::bookkeeping::csv(&rows))?;
@@ -893,7 +991,12 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
         return Ok(floor_text + &text3);
     }
 
-    let reference_spec = RunSpec { scheme: SchemeKind::Midpoint, inner: InnerSolver::Newton, mass: MassKind::Lumped, level: plan.reference };
+    let reference_spec = RunSpec {
+        scheme: SchemeKind::Midpoint,
+        inner: InnerSolver::Newton,
+        mass: MassKind::Lumped,
+        level: plan.reference,
+    };
     progress(&format!("reference {}", reference_spec.label()));
     let p_ref = Problem::new(reference_spec.model(plan.t_end)?, Path::new("."))?;
     let (reference, ref_stats) = simulate(&p_ref, &probe_dofs(&p_ref)?)?;
@@ -915,7 +1018,8 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     write(out, "floor3d.csv", &csv3)?;
     let floor_text = floor_text + &text3;
 
-    let scaling_plan = if opts.quick { super::scaling::ScalingPlan::quick() } else { super::scaling::ScalingPlan::full() };
+    let scaling_plan =
+        if opts.quick { super::scaling::ScalingPlan::quick() } else { super::scaling::ScalingPlan::full() };
     let scaling_rows = super::scaling::run(&scaling_plan, &progress)?;
     write(out, "scaling.csv", &super::scaling::csv(&scaling_rows))?;
     write(out, "scaling.svg", &super::scaling::svg(&scaling_rows, &scaling_plan)?)?;
@@ -930,7 +1034,8 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
         race.extend(race_rows(&plan.race, &case)?);
     }
     write(out, "race.csv", &race_csv(&race))?;
-    let title = format!("F.1 vs N.4, academic scene {}x{}, T = {} s", plan.race.cells[0], plan.race.cells[1], plan.race.t_end);
+    let title =
+        format!("F.1 vs N.4, academic scene {}x{}, T = {} s", plan.race.cells[0], plan.race.cells[1], plan.race.t_end);
     write(out, "race.svg", &race_svg(&race, &title)?)?;
 
     let mut report = work_report(&plan, &rows, &ref_stats);
@@ -942,8 +1047,12 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     report.push_str(&super::bookkeeping::report(&bk_rows));
     report.push('\n');
     report.push_str(&race_report(&plan.race, &race));
-    let _ = writeln!(report, "\ntotal benchmark wall time {:.1} s; outputs in {}", clock.elapsed().as_secs_f64(), out.display());
+    let _ = writeln!(
+        report,
+        "\ntotal benchmark wall time {:.1} s; outputs in {}",
+        clock.elapsed().as_secs_f64(),
+        out.display()
+    );
     write(out, "report.txt", &report)?;
     Ok(report)
 }
-

@@ -11,7 +11,7 @@ use std::path::Path;
 use crate::error::Result;
 use crate::output::summary::Timing;
 use crate::problem::Problem;
-use crate::run::{run, RunOptions};
+use crate::run::{RunOptions, run};
 use crate::scene::Scene;
 
 /// Cells, horizon and repetitions of the part.
@@ -63,7 +63,14 @@ pub fn run_part(plan: &BookkeepingPlan, out: &Path) -> Result<Vec<BookkeepingRow
     scene.contact = None;
     scene.time.end = plan.end;
     let p = Problem::from_scene(&scene, Path::new("."))?;
-    let opts = RunOptions { out: out.join("bookkeeping-run"), progress: false, checkpoint_every: None, resume: false, stop_after: None, interrupt: None };
+    let opts = RunOptions {
+        out: out.join("bookkeeping-run"),
+        progress: false,
+        checkpoint_every: None,
+        resume: false,
+        stop_after: None,
+        interrupt: None,
+    };
     (0..plan.repeats)
         .map(|_| {
             let s = run(&p, &opts)?;
@@ -73,7 +80,9 @@ pub fn run_part(plan: &BookkeepingPlan, out: &Path) -> Result<Vec<BookkeepingRow
 }
 
 pub fn csv(rows: &[BookkeepingRow]) -> String {
-    let mut s = String::from("run,unknowns,steps,step_s,free_solve_s,products_s,balance_s,output_s,share_balance_output,share_with_products\n");
+    let mut s = String::from(
+        "run,unknowns,steps,step_s,free_solve_s,products_s,balance_s,output_s,share_balance_output,share_with_products\n",
+    );
     for (i, r) in rows.iter().enumerate() {
         let t = &r.timing;
         let _ = writeln!(

@@ -16,7 +16,7 @@ use crate::model::kinds::{self, BoundAt, FrictionBound};
 use crate::problem::Problem;
 use crate::scene::{NumOrStr, Scene};
 
-use super::convergence::{relative_l2, simulate, step_ratio, steps_in, window_means, Trajectory};
+use super::convergence::{Trajectory, relative_l2, simulate, step_ratio, steps_in, window_means};
 use super::harness::{self, loglog_slope};
 
 /// The compliances of the study.
@@ -38,7 +38,8 @@ struct Case {
     t_end: f64,
 }
 
-const CASES: [Case; 2] = [Case { name: "academic", k0: 1e-3, t_end: 0.4 }, Case { name: "block", k0: 1e-3, t_end: 0.2 }];
+const CASES: [Case; 2] =
+    [Case { name: "academic", k0: 1e-3, t_end: 0.4 }, Case { name: "block", k0: 1e-3, t_end: 0.2 }];
 
 /// One row of bound_at.csv.
 #[derive(Debug, Clone)]
@@ -86,13 +87,17 @@ fn trajectory(case: &Case, c: f64, k: f64, at: BoundAt) -> Result<(Trajectory, f
 /// Relative L² error of the tangential impulses over windows of `window`.
 fn tangential_impulse_error(run: &Trajectory, reference: &Trajectory, window: f64) -> Result<f64> {
     step_ratio(run, reference)?;
-    let (a, b) = (window_means(&run.forces, steps_in(window, run.k)?), window_means(&reference.forces, steps_in(window, reference.k)?));
+    let (a, b) = (
+        window_means(&run.forces, steps_in(window, run.k)?),
+        window_means(&reference.forces, steps_in(window, reference.k)?),
+    );
     Ok(relative_l2(&a, &b)[2])
 }
 
 /// The study's rows.
 pub fn rows(opts: &BoundAtOptions) -> Result<Vec<BoundAtRow>> {
-    let (compliances, levels): (Vec<f64>, usize) = if opts.quick { (vec![1e3, 1e7], 2) } else { (COMPLIANCES.to_vec(), 3) };
+    let (compliances, levels): (Vec<f64>, usize) =
+        if opts.quick { (vec![1e3, 1e7], 2) } else { (COMPLIANCES.to_vec(), 3) };
     let mut rows = Vec::new();
     for case in &CASES {
         for &c in &compliances {
@@ -124,7 +129,8 @@ pub struct LimitRow {
 /// The Signorini–Coulomb limit of the block at k0/4 (k0/2 in the quick study).
 pub fn signorini_limit(opts: &BoundAtOptions) -> Result<Vec<LimitRow>> {
     let case = &CASES[1];
-    let (compliances, k) = if opts.quick { (vec![1e3, 1e7], case.k0 / 2.0) } else { (COMPLIANCES.to_vec(), case.k0 / 4.0) };
+    let (compliances, k) =
+        if opts.quick { (vec![1e3, 1e7], case.k0 / 2.0) } else { (COMPLIANCES.to_vec(), case.k0 / 4.0) };
     let mut limit_scene = scene(case, 0.0, k, BoundAt::Predictor)?;
     if let Some(c) = limit_scene.contact.as_mut() {
         c.penetration_bound = NumOrStr::Num(0.0);
@@ -173,13 +179,19 @@ fn order(s: &[&BoundAtRow]) -> f64 {
 /// report.txt: per case and compliance, the errors at the finest k and the orders of both points;
 /// then the block's distance to its Signorini–Coulomb limit.
 pub fn report(rows: &[BoundAtRow], limit: &[LimitRow], wall_time_s: f64) -> String {
-    let mut s = String::from("friction_bound_at study: tangential impulse error against a k0/16 reference (bound at the iterate)\n");
-    s.push_str(&format!("{:<9} {:>8} {:>14} {:>8} {:>14} {:>8}\n", "case", "c_nu", "predictor err", "order", "midpoint err", "order"));
+    let mut s = String::from(
+        "friction_bound_at study: tangential impulse error against a k0/16 reference (bound at the iterate)\n",
+    );
+    s.push_str(&format!(
+        "{:<9} {:>8} {:>14} {:>8} {:>14} {:>8}\n",
+        "case", "c_nu", "predictor err", "order", "midpoint err", "order"
+    ));
     for case in &CASES {
         let mut cs: Vec<f64> = rows.iter().filter(|r| r.case == case.name).map(|r| r.compliance).collect();
         cs.dedup();
         for c in cs {
-            let (p, m) = (series(rows, case.name, c, BoundAt::Predictor), series(rows, case.name, c, BoundAt::Midpoint));
+            let (p, m) =
+                (series(rows, case.name, c, BoundAt::Predictor), series(rows, case.name, c, BoundAt::Midpoint));
             let last = |v: &[&BoundAtRow]| v.last().map_or(f64::NAN, |r| r.error_tangential);
             s.push_str(&format!(
                 "{:<9} {:>8.0e} {:>14.3e} {:>8.2} {:>14.3e} {:>8.2}\n",
@@ -212,7 +224,12 @@ pub fn svg(rows: &[BoundAtRow]) -> Result<String> {
         for at in [BoundAt::Predictor, BoundAt::Midpoint] {
             series.push(harness::LogSeries {
                 name: format!("{}, {}", case.name, kinds::name(&at)),
-                points: rows.iter().filter(finest).filter(|r| r.case == case.name && r.at == at).map(|r| (r.compliance, r.error_tangential)).collect(),
+                points: rows
+                    .iter()
+                    .filter(finest)
+                    .filter(|r| r.case == case.name && r.at == at)
+                    .map(|r| (r.compliance, r.error_tangential))
+                    .collect(),
             });
         }
     }
@@ -229,7 +246,9 @@ pub fn run(out: &Path, opts: &BoundAtOptions) -> Result<String> {
     let svg = svg(&rows)?;
     let limit_csv = harness::csv_table(
         "compliance,bound_at,k,distance_tangential_impulse",
-        limit.iter().map(|r| vec![format!("{:e}", r.compliance), kinds::name(&r.at), format!("{:e}", r.k), format!("{:.6e}", r.distance)]),
+        limit.iter().map(|r| {
+            vec![format!("{:e}", r.compliance), kinds::name(&r.at), format!("{:e}", r.k), format!("{:.6e}", r.distance)]
+        }),
     );
     harness::write_files(
         out,

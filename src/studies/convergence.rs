@@ -66,8 +66,12 @@ pub(super) fn probe_dofs(p: &Problem) -> Result<Vec<[Option<usize>; 2]>> {
     PROBES
         .iter()
         .map(|x| {
-            let node = (0..p.mesh.n_nodes()).map(|i| p.mesh.point(i)).position(|y| (y[0] - x[0]).abs() <= tol && (y[1] - x[1]).abs() <= tol && y[2] == 0.0);
-            let node = node.ok_or_else(|| Error::Output(format!("bench: the probe point ({}, {}) is not a mesh node", x[0], x[1])))?;
+            let node = (0..p.mesh.n_nodes())
+                .map(|i| p.mesh.point(i))
+                .position(|y| (y[0] - x[0]).abs() <= tol && (y[1] - x[1]).abs() <= tol && y[2] == 0.0);
+            let node = node.ok_or_else(|| {
+                Error::Output(format!("bench: the probe point ({}, {}) is not a mesh node", x[0], x[1]))
+            })?;
             Ok([p.dofs.map[2 * node], p.dofs.map[2 * node + 1]])
         })
         .collect()
@@ -136,14 +140,17 @@ pub(super) fn steps_in(span: f64, k: f64) -> Result<usize> {
 /// How many reference steps make one step of `run`, checking the reference covers the run.
 pub(super) fn step_ratio(run: &Trajectory, reference: &Trajectory) -> Result<usize> {
     let n = steps_in(run.k, reference.k)?;
-    (run.forces.len() * n <= reference.forces.len())
-        .then_some(n)
-        .ok_or_else(|| Error::Output(format!("bench: the reference (k = {}) is shorter than the run (k = {})", reference.k, run.k)))
+    (run.forces.len() * n <= reference.forces.len()).then_some(n).ok_or_else(|| {
+        Error::Output(format!("bench: the reference (k = {}) is shorter than the run (k = {})", reference.k, run.k))
+    })
 }
 
 /// Means of a force history over consecutive windows of `m` steps (a trailing partial window is dropped).
 pub(super) fn window_means(forces: &[[f64; 2]], m: usize) -> Vec<[f64; 2]> {
-    forces.chunks_exact(m.max(1)).map(|w| [0, 1].map(|c| w.iter().map(|f| f[c]).sum::<f64>() / w.len() as f64)).collect()
+    forces
+        .chunks_exact(m.max(1))
+        .map(|w| [0, 1].map(|c| w.iter().map(|f| f[c]).sum::<f64>() / w.len() as f64))
+        .collect()
 }
 
 /// Relative L² distances of a force history from a reference one on the same time grid (the
@@ -173,7 +180,10 @@ pub(super) fn force_errors(run: &Trajectory, reference: &Trajectory) -> Result<[
 /// weak measure: chatter within a window averages out, as a time-averaged reading of the force.
 pub(super) fn impulse_error(run: &Trajectory, reference: &Trajectory, window: f64) -> Result<f64> {
     step_ratio(run, reference)?;
-    let (a, b) = (window_means(&run.forces, steps_in(window, run.k)?), window_means(&reference.forces, steps_in(window, reference.k)?));
+    let (a, b) = (
+        window_means(&run.forces, steps_in(window, run.k)?),
+        window_means(&reference.forces, steps_in(window, reference.k)?),
+    );
     Ok(relative_l2(&a, &b)[0])
 }
 

@@ -9,7 +9,8 @@ use crate::output::write_atomic;
 /// Least-squares slope of log10(y) against log10(x) over the positive pairs (NaN with fewer
 /// than two).
 pub fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
-    let pts: Vec<(f64, f64)> = x.iter().zip(y).filter(|(a, b)| **a > 0.0 && **b > 0.0).map(|(a, b)| (a.log10(), b.log10())).collect();
+    let pts: Vec<(f64, f64)> =
+        x.iter().zip(y).filter(|(a, b)| **a > 0.0 && **b > 0.0).map(|(a, b)| (a.log10(), b.log10())).collect();
     let n = pts.len() as f64;
     if pts.len() < 2 {
         return f64::NAN;
@@ -43,7 +44,8 @@ pub fn chart_error(file: &'static str) -> impl Fn(&dyn std::fmt::Display) -> Err
 
 /// A padded log-scale range of the positive finite values (a decade when there are none).
 pub fn log_range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (lo, hi) = vals.filter(|v| v.is_finite() && *v > 0.0).fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) =
+        vals.filter(|v| v.is_finite() && *v > 0.0).fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
     if lo.is_finite() { (lo / 1.6, hi * 1.6) } else { (0.1, 1.0) }
 }
 
@@ -64,7 +66,13 @@ pub struct LogSeries {
 
 /// A log–log line chart with markers (the studies' error charts): `pad` widens the axes by that
 /// factor on each side of the data. An error names `file` when no point is positive.
-pub fn loglog_chart(file: &'static str, title: &str, (x_desc, y_desc): (&str, &str), series: &[LogSeries], pad: (f64, f64)) -> Result<String> {
+pub fn loglog_chart(
+    file: &'static str,
+    title: &str,
+    (x_desc, y_desc): (&str, &str),
+    series: &[LogSeries],
+    pad: (f64, f64),
+) -> Result<String> {
     use plotters::prelude::*;
     let err = chart_error(file);
     let pos = |p: &(f64, f64)| p.0.is_finite() && p.0 > 0.0 && p.1.is_finite() && p.1 > 0.0;

@@ -102,12 +102,24 @@ pub fn sweep_file(eps_list: Option<&[f64]>) -> Result<SweepFile> {
 /// Run the study: the sweep of the ε list (default: the file's) on `base` with `overrides`,
 /// its points in `work` (`jobs` at once; points completed earlier with the same scene are
 /// skipped), then the collector. The scene must have contact with a finite penetration bound.
-pub fn penalty_study(base: &Base, overrides: &[Override], eps_list: Option<&[f64]>, work: &Path, jobs: usize) -> Result<PenaltyStudy> {
+pub fn penalty_study(
+    base: &Base,
+    overrides: &[Override],
+    eps_list: Option<&[f64]>,
+    work: &Path,
+    jobs: usize,
+) -> Result<PenaltyStudy> {
     let sweep = sweep_file(eps_list)?;
     let scene = crate::sweep::scene_for(&sweep, base, overrides)?;
-    let c = scene.contact.as_ref().ok_or_else(|| Error::scene("contact", "the penalty study needs a scene with contact"))?;
+    let c = scene
+        .contact
+        .as_ref()
+        .ok_or_else(|| Error::scene("contact", "the penalty study needs a scene with contact"))?;
     if Scene::bound_of(c)? == Bound::Infinite {
-        return Err(Error::scene("contact.penetration_bound", "the penalty study needs a finite g (it penalizes u_ν > g)"));
+        return Err(Error::scene(
+            "contact.penetration_bound",
+            "the penalty study needs a finite g (it penalizes u_ν > g)",
+        ));
     }
     let plan = Plan::resolve_with(&sweep, base, overrides)?;
     let done = plan.write(work)?;
@@ -120,12 +132,17 @@ pub fn penalty_study(base: &Base, overrides: &[Override], eps_list: Option<&[f64
 pub fn collect(plan: &Plan, dir: &Path) -> Result<PenaltyStudy> {
     let axis = &plan.axes[0];
     let point = |label: &str| plan.points.iter().find(|p| axis.labels[p.choice[0]] == label);
-    let exact_point = point(EXACT).ok_or_else(|| Error::Output(format!("{}: the sweep has no point {EXACT:?}", dir.display())))?;
+    let exact_point =
+        point(EXACT).ok_or_else(|| Error::Output(format!("{}: the sweep has no point {EXACT:?}", dir.display())))?;
     let exact_dir = Plan::point_dir(dir, &exact_point.id);
     let failed = |pd: &Path, id: &str| -> Result<()> {
         match crate::sweep::collect::point_status(pd).as_deref() {
             Some("completed") => Ok(()),
-            other => Err(Error::Output(format!("point {id} of the penalty study ended {:?}: see {}", other.unwrap_or("without a summary"), pd.join("summary.json").display()))),
+            other => Err(Error::Output(format!(
+                "point {id} of the penalty study ended {:?}: see {}",
+                other.unwrap_or("without a summary"),
+                pd.join("summary.json").display()
+            ))),
         }
     };
     failed(&exact_dir, &exact_point.id)?;
@@ -136,18 +153,23 @@ pub fn collect(plan: &Plan, dir: &Path) -> Result<PenaltyStudy> {
     };
     let (kv, mh) = norm_matrices(&exact)?;
     // the reference trajectory: every step after t = 0
-    let reference: Vec<TrajectoryRecord> = trajectory::read(&exact_dir.join("trajectory.f64"))?.into_iter().skip(1).collect();
+    let reference: Vec<TrajectoryRecord> =
+        trajectory::read(&exact_dir.join("trajectory.f64"))?.into_iter().skip(1).collect();
     let reference_wall_time_s = wall_time(&exact_dir);
     let u_max = reference.iter().map(|r| norm(&kv, &r.u)).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
     let v_max = reference.iter().map(|r| norm(&mh, &r.v)).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
     let mut rows = Vec::new();
     for p in plan.points.iter().filter(|p| axis.labels[p.choice[0]] != EXACT) {
         let label = &axis.labels[p.choice[0]];
-        let eps: f64 = label.parse().map_err(|_| Error::Output(format!("point {}: the ε label {label:?} is not a number", p.id)))?;
+        let eps: f64 = label
+            .parse()
+            .map_err(|_| Error::Output(format!("point {}: the ε label {label:?} is not a number", p.id)))?;
         let pd = Plan::point_dir(dir, &p.id);
         failed(&pd, &p.id)?;
         let run = trajectory::read(&pd.join("trajectory.f64"))?;
-        let penetration = crate::sweep::collect::History::read(&pd.join("history.csv")).and_then(|h| h.numbers("max_penetration")).unwrap_or_default();
+        let penetration = crate::sweep::collect::History::read(&pd.join("history.csv"))
+            .and_then(|h| h.numbers("max_penetration"))
+            .unwrap_or_default();
         let (mut e_v, mut e_h, mut delta): (f64, f64, f64) = (0.0, 0.0, 0.0);
         for (n, r) in reference.iter().enumerate() {
             let Some(q) = run.get(n + 1) else { break };
@@ -211,6 +233,9 @@ impl PenaltyStudy {
     /// Write study/penalty.csv and study/penalty.svg under `dir`.
     pub fn write(&self, dir: &Path, title: &str) -> Result<()> {
         let svg = self.svg(title)?;
-        harness::write_files(&dir.join("study"), &[("penalty.csv", self.csv().as_bytes()), ("penalty.svg", svg.as_bytes())])
+        harness::write_files(
+            &dir.join("study"),
+            &[("penalty.csv", self.csv().as_bytes()), ("penalty.svg", svg.as_bytes())],
+        )
     }
 }

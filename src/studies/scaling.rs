@@ -14,7 +14,7 @@ use crate::problem::Problem;
 use crate::scene::Scene;
 
 use super::convergence::simulate;
-use super::harness::{self, loglog_slope, LogSeries};
+use super::harness::{self, LogSeries, loglog_slope};
 
 /// What the scaling part runs.
 #[derive(Debug, Clone)]
@@ -161,7 +161,10 @@ pub fn svg(rows: &[ScalingRow], plan: &ScalingPlan) -> Result<String> {
         LogSeries { name: "contact solve, dense W".into(), points: points(rows, "dense", |r| r.contact_per_step) },
         LogSeries { name: "contact solve, sparse W".into(), points: points(rows, "sparse", |r| r.contact_per_step) },
         LogSeries { name: "one A_k solve pair (free solve)".into(), points: points(rows, "sparse", |r| 0.5 * r.floor) },
-        LogSeries { name: format!("contact solve, 3-D box (friction on the disk, {} steps)", plan.steps_3d), points: points(rows, "3-D", |r| r.contact_per_step) },
+        LogSeries {
+            name: format!("contact solve, 3-D box (friction on the disk, {} steps)", plan.steps_3d),
+            points: points(rows, "3-D", |r| r.contact_per_step),
+        },
         LogSeries { name: "3-D: one A_k solve pair".into(), points: points(rows, "3-D", |r| 0.5 * r.floor) },
     ];
     let title = format!("contact solve per step, strips [n, 16] ({} steps of {}) and 3-D boxes", plan.steps, plan.k);
@@ -170,8 +173,14 @@ pub fn svg(rows: &[ScalingRow], plan: &ScalingPlan) -> Result<String> {
 
 /// The printed lines of the scaling part.
 pub fn report(rows: &[ScalingRow]) -> String {
-    let mut s = String::from("scaling: strips [n, 16] and 3-D boxes (form \"3-D\"), contact solve per step against the contact nodes\n");
-    let _ = writeln!(s, "{:>8} {:<7} {:>12} {:>12} {:>14} {:>12} {:>8}", "n_c", "form", "contact[ms]", "free[ms]", "contact/free", "W setup[s]", "factors");
+    let mut s = String::from(
+        "scaling: strips [n, 16] and 3-D boxes (form \"3-D\"), contact solve per step against the contact nodes\n",
+    );
+    let _ = writeln!(
+        s,
+        "{:>8} {:<7} {:>12} {:>12} {:>14} {:>12} {:>8}",
+        "n_c", "form", "contact[ms]", "free[ms]", "contact/free", "W setup[s]", "factors"
+    );
     for r in rows {
         let _ = writeln!(
             s,
@@ -186,6 +195,9 @@ pub fn report(rows: &[ScalingRow]) -> String {
         );
     }
     let (all, large) = sparse_slopes(rows);
-    let _ = writeln!(s, "sparse contact solve per step: log–log slope {all:.2} over the range, {large:.2} from 513 contact nodes on");
+    let _ = writeln!(
+        s,
+        "sparse contact solve per step: log–log slope {all:.2} over the range, {large:.2} from 513 contact nodes on"
+    );
     s
 }

@@ -212,8 +212,15 @@ pub enum Sweep {
 }
 
 impl Sweep {
-    pub const ALL: [Sweep; 7] =
-        [Sweep::Step, Sweep::Penalty, Sweep::Decay, Sweep::Impact, Sweep::Relaxation, Sweep::NewtonCap, Sweep::ElasticImpactPenalty];
+    pub const ALL: [Sweep; 7] = [
+        Sweep::Step,
+        Sweep::Penalty,
+        Sweep::Decay,
+        Sweep::Impact,
+        Sweep::Relaxation,
+        Sweep::NewtonCap,
+        Sweep::ElasticImpactPenalty,
+    ];
 
     /// Short name (CSV column `sweep`).
     pub fn key(self) -> &'static str {
@@ -607,8 +614,16 @@ pub fn cases(quick: bool) -> Vec<Case> {
 /// The map's sweep files (fixtures/sweeps/stability_*.toml) with their base scenes, embedded
 /// so the map runs from any folder: the academic scene's cases and the impact's.
 const SWEEPS: [(&str, &str, &str); 2] = [
-    ("stability_academic.toml", include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sweeps/stability_academic.toml")), crate::scene::DEFAULT_SCENE),
-    ("stability_impact.toml", include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sweeps/stability_impact.toml")), IMPACT_SCENE),
+    (
+        "stability_academic.toml",
+        include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sweeps/stability_academic.toml")),
+        crate::scene::DEFAULT_SCENE,
+    ),
+    (
+        "stability_impact.toml",
+        include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sweeps/stability_impact.toml")),
+        IMPACT_SCENE,
+    ),
 ];
 
 /// A case label of the sweep files, "<sweep key> <value>".
@@ -626,7 +641,11 @@ pub fn plans(quick: bool) -> Result<Vec<(SweepFile, Base, Plan)>> {
         let extra = if quick {
             // keep the cases whose value is among its sweep's quick values
             let case = &mut sweep.axes[0];
-            let keep: Vec<bool> = case.labels.iter().map(|l| parse_case(l).is_some_and(|(sw, v)| sw.quick_values().contains(&v))).collect();
+            let keep: Vec<bool> = case
+                .labels
+                .iter()
+                .map(|l| parse_case(l).is_some_and(|(sw, v)| sw.quick_values().contains(&v)))
+                .collect();
             let mut k = keep.iter();
             case.sets.retain(|_| *k.next().unwrap_or(&false));
             let mut k = keep.iter();
@@ -635,7 +654,11 @@ pub fn plans(quick: bool) -> Result<Vec<(SweepFile, Base, Plan)>> {
         } else {
             Vec::new()
         };
-        let base = Base { text: base_text.to_string(), label: format!("the base of fixtures/sweeps/{file}"), dir: std::path::PathBuf::from(".") };
+        let base = Base {
+            text: base_text.to_string(),
+            label: format!("the base of fixtures/sweeps/{file}"),
+            dir: std::path::PathBuf::from("."),
+        };
         let plan = Plan::resolve_with(&sweep, &base, &extra)?;
         out.push((sweep, base, plan));
     }
@@ -646,7 +669,8 @@ pub fn plans(quick: bool) -> Result<Vec<(SweepFile, Base, Plan)>> {
 /// earlier with the same scene are skipped) and read every point back as a [`RunResult`], with
 /// the refused values added: in the order of [`cases`].
 pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
-    let jobs = if opts.jobs == 0 { std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) } else { opts.jobs };
+    let jobs =
+        if opts.jobs == 0 { std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) } else { opts.jobs };
     let mut found: Vec<RunResult> = Vec::new();
     for (sweep, base, plan) in plans(opts.quick)? {
         let dir = out.join("sweeps").join(&plan.name);
@@ -656,7 +680,11 @@ pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
             let case_label = &plan.axes[0].labels[p.choice[0]];
             let variant_label = &plan.axes[1].labels[p.choice[1]];
             let (Some((sw, value)), Some(v)) = (parse_case(case_label), variant(variant_label)) else {
-                return Err(Error::Output(format!("{}: point {} has the case {case_label:?} / variant {variant_label:?}, which the map does not know", dir.display(), p.id)));
+                return Err(Error::Output(format!(
+                    "{}: point {} has the case {case_label:?} / variant {variant_label:?}, which the map does not know",
+                    dir.display(),
+                    p.id
+                )));
             };
             let m = measure_point(&Plan::point_dir(&dir, &p.id), v.energy_conserving())?;
             found.push(RunResult { case: Case { sweep: sw, value, variant: v }, m });
@@ -665,12 +693,30 @@ pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
         if !opts.quick {
             for sw in Sweep::ALL {
                 for value in sw.refused_values() {
-                    let Some(proto) = plan.points.iter().find(|p| parse_case(&plan.axes[0].labels[p.choice[0]]).is_some_and(|(s, _)| s == sw)) else { continue };
+                    let Some(proto) = plan
+                        .points
+                        .iter()
+                        .find(|p| parse_case(&plan.axes[0].labels[p.choice[0]]).is_some_and(|(s, _)| s == sw))
+                    else {
+                        continue;
+                    };
                     let case_set = &plan.axes[0].overrides[proto.choice[0]];
                     for (vi, v) in variants().into_iter().enumerate() {
-                        let mut ovs: Vec<crate::overrides::Override> = case_set.iter().map(|o| if o.key == "contact.penalty" { crate::overrides::Override { value: toml::Value::Float(value), ..o.clone() } } else { o.clone() }).collect();
+                        let mut ovs: Vec<crate::overrides::Override> = case_set
+                            .iter()
+                            .map(|o| {
+                                if o.key == "contact.penalty" {
+                                    crate::overrides::Override { value: toml::Value::Float(value), ..o.clone() }
+                                } else {
+                                    o.clone()
+                                }
+                            })
+                            .collect();
                         ovs.extend(plan.axes[1].overrides[vi].iter().cloned());
-                        found.push(RunResult { case: Case { sweep: sw, value, variant: v }, m: refused(crate::sweep::scene_for(&sweep, &base, &ovs)) });
+                        found.push(RunResult {
+                            case: Case { sweep: sw, value, variant: v },
+                            m: refused(crate::sweep::scene_for(&sweep, &base, &ovs)),
+                        });
                     }
                 }
             }
@@ -679,10 +725,19 @@ pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
     // the order of `cases`, with the refused values where the full sweep lists them
     let mut rows = Vec::with_capacity(found.len());
     for c in cases(opts.quick) {
-        let pos = found.iter().position(|r| r.case.sweep == c.sweep && r.case.value == c.value && r.case.variant.name == c.variant.name);
+        let pos = found
+            .iter()
+            .position(|r| r.case.sweep == c.sweep && r.case.value == c.value && r.case.variant.name == c.variant.name);
         match pos {
             Some(i) => rows.push(found.swap_remove(i)),
-            None => return Err(Error::Output(format!("the map's sweeps have no run of {} = {} / {}", c.sweep.key(), c.value, c.variant.name))),
+            None => {
+                return Err(Error::Output(format!(
+                    "the map's sweeps have no run of {} = {} / {}",
+                    c.sweep.key(),
+                    c.value,
+                    c.variant.name
+                )));
+            }
         }
     }
     for r in &rows {
@@ -702,7 +757,8 @@ pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
 
 /// The measure of a value no scene may take: the error its scene is refused with (a clear error).
 fn refused(scene: Result<Scene>) -> Measured {
-    let planned = scene.as_ref().map(|s| ((s.time.end / s.time.step).round() as usize, s.time.step)).unwrap_or((0, f64::NAN));
+    let planned =
+        scene.as_ref().map(|s| ((s.time.end / s.time.step).round() as usize, s.time.step)).unwrap_or((0, f64::NAN));
     let mut m = Measured::empty(planned.0, planned.1);
     let e = match scene.and_then(|s| s.validate().map(|_| ())) {
         Err(e) => e,
@@ -740,12 +796,26 @@ pub fn measure_point(pd: &Path, energy_conserving: bool) -> Result<Measured> {
     m.wall_time_s = num(summary.get("wall_time_s")).unwrap_or(0.0);
     let mut non_finite = false;
     if let Some(h) = crate::sweep::collect::History::read(&pd.join("history.csv")) {
-        let col = |name: &str| h.numbers(name).ok_or_else(|| Error::Output(format!("{}: history.csv has no column {name}", pd.display())));
-        let terms: Vec<Vec<f64>> = ["kinetic", "elastic", "compliance", "external_work", "viscous_dissipation", "friction_dissipation", "constraint_dissipation", "persistency_dissipation", "energy_residual", "energy_scale"]
-            .iter()
-            .map(|n| col(n))
-            .collect::<Result<_>>()?;
-        let (fp, converged, newton) = (col("fixed_point_iterations")?, col("fixed_point_converged")?, col("newton_iterations")?);
+        let col = |name: &str| {
+            h.numbers(name).ok_or_else(|| Error::Output(format!("{}: history.csv has no column {name}", pd.display())))
+        };
+        let terms: Vec<Vec<f64>> = [
+            "kinetic",
+            "elastic",
+            "compliance",
+            "external_work",
+            "viscous_dissipation",
+            "friction_dissipation",
+            "constraint_dissipation",
+            "persistency_dissipation",
+            "energy_residual",
+            "energy_scale",
+        ]
+        .iter()
+        .map(|n| col(n))
+        .collect::<Result<_>>()?;
+        let (fp, converged, newton) =
+            (col("fixed_point_iterations")?, col("fixed_point_converged")?, col("newton_iterations")?);
         let energy = |r: usize| EnergyTerms {
             kinetic: terms[0][r],
             elastic: terms[1][r],
@@ -875,8 +945,12 @@ pub fn svg(rows: &[RunResult]) -> Result<String> {
         let font = |size: i32| ("sans-serif", size).into_font();
         let centered = |size: i32| TextStyle::from(font(size)).pos(Pos::new(HPos::Center, VPos::Center));
         let right = |size: i32| TextStyle::from(font(size)).pos(Pos::new(HPos::Right, VPos::Center));
-        root.draw(&Text::new("Stability map: class of every run (one parameter varied at a time)", (w / 2, 18), centered(20)))
-            .map_err(|e| err(&e))?;
+        root.draw(&Text::new(
+            "Stability map: class of every run (one parameter varied at a time)",
+            (w / 2, 18),
+            centered(20),
+        ))
+        .map_err(|e| err(&e))?;
         for (p, (sweep, values)) in sweeps.iter().enumerate() {
             let (x0, y0) = ((p % cols) as i32 * panel_w, 36 + (p / cols) as i32 * panel_h);
             let grid_w = panel_w - label_w - 20;
@@ -894,8 +968,10 @@ pub fn svg(rows: &[RunResult]) -> Result<String> {
                         continue;
                     };
                     let m = &r.m;
-                    root.draw(&Rectangle::new([(cx, cy), (cx + cell_w, cy + cell_h)], m.class.color().filled())).map_err(|e| err(&e))?;
-                    root.draw(&Rectangle::new([(cx, cy), (cx + cell_w, cy + cell_h)], WHITE.stroke_width(2))).map_err(|e| err(&e))?;
+                    root.draw(&Rectangle::new([(cx, cy), (cx + cell_w, cy + cell_h)], m.class.color().filled()))
+                        .map_err(|e| err(&e))?;
+                    root.draw(&Rectangle::new([(cx, cy), (cx + cell_w, cy + cell_h)], WHITE.stroke_width(2)))
+                        .map_err(|e| err(&e))?;
                     let text = match m.class {
                         RunClass::NewtonFailed | RunClass::NonFinite | RunClass::ClearError => {
                             format!("stop {}/{}", m.steps_completed, m.steps_planned)
@@ -906,11 +982,13 @@ pub fn svg(rows: &[RunResult]) -> Result<String> {
                         _ => format!("fp ≤ {}", m.fp_max),
                     };
                     if m.ck_limit.is_some_and(|ck| m.k > ck) {
-                        let corner = vec![(cx + cell_w - 12, cy + 1), (cx + cell_w - 1, cy + 1), (cx + cell_w - 1, cy + 12)];
+                        let corner =
+                            vec![(cx + cell_w - 12, cy + 1), (cx + cell_w - 1, cy + 1), (cx + cell_w - 1, cy + 12)];
                         root.draw(&Polygon::new(corner, RED_CORNER.filled())).map_err(|e| err(&e))?;
                     }
                     let color = if m.class == RunClass::NonFinite { WHITE } else { BLACK };
-                    root.draw(&Text::new(text, (cx + cell_w / 2, cy + cell_h / 2), centered(11).color(&color))).map_err(|e| err(&e))?;
+                    root.draw(&Text::new(text, (cx + cell_w / 2, cy + cell_h / 2), centered(11).color(&color)))
+                        .map_err(|e| err(&e))?;
                 }
             }
             let fy = gy + cell_h * names.len() as i32;
@@ -925,12 +1003,15 @@ pub fn svg(rows: &[RunResult]) -> Result<String> {
         for (i, class) in RunClass::ALL.iter().enumerate() {
             let (lx, lyy) = (20 + (i as i32 % 4) * 300, ly + 26 + (i as i32 / 4) * 26);
             let n = rows.iter().filter(|r| r.m.class == *class).count();
-            root.draw(&Rectangle::new([(lx, lyy), (lx + 18, lyy + 16)], class.color().filled())).map_err(|e| err(&e))?;
+            root.draw(&Rectangle::new([(lx, lyy), (lx + 18, lyy + 16)], class.color().filled()))
+                .map_err(|e| err(&e))?;
             root.draw(&Rectangle::new([(lx, lyy), (lx + 18, lyy + 16)], BLACK.stroke_width(1))).map_err(|e| err(&e))?;
-            root.draw(&Text::new(format!("{} ({n} runs)", class.label()), (lx + 26, lyy + 2), font(13))).map_err(|e| err(&e))?;
+            root.draw(&Text::new(format!("{} ({n} runs)", class.label()), (lx + 26, lyy + 2), font(13)))
+                .map_err(|e| err(&e))?;
         }
         let (nx, ny) = (20, ly + 26 + 2 * 26 + 4);
-        root.draw(&Polygon::new(vec![(nx, ny), (nx + 14, ny), (nx + 14, ny + 14)], RED_CORNER.filled())).map_err(|e| err(&e))?;
+        root.draw(&Polygon::new(vec![(nx, ny), (nx + 14, ny), (nx + 14, ny + 14)], RED_CORNER.filled()))
+            .map_err(|e| err(&e))?;
         root.draw(&Text::new(
             "k above the run's (C.k) limit (ModelInfo's, halved for backward Euler; 0 with the modified mass).   \
              Cell text: largest fixed-point count of a step (fp ≤ N), or the steps completed when the run stopped; fb: steps where newton-unfrozen fell back to F.1.",
@@ -971,7 +1052,20 @@ pub fn report(rows: &[RunResult], wall_time_s: f64) -> String {
     }
     s.push_str(&format!(
         "\n{:<15}{:>8} {:<25}{:<19}{:>10}{:>8}{:>5}{:>6}{:>5}{:>8}{:>10}{:>11}{:>10}{:>8}\n",
-        "sweep", "value", "variant", "class", "steps", "fp mean", "max", "caps", "fb", "newton", "max E.1", "drift", "max gain", "wall s"
+        "sweep",
+        "value",
+        "variant",
+        "class",
+        "steps",
+        "fp mean",
+        "max",
+        "caps",
+        "fb",
+        "newton",
+        "max E.1",
+        "drift",
+        "max gain",
+        "wall s"
     ));
     for r in rows {
         let m = &r.m;
@@ -1020,6 +1114,10 @@ pub fn run(out: &Path, opts: &StabilityOptions) -> Result<String> {
     write_atomic(&out.join("stability.csv"), csv(&rows).as_bytes())?;
     write_atomic(&out.join("stability.svg"), svg(&rows)?.as_bytes())?;
     let mut s = report(&rows, wall);
-    s.push_str(&format!("\nwritten {} and {}\n", out.join("stability.csv").display(), out.join("stability.svg").display()));
+    s.push_str(&format!(
+        "\nwritten {} and {}\n",
+        out.join("stability.csv").display(),
+        out.join("stability.svg").display()
+    ));
     Ok(s)
 }

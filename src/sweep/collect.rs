@@ -19,7 +19,7 @@ use std::path::Path;
 
 use super::{Plan, Point};
 use crate::error::{Error, Result};
-use crate::output::plots::{stacked_chart, Options, Panel, Series};
+use crate::output::plots::{Options, Panel, Series, stacked_chart};
 use crate::output::write_atomic;
 use crate::studies::harness::csv_field;
 
@@ -78,7 +78,9 @@ pub fn point_status(pd: &Path) -> Option<String> {
 pub fn completed_with(pd: &Path, scene_text: &str) -> bool {
     let Some(v) = read_json(&pd.join("summary.json")) else { return false };
     let recorded = v.get("inputs_fingerprint").and_then(|s| s.as_str());
-    v.get("status").and_then(|s| s.as_str()) == Some("completed") && recorded.is_some() && recorded == current_inputs(pd, scene_text).as_deref()
+    v.get("status").and_then(|s| s.as_str()) == Some("completed")
+        && recorded.is_some()
+        && recorded == current_inputs(pd, scene_text).as_deref()
 }
 
 /// The inputs fingerprint of a point's scene with its files as they are now.
@@ -104,12 +106,22 @@ pub fn rows(dir: &Path) -> Result<(Plan, Vec<Row>)> {
 /// One point's row.
 fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
     let axes: Vec<String> = plan.axes.iter().zip(&p.choice).map(|(a, &c)| a.labels[c].clone()).collect();
-    let bare = |status: &str, reason: String| Row { point: p.id.clone(), axes: axes.clone(), status: status.into(), wall_time_s: None, figures: vec![String::new(); FIGURES.len()], reason };
+    let bare = |status: &str, reason: String| Row {
+        point: p.id.clone(),
+        axes: axes.clone(),
+        status: status.into(),
+        wall_time_s: None,
+        figures: vec![String::new(); FIGURES.len()],
+        reason,
+    };
     let sp = pd.join("summary.json");
     if !sp.exists() {
         return Ok(bare("missing", String::new()));
     }
-    let summary = match std::fs::read_to_string(&sp).map_err(|e| e.to_string()).and_then(|t| serde_json::from_str::<serde_json::Value>(&t).map_err(|e| e.to_string())) {
+    let summary = match std::fs::read_to_string(&sp)
+        .map_err(|e| e.to_string())
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).map_err(|e| e.to_string()))
+    {
         Ok(v) => v,
         Err(e) => return Ok(bare("corrupt", format!("summary.json is not readable JSON ({e})"))),
     };
@@ -149,7 +161,11 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
                 figures.insert(fig, v);
             }
         }
-        for (fig, col, abs) in [("max_normal_force", "normal_force", false), ("max_tangential_force", "tangential_force", true), ("max_penetration", "max_penetration", false)] {
+        for (fig, col, abs) in [
+            ("max_normal_force", "normal_force", false),
+            ("max_tangential_force", "tangential_force", true),
+            ("max_penetration", "max_penetration", false),
+        ] {
             if let Some(v) = h.max(col, abs) {
                 figures.insert(fig, v.to_string());
             }
@@ -158,8 +174,19 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
     let status = text("status");
     // an interrupted point runs again from its start: its message (with a resume path that
     // names this folder) is not its reason
-    let reason = if status == "interrupted" { "interrupted: runs again when the sweep runs again".to_string() } else { text("failure") };
-    Ok(Row { point: p.id.clone(), axes, status, wall_time_s: number("wall_time_s"), figures: FIGURES.iter().map(|f| figures.remove(f).unwrap_or_default()).collect(), reason })
+    let reason = if status == "interrupted" {
+        "interrupted: runs again when the sweep runs again".to_string()
+    } else {
+        text("failure")
+    };
+    Ok(Row {
+        point: p.id.clone(),
+        axes,
+        status,
+        wall_time_s: number("wall_time_s"),
+        figures: FIGURES.iter().map(|f| figures.remove(f).unwrap_or_default()).collect(),
+        reason,
+    })
 }
 
 /// A point's files agree: a known status; history.csv, where the run wrote one, with
@@ -170,11 +197,16 @@ fn check_point(summary: &serde_json::Value, pd: &Path) -> std::result::Result<()
     if !STATUSES.contains(&status) {
         return Err(format!("summary.json has the unknown status {status:?}"));
     }
-    let steps = summary.get("steps_completed").and_then(|v| v.as_u64()).ok_or("summary.json has no steps_completed")? as usize;
+    let steps =
+        summary.get("steps_completed").and_then(|v| v.as_u64()).ok_or("summary.json has no steps_completed")? as usize;
     let hp = pd.join("history.csv");
     if !hp.exists() {
         // a run that could not start writes no history; any run that started does
-        return if status == "failed" && steps == 0 { Ok(()) } else { Err(format!("history.csv is missing for a {status} run of {steps} steps")) };
+        return if status == "failed" && steps == 0 {
+            Ok(())
+        } else {
+            Err(format!("history.csv is missing for a {status} run of {steps} steps"))
+        };
     }
     let text = std::fs::read_to_string(&hp).map_err(|e| format!("history.csv cannot be read ({e})"))?;
     let mut lines = text.lines();
@@ -183,7 +215,11 @@ fn check_point(summary: &serde_json::Value, pd: &Path) -> std::result::Result<()
     for (i, line) in lines.enumerate() {
         let fields: Vec<&str> = line.split(',').collect();
         if fields.len() != width {
-            return Err(format!("history.csv row {} has {} fields, not {width} (a truncated file?)", i + 2, fields.len()));
+            return Err(format!(
+                "history.csv row {} has {} fields, not {width} (a truncated file?)",
+                i + 2,
+                fields.len()
+            ));
         }
         if fields[0].parse::<usize>() != Ok(i) {
             return Err(format!("history.csv row {} is not step {i}", i + 2));
@@ -195,11 +231,20 @@ fn check_point(summary: &serde_json::Value, pd: &Path) -> std::result::Result<()
     }
     // a running (or killed) run may be one row ahead of its last summary
     if rows != steps + 1 && !(status == "running" && rows >= steps + 1) {
-        return Err(format!("history.csv has {rows} rows of steps where summary.json reports {steps} steps (so {} rows)", steps + 1));
+        return Err(format!(
+            "history.csv has {rows} rows of steps where summary.json reports {steps} steps (so {} rows)",
+            steps + 1
+        ));
     }
-    let scene_text = std::fs::read_to_string(pd.join("scene.toml")).map_err(|e| format!("scene.toml cannot be read ({e})"))?;
-    if status == "completed" && summary.get("inputs_fingerprint").and_then(|v| v.as_str()) != current_inputs(pd, &scene_text).as_deref() {
-        return Err("its inputs changed since it ran (the scene, or a file it reads such as its mesh): run the sweep again".into());
+    let scene_text =
+        std::fs::read_to_string(pd.join("scene.toml")).map_err(|e| format!("scene.toml cannot be read ({e})"))?;
+    if status == "completed"
+        && summary.get("inputs_fingerprint").and_then(|v| v.as_str()) != current_inputs(pd, &scene_text).as_deref()
+    {
+        return Err(
+            "its inputs changed since it ran (the scene, or a file it reads such as its mesh): run the sweep again"
+                .into(),
+        );
     }
     Ok(())
 }
@@ -216,7 +261,10 @@ impl History {
         let text = std::fs::read_to_string(p).ok()?;
         let mut lines = text.lines();
         let columns: Vec<String> = lines.next()?.split(',').map(str::to_string).collect();
-        let rows = lines.map(|l| l.split(',').map(str::to_string).collect::<Vec<_>>()).filter(|r| r.len() == columns.len()).collect();
+        let rows = lines
+            .map(|l| l.split(',').map(str::to_string).collect::<Vec<_>>())
+            .filter(|r| r.len() == columns.len())
+            .collect();
         Some(History { columns, rows })
     }
     pub fn column(&self, name: &str) -> Option<usize> {
@@ -281,13 +329,18 @@ pub fn collect(dir: &Path) -> Result<(Plan, Vec<Row>)> {
 
 /// A file name for a column (`contact.penalty` → `contact.penalty`, other characters → `_`).
 fn file_name(column: &str) -> String {
-    column.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' || c == '_' { c } else { '_' }).collect()
+    column
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' || c == '_' { c } else { '_' })
+        .collect()
 }
 
 /// Whether values span at least two decades (all positive): the axis is drawn logarithmic.
 fn spans_decades(v: &[f64]) -> bool {
     let pos: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    !pos.is_empty() && pos.iter().all(|&x| x > 0.0) && pos.iter().copied().fold(0.0, f64::max) >= 100.0 * pos.iter().copied().fold(f64::INFINITY, f64::min)
+    !pos.is_empty()
+        && pos.iter().all(|&x| x > 0.0)
+        && pos.iter().copied().fold(0.0, f64::max) >= 100.0 * pos.iter().copied().fold(f64::INFINITY, f64::min)
 }
 
 /// plots/<axis>.svg: one panel per chosen figure against the axis' numbers, a line per
@@ -324,12 +377,20 @@ fn chart(plan: &Plan, rows: &[Row], a: usize) -> Result<String> {
     }
     let panels: Vec<(Panel, f64)> = panels_data
         .iter()
-        .map(|(fig, series, log_y)| (Panel { title: fig, x_desc: &axis.column, y_desc: fig, series, hlines: &[], log: (log_x, *log_y) }, 1.0))
+        .map(|(fig, series, log_y)| {
+            (Panel { title: fig, x_desc: &axis.column, y_desc: fig, series, hlines: &[], log: (log_x, *log_y) }, 1.0)
+        })
         .collect();
     let opts = Options { markers: true, ..Options::default() };
     stacked_chart(&panels, &opts).map_err(|e| Error::Output(format!("plots/{}.svg: {e}", file_name(&axis.column))))
 }
 
 fn group_key(plan: &Plan, p: &Point, a: usize) -> String {
-    plan.axes.iter().enumerate().filter(|(b, _)| *b != a).map(|(b, ax)| format!("{} = {}", ax.column, ax.labels[p.choice[b]])).collect::<Vec<_>>().join(", ")
+    plan.axes
+        .iter()
+        .enumerate()
+        .filter(|(b, _)| *b != a)
+        .map(|(b, ax)| format!("{} = {}", ax.column, ax.labels[p.choice[b]]))
+        .collect::<Vec<_>>()
+        .join(", ")
 }

@@ -43,7 +43,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::output::write_atomic;
 use crate::overrides::Override;
-use crate::scene::{Scene, DEFAULT_SCENE};
+use crate::scene::{DEFAULT_SCENE, Scene};
 
 /// The most points a sweep may have.
 pub const MAX_POINTS: usize = 100_000;
@@ -115,7 +115,9 @@ impl Default for PlotSpec {
 }
 
 fn default_figures() -> Vec<String> {
-    ["max_normal_force", "max_penetration", "friction_dissipation", "max_relative_energy_residual", "newton_iterations"].map(String::from).to_vec()
+    ["max_normal_force", "max_penetration", "friction_dissipation", "max_relative_energy_residual", "newton_iterations"]
+        .map(String::from)
+        .to_vec()
 }
 
 /// A resolved axis: its column in sweep.csv, the label of each value, the numbers when every
@@ -242,7 +244,10 @@ impl Plan {
             if own {
                 continue;
             }
-            if let Some((from, _)) = existing.iter().find(|(id, text)| *text == p.scene_text && !moves.iter().any(|m| m.0 == points.join(id))) {
+            if let Some((from, _)) = existing
+                .iter()
+                .find(|(id, text)| *text == p.scene_text && !moves.iter().any(|m| m.0 == points.join(id)))
+            {
                 let aside = points.join(format!(".moving-{}", p.id));
                 std::fs::rename(points.join(from), &aside).map_err(|e| Error::io(&aside, e))?;
                 moves.push((points.join(from), aside));
@@ -251,11 +256,17 @@ impl Plan {
         // their markers (points/<id>.done) move with them
         let markers: Vec<bool> = moves.iter().map(|(from, _)| runner::marker(from).exists()).collect();
         for (_, aside) in &moves {
-            let id = aside.file_name().map(|n| n.to_string_lossy().trim_start_matches(".moving-").to_string()).unwrap_or_default();
+            let id = aside
+                .file_name()
+                .map(|n| n.to_string_lossy().trim_start_matches(".moving-").to_string())
+                .unwrap_or_default();
             let _ = std::fs::remove_file(runner::marker(&points.join(&id)));
         }
         for ((from, aside), had_marker) in moves.iter().zip(markers) {
-            let id = aside.file_name().map(|n| n.to_string_lossy().trim_start_matches(".moving-").to_string()).unwrap_or_default();
+            let id = aside
+                .file_name()
+                .map(|n| n.to_string_lossy().trim_start_matches(".moving-").to_string())
+                .unwrap_or_default();
             let target = points.join(&id);
             if target.exists() {
                 std::fs::remove_dir_all(&target).map_err(|e| Error::io(&target, e))?;
@@ -287,12 +298,18 @@ impl Plan {
     /// choice per axis within its values.
     pub fn read(dir: &Path) -> Result<Plan> {
         let p = dir.join("sweep.json");
-        let text = std::fs::read_to_string(&p).map_err(|e| Error::folder(&p, format!("cannot be read ({e}): is this a sweep's folder?")))?;
-        let plan: Plan = serde_json::from_str(&text).map_err(|e| Error::folder(&p, format!("not a sweep folder's plan ({e})")))?;
+        let text = std::fs::read_to_string(&p)
+            .map_err(|e| Error::folder(&p, format!("cannot be read ({e}): is this a sweep's folder?")))?;
+        let plan: Plan =
+            serde_json::from_str(&text).map_err(|e| Error::folder(&p, format!("not a sweep folder's plan ({e})")))?;
         for pt in &plan.points {
-            let fits = pt.choice.len() == plan.axes.len() && pt.choice.iter().zip(&plan.axes).all(|(&c, a)| c < a.labels.len());
+            let fits = pt.choice.len() == plan.axes.len()
+                && pt.choice.iter().zip(&plan.axes).all(|(&c, a)| c < a.labels.len());
             if !is_id(&pt.id) || !fits {
-                return Err(Error::folder(&p, format!("point {:?} does not fit the plan's axes (edited by hand?)", pt.id)));
+                return Err(Error::folder(
+                    &p,
+                    format!("point {:?} does not fit the plan's axes (edited by hand?)", pt.id),
+                ));
             }
         }
         Ok(plan)
@@ -318,11 +335,20 @@ impl Base {
     pub fn of(sweep: &SweepFile, dir: &Path) -> Result<Base> {
         if sweep.base == "default" {
             // relative paths a sweep sets (a Gmsh file) are read from the sweep's folder
-            return Ok(Base { text: DEFAULT_SCENE.to_string(), label: "<embedded academic scene>".into(), dir: dir.to_path_buf() });
+            return Ok(Base {
+                text: DEFAULT_SCENE.to_string(),
+                label: "<embedded academic scene>".into(),
+                dir: dir.to_path_buf(),
+            });
         }
         let p = dir.join(&sweep.base);
-        let text = std::fs::read_to_string(&p).map_err(|e| Error::scene("base", format!("cannot read {}: {e}", p.display())))?;
-        Ok(Base { text, label: p.display().to_string(), dir: p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")) })
+        let text = std::fs::read_to_string(&p)
+            .map_err(|e| Error::scene("base", format!("cannot read {}: {e}", p.display())))?;
+        Ok(Base {
+            text,
+            label: p.display().to_string(),
+            dir: p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")),
+        })
     }
 }
 
@@ -344,7 +370,10 @@ fn check_conflicts(fixed: &[Override], axes: &[Axis], extra: &[Override]) -> Res
     let name = [crate::overrides::Segment::Key("name".into())];
     for o in fixed.iter().chain(axes.iter().flat_map(|a| a.overrides.iter().flatten())) {
         if crate::overrides::overlap(&o.path, &name) {
-            return Err(Error::scene(&o.key, "is set for every point (its name is the sweep's); a sweep cannot vary it"));
+            return Err(Error::scene(
+                &o.key,
+                "is set for every point (its name is the sweep's); a sweep cannot vary it",
+            ));
         }
     }
     for (i, a) in axes.iter().enumerate() {
@@ -353,11 +382,22 @@ fn check_conflicts(fixed: &[Override], axes: &[Axis], extra: &[Override]) -> Res
             .iter()
             .map(|o| ("[set]".to_string(), o))
             .chain(extra.iter().map(|o| ("--set".to_string(), o)))
-            .chain(axes[..i].iter().enumerate().flat_map(|(j, b)| b.overrides.iter().flatten().map(move |o| (format!("axis[{j}]"), o))))
+            .chain(
+                axes[..i]
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(j, b)| b.overrides.iter().flatten().map(move |o| (format!("axis[{j}]"), o))),
+            )
             .collect();
         for m in &mine {
             if let Some((from, o)) = against.iter().find(|(_, o)| crate::overrides::overlap(&m.path, &o.path)) {
-                return Err(Error::scene(format!("axis[{i}]"), format!("{} and {} of {from} set the same value: sweep.csv would report what did not run", m.key, o.key)));
+                return Err(Error::scene(
+                    format!("axis[{i}]"),
+                    format!(
+                        "{} and {} of {from} set the same value: sweep.csv would report what did not run",
+                        m.key, o.key
+                    ),
+                ));
             }
         }
     }
@@ -402,7 +442,10 @@ pub fn clear_outputs(pd: &Path) -> Result<()> {
 
 /// Parse a sweep file's text; errors name the key path as a scene's do.
 pub fn parse(text: &str, file: &str) -> Result<SweepFile> {
-    let de = toml::de::Deserializer::parse(text).map_err(|e| Error::SceneSyntax { file: file.to_string(), message: crate::scene::one_paragraph(&e.to_string()) })?;
+    let de = toml::de::Deserializer::parse(text).map_err(|e| Error::SceneSyntax {
+        file: file.to_string(),
+        message: crate::scene::one_paragraph(&e.to_string()),
+    })?;
     serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
         let inner = crate::scene::one_paragraph(&e.into_inner().to_string());
@@ -414,20 +457,32 @@ pub fn parse(text: &str, file: &str) -> Result<SweepFile> {
 /// An axis as written → its column, labels, numbers and overrides.
 fn resolve_axis(a: usize, spec: &AxisSpec) -> Result<Axis> {
     let at = format!("axis[{a}]");
-    let (column, overrides, shown): (String, Vec<Vec<Override>>, Vec<String>) = match (&spec.key, spec.sets.is_empty()) {
+    let (column, overrides, shown): (String, Vec<Vec<Override>>, Vec<String>) = match (&spec.key, spec.sets.is_empty())
+    {
         (Some(key), true) => {
             if spec.values.is_empty() {
                 return Err(Error::scene(format!("{at}.values"), "is empty: an axis needs at least one value"));
             }
             if spec.name.is_some() || !spec.labels.is_empty() {
-                return Err(Error::scene(&at, "an axis of `key` is named by its key and shows its values: `name` and `labels` go with `sets`"));
+                return Err(Error::scene(
+                    &at,
+                    "an axis of `key` is named by its key and shows its values: `name` and `labels` go with `sets`",
+                ));
             }
-            let ovs = spec.values.iter().map(|v| Override::new(key, v.clone()).map(|o| vec![o])).collect::<Result<Vec<_>>>().map_err(|e| Error::scene(format!("{at}.key"), e.to_string()))?;
+            let ovs = spec
+                .values
+                .iter()
+                .map(|v| Override::new(key, v.clone()).map(|o| vec![o]))
+                .collect::<Result<Vec<_>>>()
+                .map_err(|e| Error::scene(format!("{at}.key"), e.to_string()))?;
             (key.clone(), ovs, spec.values.iter().map(show_value).collect())
         }
         (None, false) => {
             let Some(name) = &spec.name else {
-                return Err(Error::scene(format!("{at}.name"), "missing: an axis of `sets` needs a name (its sweep.csv column)"));
+                return Err(Error::scene(
+                    format!("{at}.name"),
+                    "missing: an axis of `sets` needs a name (its sweep.csv column)",
+                ));
             };
             if !spec.values.is_empty() {
                 return Err(Error::scene(format!("{at}.values"), "goes with `key`; an axis of `sets` has no values"));
@@ -438,12 +493,19 @@ fn resolve_axis(a: usize, spec: &AxisSpec) -> Result<Axis> {
                 .enumerate()
                 .map(|(i, t)| {
                     if t.is_empty() {
-                        return Err(Error::scene(format!("{at}.sets[{i}]"), "is empty: a value of the axis sets at least one key"));
+                        return Err(Error::scene(
+                            format!("{at}.sets[{i}]"),
+                            "is empty: a value of the axis sets at least one key",
+                        ));
                     }
                     crate::overrides::leaves(t).map_err(|e| Error::scene(format!("{at}.sets[{i}]"), e.to_string()))
                 })
                 .collect::<Result<Vec<_>>>()?;
-            let shown = spec.sets.iter().map(|t| t.iter().map(|(k, v)| format!("{k}={}", show_value(v))).collect::<Vec<_>>().join(" ")).collect();
+            let shown = spec
+                .sets
+                .iter()
+                .map(|t| t.iter().map(|(k, v)| format!("{k}={}", show_value(v))).collect::<Vec<_>>().join(" "))
+                .collect();
             (name.clone(), ovs, shown)
         }
         (Some(_), false) => return Err(Error::scene(&at, "has both `key` and `sets`: give one")),
@@ -454,10 +516,16 @@ fn resolve_axis(a: usize, spec: &AxisSpec) -> Result<Axis> {
     } else if spec.labels.len() == overrides.len() {
         spec.labels.clone()
     } else {
-        return Err(Error::scene(format!("{at}.labels"), format!("has {} entries for {} values", spec.labels.len(), overrides.len())));
+        return Err(Error::scene(
+            format!("{at}.labels"),
+            format!("has {} entries for {} values", spec.labels.len(), overrides.len()),
+        ));
     };
     if column.trim().is_empty() || column.contains([',', '"']) || column.chars().any(char::is_control) {
-        return Err(Error::scene(&at, format!("the column name {column:?} must be non-empty, without commas, quotes or control characters")));
+        return Err(Error::scene(
+            &at,
+            format!("the column name {column:?} must be non-empty, without commas, quotes or control characters"),
+        ));
     }
     for (i, l) in labels.iter().enumerate() {
         crate::scene::check_text(&format!("{at}.labels[{i}]"), l)?;
@@ -492,7 +560,10 @@ fn combinations(axes: &[Axis], mode: Mode) -> Result<Vec<Vec<usize>>> {
     match mode {
         Mode::Zip => {
             if let Some(a) = lens.iter().position(|&l| l != lens[0]) {
-                return Err(Error::scene("mode", format!("\"zip\" needs axes of one length: axis[0] has {}, axis[{a}] {}", lens[0], lens[a])));
+                return Err(Error::scene(
+                    "mode",
+                    format!("\"zip\" needs axes of one length: axis[0] has {}, axis[{a}] {}", lens[0], lens[a]),
+                ));
             }
             Ok((0..lens[0]).map(|i| vec![i; axes.len()]).collect())
         }
@@ -525,7 +596,10 @@ fn describe(axes: &[Axis], choice: &[usize]) -> String {
 /// The point's scene: the base text with its overrides, its name set to `name`, and a relative
 /// mesh file made absolute (the point's scene lives in another folder).
 fn point_text(base: &str, label: &str, base_dir: &Path, ovs: &[Override], name: &str) -> Result<String> {
-    let mut table: toml::Table = base.parse().map_err(|e: toml::de::Error| Error::SceneSyntax { file: label.to_string(), message: crate::scene::one_paragraph(&e.to_string()) })?;
+    let mut table: toml::Table = base.parse().map_err(|e: toml::de::Error| Error::SceneSyntax {
+        file: label.to_string(),
+        message: crate::scene::one_paragraph(&e.to_string()),
+    })?;
     crate::overrides::apply_all(&mut table, ovs)?;
     table.insert("name".into(), toml::Value::String(name.to_string()));
     if let Some(toml::Value::Table(d)) = table.get_mut("domain") {

@@ -17,7 +17,7 @@ use std::sync::{Arc, Mutex};
 use super::Plan;
 use crate::error::{Error, Result};
 use crate::problem::Problem;
-use crate::run::{run, write_failed_start, RunOptions};
+use crate::run::{RunOptions, run, write_failed_start};
 use crate::scene::Scene;
 
 /// How a sweep runs here.
@@ -49,11 +49,15 @@ pub enum Outcome {
 /// `dir`. Returns each point's outcome, in the plan's order.
 pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) -> Result<Vec<Outcome>> {
     let n = plan.points.len();
-    let outcomes: Vec<Mutex<Outcome>> = (0..n).map(|i| Mutex::new(if done.get(i).copied().unwrap_or(false) { Outcome::Skipped } else { Outcome::NotRun })).collect();
+    let outcomes: Vec<Mutex<Outcome>> = (0..n)
+        .map(|i| Mutex::new(if done.get(i).copied().unwrap_or(false) { Outcome::Skipped } else { Outcome::NotRun }))
+        .collect();
     let todo: Vec<usize> = (0..n).filter(|&i| !done.get(i).copied().unwrap_or(false)).collect();
     let bar = opts.progress.then(|| {
         let b = indicatif::ProgressBar::new(n as u64);
-        if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} points  {elapsed_precise} (eta {eta})  {msg}") {
+        if let Ok(style) =
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} points  {elapsed_precise} (eta {eta})  {msg}")
+        {
             b.set_style(style);
         }
         b.set_position((n - todo.len()) as u64);
@@ -67,12 +71,13 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
         .into_iter()
         .filter(|&i| {
             let pd = Plan::point_dir(dir, &plan.points[i].id);
-            let fits = Scene::from_toml(&plan.points[i].scene_text, "scene.toml").and_then(|s| s.validate()).and_then(|m| {
-                let e = crate::resources::estimate(&m, &pd)?;
-                crate::resources::check_fits(&e, available)?;
-                largest = largest.max(e.total());
-                Ok(())
-            });
+            let fits =
+                Scene::from_toml(&plan.points[i].scene_text, "scene.toml").and_then(|s| s.validate()).and_then(|m| {
+                    let e = crate::resources::estimate(&m, &pd)?;
+                    crate::resources::check_fits(&e, available)?;
+                    largest = largest.max(e.total());
+                    Ok(())
+                });
             match fits {
                 Ok(()) => true,
                 Err(e) => {
@@ -106,30 +111,36 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
     faer::set_global_parallelism(faer::Par::Seq);
     std::thread::scope(|scope| {
         for _ in 0..at_once {
-            scope.spawn(|| loop {
-                if stopped() {
-                    break;
-                }
-                let k = next.fetch_add(1, Ordering::SeqCst);
-                let Some(&i) = todo.get(k) else { break };
-                let p = &plan.points[i];
-                let pd = Plan::point_dir(dir, &p.id);
-                // a panic in one point (none is known: every failure path returns an error) is that
-                // point's failure, not the sweep's
-                let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_point(&pd, &p.scene_text, opts.interrupt.clone())))
+            scope.spawn(|| {
+                loop {
+                    if stopped() {
+                        break;
+                    }
+                    let k = next.fetch_add(1, Ordering::SeqCst);
+                    let Some(&i) = todo.get(k) else { break };
+                    let p = &plan.points[i];
+                    let pd = Plan::point_dir(dir, &p.id);
+                    // a panic in one point (none is known: every failure path returns an error) is that
+                    // point's failure, not the sweep's
+                    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                        run_point(&pd, &p.scene_text, opts.interrupt.clone())
+                    }))
                     .unwrap_or_else(|_| {
-                        let reason = "the run panicked (a defect of dyncontact: please report it with this point's scene.toml)".to_string();
+                        let reason =
+                            "the run panicked (a defect of dyncontact: please report it with this point's scene.toml)"
+                                .to_string();
                         let _ = write_failed_start(&pd, &p.id, &Error::Output(reason.clone()));
                         Outcome::Failed(reason)
                     });
-                if let Some(b) = &bar {
-                    b.inc(1);
-                    if let Outcome::Failed(reason) = &outcome {
-                        b.set_message(format!("{} failed: {}", p.id, reason.chars().take(60).collect::<String>()));
+                    if let Some(b) = &bar {
+                        b.inc(1);
+                        if let Outcome::Failed(reason) = &outcome {
+                            b.set_message(format!("{} failed: {}", p.id, reason.chars().take(60).collect::<String>()));
+                        }
                     }
-                }
-                if let Ok(mut slot) = outcomes[i].lock() {
-                    *slot = outcome;
+                    if let Ok(mut slot) = outcomes[i].lock() {
+                        *slot = outcome;
+                    }
                 }
             });
         }
@@ -201,7 +212,14 @@ fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> 
             return (Outcome::Failed(e.to_string()), Some(e.kind()));
         }
     };
-    let opts = RunOptions { out: pd.to_path_buf(), progress: false, checkpoint_every: None, resume: false, stop_after: None, interrupt };
+    let opts = RunOptions {
+        out: pd.to_path_buf(),
+        progress: false,
+        checkpoint_every: None,
+        resume: false,
+        stop_after: None,
+        interrupt,
+    };
     match run(&problem, &opts) {
         Ok(_) => (Outcome::Completed, None),
         Err(Error::Interrupted { .. }) => (Outcome::Interrupted, Some("interrupted")),

@@ -70,7 +70,8 @@ rule collect:
 /// config.yaml: the binary that wrote the sweep (edit it where the cluster's copy lives) and
 /// each point's resources.
 pub fn config(plan: &Plan, binary: &str) -> String {
-    let mut s = String::from("# written by `dyncontact sweep`: the binary that runs a point, and each point's resources\n");
+    let mut s =
+        String::from("# written by `dyncontact sweep`: the binary that runs a point, and each point's resources\n");
     s.push_str("# (mem_mb: the memory estimate of `dyncontact check`; runtime: minutes, a conservative bound)\n");
     // a JSON string is a YAML double-quoted scalar with every special character escaped
     let _ = writeln!(s, "dyncontact: {}", serde_json::to_string(binary).unwrap_or_else(|_| "\"dyncontact\"".into()));

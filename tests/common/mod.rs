@@ -7,7 +7,8 @@ use dyncontact::simulation::{Settings, Simulation, StepRecord};
 
 /// A scene of fixtures/scenes by name (without .toml).
 pub fn fixture(name: &str) -> Scene {
-    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes").join(format!("{name}.toml"));
+    let path =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes").join(format!("{name}.toml"));
     Scene::from_file(&path).unwrap_or_else(|e| panic!("fixture {name}: {e}"))
 }
 
@@ -32,9 +33,11 @@ pub fn records_with(p: &Problem, settings: Settings) -> Vec<StepRecord> {
 /// the test, the quantity, the value and what was expected (the band asserted, or "reported").
 pub fn measured(test: &str, quantity: &str, value: f64, expected: &str) {
     use std::io::Write;
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).parent().map(|p| p.join("verify")).unwrap_or_default();
+    let dir =
+        std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).parent().map(|p| p.join("verify")).unwrap_or_default();
     let _ = std::fs::create_dir_all(&dir);
-    let line = serde_json::json!({"test": test, "quantity": quantity, "value": value, "expected": expected}).to_string();
+    let line =
+        serde_json::json!({"test": test, "quantity": quantity, "value": value, "expected": expected}).to_string();
     if let Ok(mut f) = std::fs::OpenOptions::new().create(true).append(true).open(dir.join("measurements.jsonl")) {
         let _ = f.write_all(format!("{line}\n").as_bytes());
     }

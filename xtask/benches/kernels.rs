@@ -8,11 +8,11 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
-use dyncontact::simulation::State;
 use dyncontact::fem::Operators;
 use dyncontact::problem::Problem;
 use dyncontact::scene::Scene;
 use dyncontact::simulation::Simulation;
+use dyncontact::simulation::State;
 use dyncontact::step::fixed_point::Inner;
 use dyncontact::step::newton::{self, NewtonSettings};
 
@@ -32,7 +32,9 @@ fn assembly(c: &mut Criterion) {
         let p = academic(cells);
         let nodes: Vec<usize> = p.contact.as_ref().map(|c| c.nodes.clone()).unwrap_or_default();
         g.bench_function(format!("operators {}x{}", cells[0], cells[1]), |b| {
-            b.iter(|| Operators::new(&p.mesh, &p.material, p.model.solver.mass, &p.dofs, black_box(&nodes)).expect("assembly"))
+            b.iter(|| {
+                Operators::new(&p.mesh, &p.material, p.model.solver.mass, &p.dofs, black_box(&nodes)).expect("assembly")
+            })
         });
     }
     g.finish();

@@ -46,7 +46,8 @@ pub struct Prepared {
 /// Debian's python3-getfem. Takes no solver binary, so it can run while cargo builds.
 pub fn prepare(root: &Path, target: &Path) -> Result<Prepared, String> {
     let t = Instant::now();
-    let (python, pip_ran) = ensure_venv(&target.join("crosscheck-venv"), &root.join("xtask").join("crosscheck").join("requirements.txt"))?;
+    let (python, pip_ran) =
+        ensure_venv(&target.join("crosscheck-venv"), &root.join("xtask").join("crosscheck").join("requirements.txt"))?;
     let mut lines = String::new();
     let _ = writeln!(
         lines,
@@ -97,12 +98,19 @@ pub fn run(root: &Path, target: &Path, bin: &Path, prepared: &Prepared) -> Resul
     // the 3-D box: scikit-fem's operators as references for tests/crosscheck.rs (the Rust side
     // has no scene path for 3-D yet, so the comparison is the Rust test's)
     let t = Instant::now();
-    let result = spawn(python_cmd(python, root).current_dir(&scripts).arg("solid_operators.py").arg(reference.join("box3d")));
+    let result =
+        spawn(python_cmd(python, root).current_dir(&scripts).arg("solid_operators.py").arg(reference.join("box3d")));
     let _ = writeln!(report, "  3-D box operators with scikit-fem ({:.1} s)", t.elapsed().as_secs_f64());
     record(&mut report, &mut failures, "3-D box operators", result);
     let t = Instant::now();
     let msh = root.join("fixtures").join("meshes").join("holed_block.msh");
-    let result = spawn(python_cmd(python, root).current_dir(&scripts).arg("solid_operators.py").arg(reference.join("holed_block")).arg(&msh));
+    let result = spawn(
+        python_cmd(python, root)
+            .current_dir(&scripts)
+            .arg("solid_operators.py")
+            .arg(reference.join("holed_block"))
+            .arg(&msh),
+    );
     let _ = writeln!(report, "  3-D Gmsh mesh operators with scikit-fem ({:.1} s)", t.elapsed().as_secs_f64());
     record(&mut report, &mut failures, "3-D Gmsh mesh operators", result);
 
@@ -114,7 +122,8 @@ pub fn run(root: &Path, target: &Path, bin: &Path, prepared: &Prepared) -> Resul
             Command::new(bin).current_dir(root).arg("run").arg(&scene).arg("--out").arg(&out),
             python_cmd(python, root).arg(scripts.join("check_frames.py")).arg(&out),
         );
-        let _ = writeln!(report, "  frames of `dyncontact run {}` ({:.1} s)", rel(root, &scene), t.elapsed().as_secs_f64());
+        let _ =
+            writeln!(report, "  frames of `dyncontact run {}` ({:.1} s)", rel(root, &scene), t.elapsed().as_secs_f64());
         record(&mut report, &mut failures, &format!("frames of {run_scene}"), result);
     }
 
@@ -132,9 +141,17 @@ pub fn run(root: &Path, target: &Path, bin: &Path, prepared: &Prepared) -> Resul
                 })
             })
             .collect();
-        handles.into_iter().map(|h| h.join().unwrap_or_else(|_| (Err("the GetFEM check's thread panicked".into()), 0.0))).collect()
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|_| (Err("the GetFEM check's thread panicked".into()), 0.0)))
+            .collect()
     });
-    let _ = writeln!(report, "  GetFEM: dynamic contact, {} comparisons side by side ({:.1} s)", GETFEM_CHECKS.len(), t.elapsed().as_secs_f64());
+    let _ = writeln!(
+        report,
+        "  GetFEM: dynamic contact, {} comparisons side by side ({:.1} s)",
+        GETFEM_CHECKS.len(),
+        t.elapsed().as_secs_f64()
+    );
     for (c, (result, seconds)) in GETFEM_CHECKS.iter().zip(results) {
         let _ = writeln!(report, "  GetFEM: {} ({seconds:.1} s)", c.what);
         record(&mut report, &mut failures, &format!("GetFEM dynamic contact ({})", c.what), result);
@@ -142,7 +159,11 @@ pub fn run(root: &Path, target: &Path, bin: &Path, prepared: &Prepared) -> Resul
 
     let t = Instant::now();
     let result = super::workflow::check(root, bin, python, &out_root.join("workflow"));
-    let _ = writeln!(report, "  sweeps: in-process against Snakemake, and the stability map's job lists ({:.1} s)", t.elapsed().as_secs_f64());
+    let _ = writeln!(
+        report,
+        "  sweeps: in-process against Snakemake, and the stability map's job lists ({:.1} s)",
+        t.elapsed().as_secs_f64()
+    );
     record(&mut report, &mut failures, "sweeps with Snakemake", result);
 
     let refs = rel(root, &reference);
@@ -173,14 +194,19 @@ const GETFEM_PYTHON: &str = "/usr/bin/python3";
 /// taken in the same order whatever the number of cores.
 fn getfem_python() -> Command {
     let mut c = Command::new(GETFEM_PYTHON);
-    c.args(["-E", "-s"]).env("PYTHONDONTWRITEBYTECODE", "1").env("PYTHONUNBUFFERED", "1").env("OPENBLAS_NUM_THREADS", "1");
+    c.args(["-E", "-s"])
+        .env("PYTHONDONTWRITEBYTECODE", "1")
+        .env("PYTHONUNBUFFERED", "1")
+        .env("OPENBLAS_NUM_THREADS", "1");
     c
 }
 
 /// python3-getfem importable by [`getfem_python`], installed with apt when it is missing (CI runs
 /// as root). Ok: the package's version, whether apt ran, and the numpy GetFEM's Python imports.
 fn ensure_getfem() -> Result<String, String> {
-    let probe = || match spawn(getfem_python().args(["-c", "import getfem, numpy; print(f'numpy {numpy.__version__} from {numpy.__file__}')"])) {
+    let probe = || match spawn(
+        getfem_python().args(["-c", "import getfem, numpy; print(f'numpy {numpy.__version__} from {numpy.__file__}')"]),
+    ) {
         Ok((true, text)) => Ok(text.trim().to_string()),
         Ok((false, text)) | Err(text) => Err(text),
     };
@@ -189,8 +215,14 @@ fn ensure_getfem() -> Result<String, String> {
         Err(_) => {
             exec(Command::new("apt-get").args(["update", "-qq"]))
                 .and_then(|()| exec(Command::new("apt-get").args(["install", "-y", "-qq", "python3-getfem"])))
-                .map_err(|e| format!("python3-getfem is missing and `apt-get install python3-getfem` failed (run it as root): {e}"))?;
-            let numpy = probe().map_err(|e| format!("python3-getfem was installed but `{GETFEM_PYTHON} -E -s -c 'import getfem'` still fails: {e}"))?;
+                .map_err(|e| {
+                    format!(
+                        "python3-getfem is missing and `apt-get install python3-getfem` failed (run it as root): {e}"
+                    )
+                })?;
+            let numpy = probe().map_err(|e| {
+                format!("python3-getfem was installed but `{GETFEM_PYTHON} -E -s -c 'import getfem'` still fails: {e}")
+            })?;
             (numpy, "installed with apt")
         }
     };
@@ -214,16 +246,45 @@ struct GetfemCheck {
 /// `bar_friction.py` (the oblique impact: Signorini–Coulomb, and normal compliance + Coulomb in
 /// GetFEM's weak-form language).
 const GETFEM_CHECKS: [GetfemCheck; 3] = [
-    GetfemCheck { script: "bar_impact.py", scene: "bar_impact_singular.toml", case: None, what: "B.1 on the singular mass" },
-    GetfemCheck { script: "bar_friction.py", scene: "bar_friction.toml", case: Some("signorini-coulomb"), what: "oblique impact, Signorini–Coulomb" },
-    GetfemCheck { script: "bar_friction.py", scene: "bar_friction.toml", case: Some("compliance-coulomb"), what: "oblique impact, compliance + Coulomb" },
+    GetfemCheck {
+        script: "bar_impact.py",
+        scene: "bar_impact_singular.toml",
+        case: None,
+        what: "B.1 on the singular mass",
+    },
+    GetfemCheck {
+        script: "bar_friction.py",
+        scene: "bar_friction.toml",
+        case: Some("signorini-coulomb"),
+        what: "oblique impact, Signorini–Coulomb",
+    },
+    GetfemCheck {
+        script: "bar_friction.py",
+        scene: "bar_friction.toml",
+        case: Some("compliance-coulomb"),
+        what: "oblique impact, compliance + Coulomb",
+    },
 ];
 
-fn getfem_check(root: &Path, bin: &Path, dir: &Path, out: &Path, check: &GetfemCheck) -> Result<(bool, String), String> {
-    let folder = format!("{}{}", check.script.trim_end_matches(".py"), check.case.map(|c| format!("-{c}")).unwrap_or_default());
+fn getfem_check(
+    root: &Path,
+    bin: &Path,
+    dir: &Path,
+    out: &Path,
+    check: &GetfemCheck,
+) -> Result<(bool, String), String> {
+    let folder =
+        format!("{}{}", check.script.trim_end_matches(".py"), check.case.map(|c| format!("-{c}")).unwrap_or_default());
     let out = fresh_dir(&out.join(folder))?;
     let mut cmd = getfem_python();
-    cmd.current_dir(root).arg(dir.join(check.script)).arg("--dyncontact").arg(bin).arg("--scene").arg(dir.join(check.scene)).arg("--out").arg(&out);
+    cmd.current_dir(root)
+        .arg(dir.join(check.script))
+        .arg("--dyncontact")
+        .arg(bin)
+        .arg("--scene")
+        .arg(dir.join(check.scene))
+        .arg("--out")
+        .arg(&out);
     if let Some(case) = check.case {
         cmd.args(["--case", case]);
     }
@@ -312,7 +373,6 @@ fn push_lines(report: &mut String, text: &str) {
 fn stem(p: &Path) -> String {
     p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
 }
-
 
 /// FNV-1a, 64 bit: a hash that stays the same across Rust versions (unlike `DefaultHasher`).
 fn fnv1a(bytes: &[u8]) -> u64 {

@@ -156,7 +156,10 @@ fn build_tests(root: &Path) -> Result<Build, String> {
             continue;
         }
         let Some(src) = v["target"]["src_path"].as_str() else { continue };
-        let src = Path::new(src).strip_prefix(root).map(|p| p.to_string_lossy().to_string()).unwrap_or_else(|_| src.to_string());
+        let src = Path::new(src)
+            .strip_prefix(root)
+            .map(|p| p.to_string_lossy().to_string())
+            .unwrap_or_else(|_| src.to_string());
         tests.push(TestBinary { src, exe: PathBuf::from(exe) });
     }
     let dyncontact = dyncontact.ok_or("`cargo test -p dyncontact --no-run` reported no `dyncontact` binary")?;
@@ -231,7 +234,8 @@ fn run_tests(root: &Path, bins: &[TestBinary], jobs: usize) -> Result<Outcomes, 
         }
     }
     if !failed_bins.is_empty() {
-        let failed: Vec<String> = outcomes.iter().filter(|(_, p)| !**p).map(|((f, n), _)| format!("{f}::{n}")).collect();
+        let failed: Vec<String> =
+            outcomes.iter().filter(|(_, p)| !**p).map(|((f, n), _)| format!("{f}::{n}")).collect();
         return Err(format!("tests failed in {}: {}", failed_bins.join(", "), failed.join(", ")));
     }
     Ok(outcomes)
@@ -242,20 +246,20 @@ fn run_tests(root: &Path, bins: &[TestBinary], jobs: usize) -> Result<Outcomes, 
 fn test_passed(outcomes: &Outcomes, reference: &str) -> Option<bool> {
     let (file, name) = reference.split_once("::")?;
     if file.starts_with("src/") && file != "src/main.rs" {
-        let module = file.trim_start_matches("src/").trim_end_matches(".rs").trim_end_matches("/mod").replace('/', "::");
+        let module =
+            file.trim_start_matches("src/").trim_end_matches(".rs").trim_end_matches("/mod").replace('/', "::");
         let full = if module == "lib" { name.to_string() } else { format!("{module}::{name}") };
         return outcomes.get(&("src/lib.rs".to_string(), full)).copied();
     }
-    outcomes
-        .iter()
-        .find(|((f, n), _)| f == file && (n == name || n.ends_with(&format!("::{name}"))))
-        .map(|(_, p)| *p)
+    outcomes.iter().find(|((f, n), _)| f == file && (n == name || n.ends_with(&format!("::{name}")))).map(|(_, p)| *p)
 }
 
 /// Does `file` contain `fn name` whose doc comment starts with `/// (ID)`?
 fn anchor_ok(root: &Path, anchor: &str, id: &str) -> Result<(), String> {
-    let (file, name) = anchor.split_once("::").ok_or_else(|| format!("anchor `{anchor}` is not `file.rs::function`"))?;
-    let text = std::fs::read_to_string(root.join(file)).map_err(|_| format!("anchor `{anchor}`: file {file} does not exist"))?;
+    let (file, name) =
+        anchor.split_once("::").ok_or_else(|| format!("anchor `{anchor}` is not `file.rs::function`"))?;
+    let text = std::fs::read_to_string(root.join(file))
+        .map_err(|_| format!("anchor `{anchor}`: file {file} does not exist"))?;
     let lines: Vec<&str> = text.lines().collect();
     let want = format!("/// ({id})");
     let mut found_fn = false;
@@ -298,7 +302,8 @@ fn anchor_ok(root: &Path, anchor: &str, id: &str) -> Result<(), String> {
 /// written `| (ID) |`.
 fn model_ids(root: &Path) -> Result<BTreeSet<String>, String> {
     let p = root.join("spec/model.md");
-    let text = std::fs::read_to_string(&p).map_err(|e| format!("{}: {e} (the model document must be in the repository)", p.display()))?;
+    let text = std::fs::read_to_string(&p)
+        .map_err(|e| format!("{}: {e} (the model document must be in the repository)", p.display()))?;
     Ok(text
         .lines()
         .filter_map(|l| l.strip_prefix("| (")?.split_once(") |").map(|(id, _)| id.to_string()))
@@ -347,11 +352,14 @@ struct TraceResult {
 }
 
 fn check_trace(root: &Path, outcomes: Option<&Outcomes>) -> Result<TraceResult, String> {
-    let text = std::fs::read_to_string(root.join("spec/equations.toml")).map_err(|e| format!("spec/equations.toml: {e}"))?;
+    let text =
+        std::fs::read_to_string(root.join("spec/equations.toml")).map_err(|e| format!("spec/equations.toml: {e}"))?;
     let spec: Spec = toml::from_str(&text).map_err(|e| format!("spec/equations.toml: {e}"))?;
     let mut failures = Vec::new();
     let mut open = Vec::new();
-    let mut md = String::from("# Equation trace\n\n| ID | provenance | status | code | tests | result |\n|---|---|---|---|---|---|\n");
+    let mut md = String::from(
+        "# Equation trace\n\n| ID | provenance | status | code | tests | result |\n|---|---|---|---|---|---|\n",
+    );
     let mut ids = BTreeSet::new();
     for eq in &spec.equation {
         if !ids.insert(eq.id.clone()) {
@@ -415,7 +423,10 @@ fn check_trace(root: &Path, outcomes: Option<&Outcomes>) -> Result<TraceResult, 
     cited_ids(&root.join("tests"), &mut cited);
     for (id, files) in &cited {
         if !ids.contains(id) {
-            failures.push(format!("{id} is cited in {} but is not in spec/equations.toml", files.iter().cloned().collect::<Vec<_>>().join(", ")));
+            failures.push(format!(
+                "{id} is cited in {} but is not in spec/equations.toml",
+                files.iter().cloned().collect::<Vec<_>>().join(", ")
+            ));
         }
     }
     // every ID of the spec and every cited ID is defined in the index of spec/model.md
@@ -469,7 +480,11 @@ fn report(target: &Path, trace: &TraceResult, outcomes: &Outcomes, crosscheck: &
     let passed = outcomes.values().filter(|p| **p).count();
     r.push_str(&format!("{passed} tests passed, {} failed.\n\n", outcomes.len() - passed));
     let num = |v: &serde_json::Value| v["value"].as_f64().unwrap_or(f64::NAN);
-    let worst_e1 = m.iter().filter(|v| v["quantity"].as_str().unwrap_or("").starts_with("E.1 largest")).map(num).fold(0.0, f64::max);
+    let worst_e1 = m
+        .iter()
+        .filter(|v| v["quantity"].as_str().unwrap_or("").starts_with("E.1 largest"))
+        .map(num)
+        .fold(0.0, f64::max);
     let twins: Vec<String> = m
         .iter()
         .filter(|v| v["quantity"].as_str().unwrap_or("").starts_with("twins"))
@@ -482,11 +497,20 @@ fn report(target: &Path, trace: &TraceResult, outcomes: &Outcomes, crosscheck: &
         .collect();
     r.push_str(&format!("- largest (E.1) residual, relative to the energy scale: {worst_e1:.2e}\n"));
     r.push_str(&format!("- twin solvers (newton vs conic), worst per-step difference: {}\n", twins.join("; ")));
-    r.push_str(&format!("- snapshots: {}\n\n", if snapshots.is_empty() { "not run".into() } else { snapshots.join("; ") }));
+    r.push_str(&format!(
+        "- snapshots: {}\n\n",
+        if snapshots.is_empty() { "not run".into() } else { snapshots.join("; ") }
+    ));
     r.push_str("## Measured numbers\n\n| test | quantity | measured | expected |\n|---|---|---|---|\n");
     let cell = |v: &serde_json::Value| v.as_str().unwrap_or("").replace('|', "\\|");
     for v in &m {
-        r.push_str(&format!("| {} | {} | {:.4e} | {} |\n", cell(&v["test"]), cell(&v["quantity"]), num(v), cell(&v["expected"])));
+        r.push_str(&format!(
+            "| {} | {} | {:.4e} | {} |\n",
+            cell(&v["test"]),
+            cell(&v["quantity"]),
+            num(v),
+            cell(&v["expected"])
+        ));
     }
     r.push_str("\n## Cross-check against scikit-fem\n\n```\n");
     r.push_str(crosscheck);
@@ -514,7 +538,11 @@ fn verify(root: &Path, target: &Path, skip_crosscheck: bool) -> Result<(), Strin
         let t = Instant::now();
         let outcomes = run_tests(root, &build.tests, jobs)?;
         let passed = outcomes.values().filter(|p| **p).count();
-        println!("\n== {passed} tests passed in {} binaries ({:.1} s, {jobs} at a time)", build.tests.len(), t.elapsed().as_secs_f64());
+        println!(
+            "\n== {passed} tests passed in {} binaries ({:.1} s, {jobs} at a time)",
+            build.tests.len(),
+            t.elapsed().as_secs_f64()
+        );
         let trace = check_trace(root, Some(&outcomes))?;
         println!("\n{}", trace.markdown);
         let path = write_report(target, "trace.md", &trace.markdown)?;

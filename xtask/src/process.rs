@@ -13,7 +13,8 @@ pub fn spawn(cmd: &mut Command) -> Result<(bool, String), String> {
         Some(d) => rel(d, Path::new(a)),
         None => a.to_string_lossy().into_owned(),
     };
-    let shown = std::iter::once(short(cmd.get_program())).chain(cmd.get_args().map(short)).collect::<Vec<_>>().join(" ");
+    let shown =
+        std::iter::once(short(cmd.get_program())).chain(cmd.get_args().map(short)).collect::<Vec<_>>().join(" ");
     let out = cmd.stdin(Stdio::null()).output().map_err(|e| format!("cannot start `{shown}`: {e}"))?;
     let mut text = String::from_utf8_lossy(&out.stdout).into_owned();
     text.push_str(&String::from_utf8_lossy(&out.stderr));

@@ -43,7 +43,10 @@ pub fn check(root: &Path, bin: &Path, python: &Path, out_root: &Path) -> Result<
     run(Command::new(&snakemake).current_dir(&snake).args(["--cores", "2", "--quiet", "all"]))?;
     let pwned: Vec<_> = [&snake, &odd, out_root, root].iter().map(|d| d.join("PWNED")).filter(|p| p.exists()).collect();
     if pwned.is_empty() {
-        let _ = writeln!(report, "the binary at a path holding a quote and `$(touch PWNED)` ran every point; nothing ran from its name");
+        let _ = writeln!(
+            report,
+            "the binary at a path holding a quote and `$(touch PWNED)` ran every point; nothing ran from its name"
+        );
     } else {
         ok = false;
         let _ = writeln!(report, "FAILED: the binary's path ran as code: {pwned:?}");
@@ -51,7 +54,10 @@ pub fn check(root: &Path, bin: &Path, python: &Path, out_root: &Path) -> Result<
     let (a, b) = (read(&inproc.join("sweep.csv"))?, read(&snake.join("sweep.csv"))?);
     match compare(&a, &b) {
         Ok(n) => {
-            let _ = writeln!(report, "six-point sweep: in-process and Snakemake (--cores 2) give the same sweep.csv ({n} rows, every figure equal; wall times aside)");
+            let _ = writeln!(
+                report,
+                "six-point sweep: in-process and Snakemake (--cores 2) give the same sweep.csv ({n} rows, every figure equal; wall times aside)"
+            );
         }
         Err(e) => {
             ok = false;
@@ -63,14 +69,27 @@ pub fn check(root: &Path, bin: &Path, python: &Path, out_root: &Path) -> Result<
     }
     let dry = run(Command::new(&snakemake).current_dir(&snake).args(["-n", "all"]))?;
     if job_count(&dry, "point") == Some(1) {
-        let _ = writeln!(report, "a point without its marker (interrupted or killed): `snakemake -n` runs it again, and only it");
+        let _ = writeln!(
+            report,
+            "a point without its marker (interrupted or killed): `snakemake -n` runs it again, and only it"
+        );
     } else {
         ok = false;
-        let _ = writeln!(report, "FAILED: after removing one marker `snakemake -n` lists {:?} point jobs, not 1", job_count(&dry, "point"));
+        let _ = writeln!(
+            report,
+            "FAILED: after removing one marker `snakemake -n` lists {:?} point jobs, not 1",
+            job_count(&dry, "point")
+        );
     }
     for name in ["stability_academic", "stability_impact"] {
         let dir = fresh_dir(&out_root.join(format!("plan-{name}")))?;
-        run(Command::new(bin).current_dir(root).arg("sweep").arg(root.join(format!("fixtures/sweeps/{name}.toml"))).arg("--out").arg(&dir).arg("--plan-only"))?;
+        run(Command::new(bin)
+            .current_dir(root)
+            .arg("sweep")
+            .arg(root.join(format!("fixtures/sweeps/{name}.toml")))
+            .arg("--out")
+            .arg(&dir)
+            .arg("--plan-only"))?;
         let points = std::fs::read_dir(dir.join("points")).map_err(|e| format!("{}: {e}", dir.display()))?.count();
         let dry = run(Command::new(&snakemake).current_dir(&dir).args(["-n", "all"]))?;
         let jobs = job_count(&dry, "point");
@@ -97,7 +116,9 @@ fn compare(a: &str, b: &str) -> Result<usize, String> {
     let header: Vec<&str> = la.first().ok_or("an empty sweep.csv")?.split(',').collect();
     let skip = header.iter().position(|c| *c == "wall_time_s");
     for (i, (x, y)) in la.iter().zip(&lb).enumerate() {
-        let keep = |l: &str| l.split(',').enumerate().filter(|(j, _)| Some(*j) != skip).map(|(_, f)| f.to_string()).collect::<Vec<_>>();
+        let keep = |l: &str| {
+            l.split(',').enumerate().filter(|(j, _)| Some(*j) != skip).map(|(_, f)| f.to_string()).collect::<Vec<_>>()
+        };
         if keep(x) != keep(y) {
             return Err(format!("line {}:\n  {x}\n  {y}", i + 1));
         }
