@@ -211,7 +211,7 @@ pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
     let element_entries = ((model.dim + 1) * model.dim).pow(2) as f64;
     let steps = model.time.steps;
     // every `output.every`-th step, the first and the last
-    let frames = if model.output_every == 0 { 0 } else { steps / model.output_every + 2 };
+    let frames = steps.checked_div(model.output_every).map_or(0, |f| f + 2);
     let outputs = Outputs {
         frames,
         frame_bytes: 4096.0 + 190.0 * nodes as f64 + if model.dim == 3 { 115.0 } else { 65.0 } * triangles as f64,

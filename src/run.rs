@@ -399,7 +399,7 @@ fn steps_loop(
         let last = state.n == problem.steps;
         let stopping = !last && stop_now(state.n);
         writer.record(&rec, problem, state, last).map_err(Stop::Failed)?;
-        if opts.checkpoint_every.is_some_and(|c| c > 0 && state.n % c == 0) || stopping {
+        if opts.checkpoint_every.is_some_and(|c| c > 0 && state.n.is_multiple_of(c)) || stopping {
             checkpoint(steps.simulation(), summary, *first_cap, writer).map_err(Stop::Failed)?;
         }
         summary.timing.output_s += t_out.elapsed().as_secs_f64();

@@ -102,6 +102,7 @@ pub struct Traction {
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
+#[derive(Default)]
 pub struct Loads {
     /// d expressions in x, y (, z), t; absent: zero
     #[serde(default, deserialize_with = "opt_components")]
@@ -114,26 +115,15 @@ pub struct Loads {
     pub traction: Vec<Traction>,
 }
 
-impl Default for Loads {
-    fn default() -> Self {
-        Loads { body: None, contact_surface: None, traction: Vec::new() }
-    }
-}
-
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
+#[derive(Default)]
 pub struct Initial {
     /// d expressions in x, y (, z); absent: zero
     #[serde(default, deserialize_with = "opt_components")]
     pub displacement: Option<Vec<String>>,
     #[serde(default, deserialize_with = "opt_components")]
     pub velocity: Option<Vec<String>>,
-}
-
-impl Default for Initial {
-    fn default() -> Self {
-        Initial { displacement: None, velocity: None }
-    }
 }
 
 /// A number or a string (for `penetration_bound = "inf"` and `gap = 0.0`).

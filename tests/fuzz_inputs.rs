@@ -1427,7 +1427,7 @@ fn pipeline(input: &Input, reached: &mut Vec<String>) -> Result<Outcome, String>
     }
     let mut steps = sim.steps().take(MAX_STEPS);
     let mut n = 0;
-    while let Some(rec) = steps.next() {
+    for rec in steps.by_ref() {
         n += 1;
         if let Err(e) = rec {
             return check_clean("Simulation::step", &e);

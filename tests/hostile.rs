@@ -248,16 +248,16 @@ fn nudge_a_node(mesh: &Path) {
             in_nodes = false;
         } else if in_nodes && !done {
             let f: Vec<&str> = l.split_whitespace().collect();
-            if f.len() == 3 || f.len() == 4 {
-                if let Ok(x) = f[f.len() - 3].parse::<f64>() {
-                    if x > 0.0 && x < 1.0 {
-                        let mut g: Vec<String> = f.iter().map(|s| s.to_string()).collect();
-                        let i = g.len() - 3;
-                        g[i] = format!("{}", x + 1e-9);
-                        line = g.join(" ");
-                        done = true;
-                    }
-                }
+            if (f.len() == 3 || f.len() == 4)
+                && let Ok(x) = f[f.len() - 3].parse::<f64>()
+                && x > 0.0
+                && x < 1.0
+            {
+                let mut g: Vec<String> = f.iter().map(|s| s.to_string()).collect();
+                let i = g.len() - 3;
+                g[i] = format!("{}", x + 1e-9);
+                line = g.join(" ");
+                done = true;
             }
         }
         out.push(line);

@@ -10,6 +10,7 @@
 //! - compliance with friction in slip: gap = 0, g = inf, f3 = σν + p(D)ν + μ(A') p(D) τ;
 //! - the constraint active: e = η = 0, δ0 = g, gap = 0, a prescribed λ = 5(1 + x + ½ sin 2t) ≥ 0:
 //!   f3 = σν + (p(g) + λ)ν + μ(A') p(g) τ (capped bound).
+//!
 //! Friction is velocity *strengthening* here, μ(r) = 0.6 − 0.3 e^{−5r}: with velocity weakening
 //! (μ = 0.3 + 0.3 e^{−5r}) the uniform slip is dynamically unstable on these meshes — the
 //! friction's negative damping |μ'| p ≈ 1.2 exceeds the viscous damping of the boundary layer
@@ -128,7 +129,7 @@ impl Mms {
         let (gap, bound) = match self.regime {
             Regime::Separation => ("0.2", "\"inf\"".to_string()),
             Regime::Slip => ("0", "\"inf\"".to_string()),
-            Regime::Constraint => ("0", format!("{}", self.delta0)),
+            Regime::Constraint => ("0", self.delta0.to_string()),
         };
         let (b, l, r, f3) = (self.body(), self.traction(false), self.traction(true), self.f3());
         let d0 = format!("({} + {}*x)", self.delta0, self.e);
@@ -181,7 +182,7 @@ max_fixed_point_iterations = 200
             r[0],
             r[1],
             2.0 * self.eta,
-            fric = format!(
+            fric = format_args!(
                 "[contact.friction]\nlaw = \"exponential\"\nstatic = {}\nkinetic = {}\ndecay = 5.0",
                 self.mu_static, self.mu_kinetic
             )

@@ -16,6 +16,7 @@
 //! - compliance with friction in slip: gap = 0, g = inf: f3 = σν + p(D)ν + μ(V) p(D) (cos ωt, sin ωt, 0);
 //! - the constraint active: e = f = η = 0, δ0 = g, a prescribed λ = 5(1 + x + y + ½ sin 2t) ≥ 0:
 //!   f3 = σν + (p(g) + λ)ν + μ(V) p(g) (cos ωt, sin ωt, 0) (capped bound).
+//!
 //! Friction is velocity strengthening, μ(r) = 0.6 − 0.3 e^{−5r}, as in 2-D (tests/manufactured_contact.rs:
 //! under weakening the uniform slip is dynamically unstable on these meshes).
 //! Expected: energy-norm order ≈ 1 in h (P1); midpoint order ≈ 2 in k while the solution stays in

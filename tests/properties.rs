@@ -2,6 +2,9 @@
 //! identities that must hold for every input, checked on random inputs. Tolerances are
 //! round-off bounds (a few ulps times the size of the terms) unless stated.
 
+// index loops over nodes read like the conditions they check (several arrays at once)
+#![allow(clippy::needless_range_loop)]
+
 use dyncontact::fem::assemble::{Dofs, assemble_full};
 use dyncontact::fem::{LoadVector, element};
 use dyncontact::linalg;
@@ -242,8 +245,11 @@ proptest! {
     }
 }
 
+/// A condensed step problem as the strategy draws it: n, then the vectors and scalars the tests unpack.
+type StepProblem = (usize, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, f64, f64);
+
 /// A random condensed step problem: n nodes, SPD W, compliance with the bound g.
-fn step_problem() -> impl Strategy<Value = (usize, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, f64, f64)> {
+fn step_problem() -> impl Strategy<Value = StepProblem> {
     (1usize..5).prop_flat_map(|n| {
         let m = 2 * n;
         (

@@ -85,7 +85,7 @@ fn memory_estimate_is_within_30_percent_of_the_measured_peak() {
         let overrides: Vec<dyncontact::overrides::Override> =
             sets.iter().map(|s| dyncontact::overrides::Override::parse(s).expect("override")).collect();
         let scene = Scene::from_file_with(&fixture(name), &overrides).expect("scene");
-        let est = estimate(&scene.validate().expect("valid"), &fixture(name).parent().expect("dir").to_path_buf())
+        let est = estimate(&scene.validate().expect("valid"), fixture(name).parent().expect("dir"))
             .expect("estimate")
             .total()
             / 1e6;

@@ -11,6 +11,7 @@
 //!   after 1 s of stick–slip under velocity weakening (the dynamics amplify solver-level
 //!   differences), so 2 digits are kept for them.
 //! - the 3-D fixtures (academic3d, column_impact3d, sliding_block3d) under the same rules.
+//!
 //! Stick/slip counts are taken where they did not move under the tighter tolerances.
 
 mod common;
@@ -75,7 +76,9 @@ fn coarse_academic() -> Scene {
 
 /// (name, scene, times of the stick/slip counts, digits of the instantaneous and of the
 /// cumulative quantities)
-fn cases() -> Vec<(&'static str, Scene, Vec<f64>, (usize, usize))> {
+type Case = (&'static str, Scene, Vec<f64>, (usize, usize));
+
+fn cases() -> Vec<Case> {
     vec![
         ("academic_coarse", coarse_academic(), vec![0.1, 0.2, 0.45], (4, 2)),
         ("bar_impact", fixture("bar_impact"), vec![1.0, 2.5], (4, 4)),

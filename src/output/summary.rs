@@ -232,7 +232,7 @@ impl ModelInfo {
             format!("time           : {} steps of k = {}", self.steps, self.step),
         ];
         match self.ck_step_limit {
-            Some(k) if k == 0.0 => v.push(format!("(C.k)          : no admissible step — {}", self.ck_note)),
+            Some(0.0) => v.push(format!("(C.k)          : no admissible step — {}", self.ck_note)),
             Some(k) => v.push(format!(
                 "(C.k)          : the unfrozen step problem is convex for k <= {k:.4e} (limited at {})",
                 self.ck_limiting_name

@@ -55,16 +55,22 @@ impl Default for ConicSettings {
     }
 }
 
+/// A row of a conic program: the sparse a (variable, coefficient) and b of b − a·x.
+type ConeRow = (Vec<(usize, f64)>, f64);
+
+/// Clarabel's problem data: P, q, A, b and the cones.
+type Program = (CscMatrix<f64>, Vec<f64>, CscMatrix<f64>, Vec<f64>, Vec<SupportedConeT<f64>>);
+
 /// A growing sparse problem: variables, objective, and constraint rows by cone.
 #[derive(Default)]
 struct Builder {
     nvar: usize,
     p: Vec<(usize, usize, f64)>,
     q: Vec<f64>,
-    zero: Vec<(Vec<(usize, f64)>, f64)>,
-    nonneg: Vec<(Vec<(usize, f64)>, f64)>,
+    zero: Vec<ConeRow>,
+    nonneg: Vec<ConeRow>,
     /// second-order cones: each a list of rows (a, b) with b − a·x in the cone
-    soc: Vec<Vec<(Vec<(usize, f64)>, f64)>>,
+    soc: Vec<Vec<ConeRow>>,
 }
 
 impl Builder {
@@ -77,7 +83,7 @@ impl Builder {
     fn le(&mut self, a: Vec<(usize, f64)>, b: f64) {
         self.nonneg.push((a, b));
     }
-    fn build(self) -> (CscMatrix<f64>, Vec<f64>, CscMatrix<f64>, Vec<f64>, Vec<SupportedConeT<f64>>) {
+    fn build(self) -> Program {
         let n = self.nvar;
         let p = csc(n, n, self.p);
         let mut trip = Vec::new();
@@ -113,7 +119,7 @@ impl Builder {
 
 /// CSC from triplets (duplicates summed).
 fn csc(m: usize, n: usize, mut t: Vec<(usize, usize, f64)>) -> CscMatrix<f64> {
-    t.sort_by(|a, b| (a.1, a.0).cmp(&(b.1, b.0)));
+    t.sort_by_key(|a| (a.1, a.0));
     let mut colptr = vec![0usize; n + 1];
     let (mut rowval, mut nzval): (Vec<usize>, Vec<f64>) = (Vec::new(), Vec::new());
     let mut last: Option<(usize, usize)> = None;

@@ -110,13 +110,13 @@ impl Delassus {
     /// [`GEMV_FROM`](crate::defaults::GEMV_FROM) components on goes through faer's
     /// matrix–vector product (SIMD of the machine, chosen at run time) over all columns.
     pub fn add_times(&self, r: &[f64], alpha: f64, out: &mut [f64]) {
-        if let Delassus::Dense(w) = self {
-            if w.nrows() >= crate::defaults::GEMV_FROM {
-                let rhs = faer::MatRef::from_column_major_slice(r, r.len(), 1);
-                let dst = faer::MatMut::from_column_major_slice_mut(out, w.nrows(), 1);
-                faer::linalg::matmul::matmul(dst, faer::Accum::Add, w.as_ref(), rhs, alpha, Par::Seq);
-                return;
-            }
+        if let Delassus::Dense(w) = self
+            && w.nrows() >= crate::defaults::GEMV_FROM
+        {
+            let rhs = faer::MatRef::from_column_major_slice(r, r.len(), 1);
+            let dst = faer::MatMut::from_column_major_slice_mut(out, w.nrows(), 1);
+            faer::linalg::matmul::matmul(dst, faer::Accum::Add, w.as_ref(), rhs, alpha, Par::Seq);
+            return;
         }
         for (l, &rl) in r.iter().enumerate() {
             if rl == 0.0 {
@@ -538,7 +538,8 @@ struct Factor {
 
 enum FactorKind {
     Dense(Llt<f64>),
-    Sparse(SparseFactor),
+    /// boxed: the sparse factor's symbolic and numeric parts are much larger than a dense Llt's handle
+    Sparse(Box<SparseFactor>),
 }
 
 impl std::fmt::Debug for FactorKind {
@@ -911,7 +912,7 @@ fn factor(w: &Delassus, frames: &SlipFrames, unknown: &[usize], diag: &[f64]) ->
                     Default::default(),
                 )
                 .ok()?;
-            Some(FactorKind::Sparse(SparseFactor { order, symbolic, values }))
+            Some(FactorKind::Sparse(Box::new(SparseFactor { order, symbolic, values })))
         }
     }
 }

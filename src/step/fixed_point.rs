@@ -236,13 +236,13 @@ fn iterate(
         report.fixed_point_change = if s_scale > 0.0 { ds / s_scale } else { 0.0 };
         if s_converged || y_converged {
             // the accepted solve to the Newton tolerance itself ((E.1) holds to it)
-            if let Inner::Newton(set) = inner {
-                if sol.residual > set.tolerance {
-                    let polished = inner_solve(step, &s_bound, &sol.lambda, &sol.t, inner).map_err(fail(l))?;
-                    report.inner_iterations += polished.iterations;
-                    report.inner_residual = polished.residual;
-                    sol = polished;
-                }
+            if let Inner::Newton(set) = inner
+                && sol.residual > set.tolerance
+            {
+                let polished = inner_solve(step, &s_bound, &sol.lambda, &sol.t, inner).map_err(fail(l))?;
+                report.inner_iterations += polished.iterations;
+                report.inner_residual = polished.residual;
+                sol = polished;
             }
             return Ok((sol, s_bound, report));
         }

@@ -24,6 +24,7 @@
 //! - **general** (`general_direction`): the full m × m LU — Co.3's coupling of the friction force
 //!   to the normal force, N.4 where no velocity form is kept, and the reference the others are
 //!   tested against.
+//!
 //! Conjugate gradients stop at the Eisenstat–Walker forcing min(1e-3, 0.1 ‖F‖/scale), which keeps
 //! Newton's quadratic convergence.
 
@@ -530,10 +531,10 @@ fn direction(
         0.0
     };
     let coupled = coupling.iter().any(|c| *c != [0.0; 2]) || slips.iter().any(|d| d.ds_dn != 0.0);
-    if let (true, false, Some(inverse)) = (reduced, coupled, step.inverse) {
-        if let Some(d) = velocity_direction(step, inverse, f, &prescribed, &g, &slips, &dy, &dm, forcing) {
-            return Some(d);
-        }
+    if let (true, false, Some(inverse)) = (reduced, coupled, step.inverse)
+        && let Some(d) = velocity_direction(step, inverse, f, &prescribed, &g, &slips, &dy, &dm, forcing)
+    {
+        return Some(d);
     }
     let symmetric = slips.iter().all(DiskSlip::frozen)
         && coupling.iter().all(|c| *c == [0.0; 2])
@@ -709,6 +710,9 @@ fn velocity_direction(
 /// kept and reused by `step.factors` (exactly while U, D and the frames hold; as the
 /// preconditioner of conjugate gradients while U holds). Returns the unknown of each component
 /// (Δm on P, Δy elsewhere), None when W'_UU + D is not numerically positive definite.
+/// (Eight arguments: each is a different object of the linearized (N.3); bundling them would
+/// only rename them.)
+#[allow(clippy::too_many_arguments)]
 fn reduced_direction(
     step: &StepData,
     frames: &SlipFrames,
@@ -757,6 +761,10 @@ fn reduced_direction(
     out.iter().all(|v| v.is_finite()).then_some(out)
 }
 
+/// The slip branch's coupling of the friction force to the normal unknown (per component) and
+/// its 2 × 2 blocks in the slip frames (node, block).
+type SlipCoupling<'a> = (&'a [[f64; 2]], &'a [(usize, [[f64; 2]; 2])]);
+
 /// The Newton direction on the full m × m system (dense LU), for the unsymmetric cases: the
 /// Co.3 coupling of the friction force to the normal force, and the unfrozen bound of N.4
 /// (∂S/∂v̄ < 0 under velocity weakening). J x = rhs with x_l = Δm_l (prescribed) or Δy_l (free).
@@ -765,7 +773,7 @@ fn general_direction(
     f: &[f64],
     prescribed: &[bool],
     g: &[f64],
-    (coupling, blocks): (&[[f64; 2]], &[(usize, [[f64; 2]; 2])]),
+    (coupling, blocks): SlipCoupling,
     dy: &[f64],
     dm: &[f64],
 ) -> Option<Vec<f64>> {

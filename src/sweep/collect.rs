@@ -230,7 +230,7 @@ fn check_point(summary: &serde_json::Value, pd: &Path) -> std::result::Result<()
         rows += 1;
     }
     // a running (or killed) run may be one row ahead of its last summary
-    if rows != steps + 1 && !(status == "running" && rows >= steps + 1) {
+    if rows != steps + 1 && !(status == "running" && rows > steps) {
         return Err(format!(
             "history.csv has {rows} rows of steps where summary.json reports {steps} steps (so {} rows)",
             steps + 1

@@ -602,14 +602,13 @@ fn point_text(base: &str, label: &str, base_dir: &Path, ovs: &[Override], name: 
     })?;
     crate::overrides::apply_all(&mut table, ovs)?;
     table.insert("name".into(), toml::Value::String(name.to_string()));
-    if let Some(toml::Value::Table(d)) = table.get_mut("domain") {
-        if let Some(toml::Value::String(f)) = d.get("file") {
-            if Path::new(f).is_relative() {
-                let abs = base_dir.join(f);
-                let abs = abs.canonicalize().unwrap_or(abs);
-                d.insert("file".into(), toml::Value::String(abs.display().to_string()));
-            }
-        }
+    if let Some(toml::Value::Table(d)) = table.get_mut("domain")
+        && let Some(toml::Value::String(f)) = d.get("file")
+        && Path::new(f).is_relative()
+    {
+        let abs = base_dir.join(f);
+        let abs = abs.canonicalize().unwrap_or(abs);
+        d.insert("file".into(), toml::Value::String(abs.display().to_string()));
     }
     toml::to_string(&table).map_err(|e| Error::Output(format!("{label}: {e}")))
 }

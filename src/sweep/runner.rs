@@ -182,10 +182,10 @@ pub fn run_one(pd: &Path, interrupt: Option<Arc<AtomicBool>>) -> Result<Outcome>
 fn run_point(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> Outcome {
     let _ = std::fs::remove_file(marker(pd));
     let (outcome, kind) = run_point_once(pd, text, interrupt);
-    if matches!(outcome, Outcome::Completed) || kind.is_some_and(is_final) {
-        if let Err(e) = crate::output::write_atomic(&marker(pd), b"") {
-            return Outcome::Failed(e.to_string());
-        }
+    if (matches!(outcome, Outcome::Completed) || kind.is_some_and(is_final))
+        && let Err(e) = crate::output::write_atomic(&marker(pd), b"")
+    {
+        return Outcome::Failed(e.to_string());
     }
     outcome
 }

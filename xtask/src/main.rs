@@ -324,12 +324,11 @@ fn cited_ids(dir: &Path, out: &mut BTreeMap<String, BTreeSet<String>>) {
                 let t = l.trim_start();
                 let Some(rest) = t.strip_prefix("///").or_else(|| t.strip_prefix("//!")) else { continue };
                 let rest = rest.trim_start();
-                if let Some(inner) = rest.strip_prefix('(') {
-                    if let Some((id, _)) = inner.split_once(')') {
-                        if is_id(id) {
-                            out.entry(id.to_string()).or_default().insert(p.display().to_string());
-                        }
-                    }
+                if let Some(inner) = rest.strip_prefix('(')
+                    && let Some((id, _)) = inner.split_once(')')
+                    && is_id(id)
+                {
+                    out.entry(id.to_string()).or_default().insert(p.display().to_string());
                 }
             }
         }
