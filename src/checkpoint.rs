@@ -162,7 +162,7 @@ impl Checkpoint {
     /// Write to `dir/checkpoint.json` (through a temporary file and a rename).
     pub fn write(&self, dir: &std::path::Path) -> Result<()> {
         let text = serde_json::to_string(self).map_err(|e| Error::Output(format!("checkpoint.json: {e}")))?;
-        crate::output::fs::write_atomic(&dir.join("checkpoint.json"), text.as_bytes())
+        crate::files::write_atomic(&dir.join("checkpoint.json"), text.as_bytes())
     }
 
     /// Read `dir/checkpoint.json`, checked: this version's format, the checksum, every value

@@ -15,11 +15,13 @@
 //! - [`energy`]: the discrete energy balance (E.1)
 //! - [`simulation`]: the time loop (`Simulation::steps`, the one loop every caller drives)
 //! - [`failure`]: why a solver or a run stopped (enums), and their messages; [`defaults`]: every tuning constant
-//! - [`output`]: history.csv, contact.csv, summary.json, VTU frames, SVG charts
+//! - [`output`]: history.csv, contact.csv, summary.json, VTU frames, SVG charts; [`files`]: whole-file and
+//!   whole-row writes (below both the outputs and the checkpoints)
 //! - [`run`], [`checkpoint`]: a run with its outputs, checkpoints and resume; [`resources`]: memory and cost estimates;
 //!   [`fingerprint`]: of the inputs a run reads (the scene and its mesh file)
 //! - [`sweep`]: many runs of one scene (axes, `[set]`), in parallel here or as Snakemake jobs; sweep.csv
-//! - [`studies`]: the ε-study, the stability map, the benchmarks (on the public API only)
+//! - [`study`]: the user's studies (`dyncontact study penalty`: the ε → 0 study), on the public API only;
+//!   the developers' studies (benchmarks, stability map) are the `dyncontact-studies` crate (studies/)
 //! - [`linalg`]: thin wrappers over faer; [`reference`]: closed forms; [`variational`]: V.1/V.2 checks
 
 // Two lints this crate does not follow, on purpose:
@@ -35,6 +37,7 @@ pub mod energy;
 pub mod error;
 pub mod failure;
 pub mod fem;
+pub mod files;
 pub mod fingerprint;
 pub mod linalg;
 pub mod mesh;
@@ -49,7 +52,7 @@ pub mod scene;
 pub mod scheme;
 pub mod simulation;
 pub mod step;
-pub mod studies;
+pub mod study;
 pub mod sweep;
 pub mod variational;
 

@@ -1,5 +1,6 @@
-//! The dyncontact command line (the README's contract): `run`, `check`, `study`,
-//! `export-operators`. Thin: it calls the library.
+//! The dyncontact command line (the README's contract): `run`, `check`, `sweep` (with `sweep
+//! collect` and `sweep point`), `study penalty`, and the hidden `export-operators` (the Python
+//! cross-check's operators). Thin: it calls the library.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -14,7 +15,7 @@ use dyncontact::overrides::Override;
 use dyncontact::problem::Problem;
 use dyncontact::run::{RunOptions, run};
 use dyncontact::scene::Scene;
-use dyncontact::{Error, resources, studies};
+use dyncontact::{Error, resources, study};
 
 #[derive(Parser)]
 #[command(
@@ -131,45 +132,6 @@ enum StudyKind {
         #[arg(long, value_name = "N")]
         jobs: Option<usize>,
     },
-    /// Work–precision benchmark: error against a fine reference vs wall time, for schemes ×
-    /// inner solvers × masses × refinement levels; the linear-algebra floor; F.1 vs N.4.
-    Bench {
-        /// output folder (default: target/bench)
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// a small configuration (smoke test)
-        #[arg(long)]
-        quick: bool,
-        /// only the floor part (time per step ÷ floor on the default scene; floor.csv)
-        #[arg(long)]
-        floor_only: bool,
-        /// only the bookkeeping part (the (E.1) terms and outputs at 66k unknowns; bookkeeping.csv)
-        #[arg(long)]
-        bookkeeping_only: bool,
-    },
-    /// Stability map: sweeps of k, ε, the friction decay, the impact speed and θ per scheme,
-    /// each run classified (converged, fixed point failed, Newton failed, energy grew, error).
-    Stability {
-        /// output folder (default: target/stability); its sweeps run in OUT/sweeps/
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// a small sweep (smoke test)
-        #[arg(long)]
-        quick: bool,
-        /// runs at once (default: the number of cores)
-        #[arg(long, value_name = "N")]
-        jobs: Option<usize>,
-    },
-    /// Where the friction bound is evaluated: the predictor against u_ν^{n+½} of the iterate,
-    /// convergence in k for c_ν = 1e3 … 1e8 on the academic scene and the pulled block.
-    BoundAt {
-        /// output folder (default: target/bound_at)
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// two compliances and two levels (smoke test)
-        #[arg(long)]
-        quick: bool,
-    },
 }
 
 /// println! that never panics: a closed stdout (`dyncontact run | head -1`) is ignored.
@@ -249,31 +211,6 @@ fn main() -> ExitCode {
         }
         Command::Study { study: StudyKind::Penalty { scene, eps, out, jobs } } => {
             cmd_penalty(scene.as_deref(), eps.as_deref(), out.as_deref(), *jobs)
-        }
-        Command::Study { study: StudyKind::Bench { out, quick, floor_only, bookkeeping_only } } => {
-            let out = out.clone().unwrap_or_else(|| PathBuf::from("target/bench"));
-            studies::bench::run(
-                &out,
-                &studies::bench::BenchOptions {
-                    quick: *quick,
-                    floor_only: *floor_only,
-                    bookkeeping_only: *bookkeeping_only,
-                },
-            )
-            .map(|report| say!("{report}"))
-        }
-        Command::Study { study: StudyKind::Stability { out, quick, jobs } } => {
-            let out = out.clone().unwrap_or_else(|| PathBuf::from("target/stability"));
-            studies::stability::run(
-                &out,
-                &studies::stability::StabilityOptions { quick: *quick, jobs: jobs.unwrap_or(0) },
-            )
-            .map(|report| say!("{report}"))
-        }
-        Command::Study { study: StudyKind::BoundAt { out, quick } } => {
-            let out = out.clone().unwrap_or_else(|| PathBuf::from("target/bound_at"));
-            studies::bound_at::run(&out, &studies::bound_at::BoundAtOptions { quick: *quick })
-                .map(|report| say!("{report}"))
         }
         Command::ExportOperators { scene, out } => load(Some(scene), &[]).and_then(|(s, dir)| {
             let problem = Problem::from_scene(&s, &dir)?;
@@ -390,7 +327,7 @@ fn cmd_penalty(
     let out = out.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&s.name));
     let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
     let work = out.join("study").join("penalty-sweep");
-    let st = studies::penalty::penalty_study(&base, &[], eps, &work, jobs)?;
+    let st = study::penalty::penalty_study(&base, &[], eps, &work, jobs)?;
     say!(
         "penalty study of {} (exact reference: {:.2} s; runs in {})",
         s.name,

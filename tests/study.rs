@@ -12,7 +12,7 @@
 mod common;
 
 use dyncontact::overrides::Override;
-use dyncontact::studies::penalty::penalty_study;
+use dyncontact::study::penalty::penalty_study;
 use dyncontact::sweep::Base;
 
 /// A fixture scene as a sweep's base.

@@ -10,9 +10,10 @@
 //! report its error), so a frame costs the loop only the copy of u and v.
 
 pub mod contact_charts;
+pub mod csv;
 pub mod export;
 pub mod folder;
-pub mod fs;
+pub mod loglog;
 pub mod plots;
 pub mod resume;
 pub mod summary;
@@ -28,7 +29,7 @@ use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::simulation::{NodeRecord, State, StepRecord};
 
-pub use fs::{AppendFile, write_atomic};
+pub use crate::files::{AppendFile, write_atomic, write_files};
 pub use summary::{ModelInfo, Summary};
 
 /// A history.csv value: a real or a count (written with Rust's shortest round-trip format).

@@ -19,9 +19,9 @@ use std::path::Path;
 
 use super::{Plan, Point};
 use crate::error::{Error, Result};
+use crate::output::csv::csv_field;
 use crate::output::plots::{Options, Panel, Series, stacked_chart};
 use crate::output::write_atomic;
-use crate::studies::harness::csv_field;
 
 /// The figures of sweep.csv, in column order (SCENES.md: final energies, cumulative
 /// dissipations, max normal force, max penetration, max |energy_residual|, iteration totals).

@@ -5,15 +5,21 @@ use dyncontact::problem::Problem;
 use dyncontact::scene::Scene;
 use dyncontact::simulation::{Settings, Simulation, StepRecord};
 
+/// The repository's root: this file serves the solver's tests (the package at the root) and the
+/// studies' (the `studies/` package below it).
+pub fn root() -> std::path::PathBuf {
+    let manifest = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    if manifest.join("fixtures").is_dir() { manifest } else { manifest.join("..") }
+}
+
 /// A scene of fixtures/scenes by name (without .toml).
 pub fn fixture(name: &str) -> Scene {
-    let path =
-        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes").join(format!("{name}.toml"));
+    let path = root().join("fixtures/scenes").join(format!("{name}.toml"));
     Scene::from_file(&path).unwrap_or_else(|e| panic!("fixture {name}: {e}"))
 }
 
 pub fn problem(scene: Scene) -> Problem {
-    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes");
+    let dir = root().join("fixtures/scenes");
     Problem::from_scene(&scene, &dir).unwrap_or_else(|e| panic!("problem: {e}"))
 }
 

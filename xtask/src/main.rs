@@ -1,7 +1,7 @@
 //! Project tasks: `cargo xtask verify | crosscheck | trace | bench | stability | bound-at`.
 //!
 //! `verify` is the project's test command. It
-//! 1. builds every test target (`cargo test -p dyncontact --no-run`: xtask has no tests, and its
+//! 1. builds every test target (`cargo test -p dyncontact -p dyncontact-studies --no-run`: xtask has no tests, and its
 //!    test harness would build criterion, a dev-dependency of its benches) and runs each test binary
 //!    directly, as many at a time as the machine has cores, recording which test passed (so a
 //!    test is tied to its file); meanwhile a thread prepares the cross-check's Python (venv, pip,
@@ -15,6 +15,7 @@
 //! 4. writes target/verify/trace.md and exits non-zero on any failure.
 
 mod crosscheck;
+mod cycles;
 mod process;
 mod workflow;
 
@@ -95,11 +96,11 @@ fn main() -> ExitCode {
     }
 }
 
-/// `bench` and `stability`: build the release binary (numerics at full speed) and run its
-/// `study` subcommand, writing under target/<what>.
+/// `bench`, `stability`, `bound-at`: build the studies' binary in release (numerics at full
+/// speed) and run that study, writing under target/<what>.
 fn study(root: &Path, target: &Path, what: &str, extra: &[String]) -> Result<(), String> {
     let st = Command::new(env!("CARGO"))
-        .args(["build", "--release", "-p", "dyncontact", "--bin", "dyncontact"])
+        .args(["build", "--release", "-p", "dyncontact-studies", "--bin", "dyncontact-studies"])
         .current_dir(root)
         .status()
         .map_err(|e| format!("cannot run cargo: {e}"))?;
@@ -107,14 +108,15 @@ fn study(root: &Path, target: &Path, what: &str, extra: &[String]) -> Result<(),
         return Err("the release build failed".into());
     }
     let out = target.join(what.replace('-', "_"));
-    let st = Command::new(target.join("release").join(format!("dyncontact{}", std::env::consts::EXE_SUFFIX)))
-        .args(["study", what, "--out"])
+    let exe = target.join("release").join(format!("dyncontact-studies{}", std::env::consts::EXE_SUFFIX));
+    let st = Command::new(exe)
+        .args([what, "--out"])
         .arg(&out)
         .args(extra)
         .current_dir(root)
         .status()
-        .map_err(|e| format!("cannot run dyncontact: {e}"))?;
-    if st.success() { Ok(()) } else { Err(format!("dyncontact study {what} failed")) }
+        .map_err(|e| format!("cannot run dyncontact-studies: {e}"))?;
+    if st.success() { Ok(()) } else { Err(format!("dyncontact-studies {what} failed")) }
 }
 
 /// A test binary built by cargo: the source file of its target and the executable.
@@ -123,7 +125,7 @@ struct TestBinary {
     exe: PathBuf,
 }
 
-/// What `cargo test -p dyncontact --no-run` built: the test binaries, and the `dyncontact` binary
+/// What `cargo test -p dyncontact -p dyncontact-studies --no-run` built: the test binaries, and the `dyncontact` binary
 /// that the CLI tests run and the cross-check uses (the one built with these tests, never an
 /// older one left in the target directory).
 struct Build {
@@ -133,7 +135,8 @@ struct Build {
 
 fn build_tests(root: &Path) -> Result<Build, String> {
     let out = Command::new(env!("CARGO"))
-        .args(["test", "-p", "dyncontact", "--no-run", "--message-format=json-render-diagnostics"])
+        .args(["test", "-p", "dyncontact", "-p", "dyncontact-studies", "--no-run"])
+        .arg("--message-format=json-render-diagnostics")
         .current_dir(root)
         .stderr(Stdio::inherit())
         .output()
@@ -162,7 +165,7 @@ fn build_tests(root: &Path) -> Result<Build, String> {
             .unwrap_or_else(|_| src.to_string());
         tests.push(TestBinary { src, exe: PathBuf::from(exe) });
     }
-    let dyncontact = dyncontact.ok_or("`cargo test -p dyncontact --no-run` reported no `dyncontact` binary")?;
+    let dyncontact = dyncontact.ok_or("the test build reported no `dyncontact` binary")?;
     Ok(Build { tests, dyncontact })
 }
 
@@ -439,6 +442,16 @@ fn check_trace(root: &Path, outcomes: Option<&Outcomes>) -> Result<TraceResult, 
         }
         Err(e) => failures.push(e),
     }
+    let module_cycles = cycles::check(root);
+    md.push_str(&format!(
+        "\n## Module cycles\n\n{}\n",
+        if module_cycles.is_empty() {
+            "none (every crate's modules, at every level)".to_string()
+        } else {
+            module_cycles.join("\n\n")
+        }
+    ));
+    failures.extend(module_cycles);
     if !open.is_empty() {
         md.push_str("\n## Open (planned) IDs\n\n");
         for o in &open {

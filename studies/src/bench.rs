@@ -33,22 +33,23 @@ use std::time::Instant;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::error::{Error, Result};
-use crate::failure::ContactFailure;
-use crate::model::Model;
-use crate::model::kinds::{self, InnerSolver, MassKind, SchemeKind};
-use crate::output::plots::PALETTE;
-use crate::output::{ModelInfo, write_atomic};
-use crate::problem::Problem;
-use crate::scene::Scene;
-use crate::simulation::Simulation;
-use crate::step::fixed_point::Inner;
-use crate::step::newton::NewtonSettings;
+use dyncontact::error::{Error, Result};
+use dyncontact::failure::ContactFailure;
+use dyncontact::model::Model;
+use dyncontact::model::kinds::{self, InnerSolver, MassKind, SchemeKind};
+use dyncontact::output::plots::PALETTE;
+use dyncontact::output::{ModelInfo, write_atomic};
+use dyncontact::problem::Problem;
+use dyncontact::scene::Scene;
+use dyncontact::simulation::Simulation;
+use dyncontact::step::fixed_point::Inner;
+use dyncontact::step::newton::NewtonSettings;
 
-use super::convergence::{
+use crate::convergence::{
     Level, RunStats, Trajectory, displacement_error, force_errors, impulse_error, joint_levels, probe_dofs, simulate,
 };
-use super::harness::{self, loglog_slope};
+use dyncontact::output::csv::{csv_field, csv_table};
+use dyncontact::output::loglog::{chart_error, log_range, loglog_slope};
 
 /// Options of the benchmark.
 #[derive(Debug, Clone, Default)]
@@ -250,7 +251,7 @@ fn run_specs(plan: &Plan) -> Vec<RunSpec> {
 
 /// work_precision.csv.
 fn work_csv(rows: &[WorkRow]) -> String {
-    harness::csv_table(
+    csv_table(
         WORK_PRECISION_COLUMNS,
         rows.iter().map(|r| {
             let st = &r.stats;
@@ -274,7 +275,7 @@ fn work_csv(rows: &[WorkRow]) -> String {
                 format!("{:.6e}", r.error_force[1]),
                 format!("{:.6e}", r.error_force[2]),
                 format!("{:.6e}", r.error_impulse),
-                harness::csv_field(&r.status),
+                csv_field(&r.status),
             ]
         }),
     )
@@ -327,10 +328,10 @@ fn work_panel(
     y_desc: &str,
     legend: bool,
 ) -> Result<()> {
-    let err = harness::chart_error("work_precision.svg");
+    let err = chart_error("work_precision.svg");
     let ok: Vec<&WorkRow> = rows.iter().filter(|r| r.ok()).collect();
-    let (x0, x1) = harness::log_range(ok.iter().map(|r| r.stats.wall_time_s));
-    let (y0, y1) = harness::log_range(ok.iter().map(|r| error(r)));
+    let (x0, x1) = log_range(ok.iter().map(|r| r.stats.wall_time_s));
+    let (y0, y1) = log_range(ok.iter().map(|r| error(r)));
     let mut chart = ChartBuilder::on(area)
         .caption(y_desc, ("sans-serif", 18))
         .margin(10)
@@ -388,7 +389,7 @@ fn work_panel(
 /// time, log–log, one line per scheme × inner × mass (newton solid with circles, conic dashed
 /// with triangles).
 fn work_svg(rows: &[WorkRow], title: &str) -> Result<String> {
-    let err = harness::chart_error("work_precision.svg");
+    let err = chart_error("work_precision.svg");
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (1950, 640)).into_drawing_area();
@@ -497,7 +498,7 @@ fn race_cases(race: &RacePlan) -> Result<Vec<RaceCase>> {
 }
 
 fn inner_failure(e: ContactFailure) -> Error {
-    Error::Output(format!("bench race: {}", crate::failure::StepFailureCause::Contact(e)))
+    Error::Output(format!("bench race: {}", dyncontact::failure::StepFailureCause::Contact(e)))
 }
 
 /// The Newton settings of a simulation whose inner solver is `newton`.
@@ -530,7 +531,7 @@ fn agreement(p: &Problem) -> Result<Agreement> {
                 sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).map_err(inner_failure)?;
             let vs = data.velocity_scale(&f1.y).max(1e-300);
             let (ra, rb) = (data.forces(&f1.y, &f1.lambda, &f1.t), data.forces(&un.y, &un.lambda, &un.t));
-            let fs = crate::linalg::norm_inf(&ra).max(1e-300);
+            let fs = dyncontact::linalg::norm_inf(&ra).max(1e-300);
             let dv = f1.y.iter().zip(&un.y).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / vs;
             let df = ra.iter().zip(&rb).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / fs;
             a.max_dv = a.max_dv.max(dv);
@@ -582,12 +583,12 @@ impl RaceRow {
 
 /// race.csv.
 fn race_csv(rows: &[RaceRow]) -> String {
-    harness::csv_table(
+    csv_table(
         RACE_COLUMNS,
         rows.iter().map(|r| {
             let st = &r.stats;
             vec![
-                harness::csv_field(&r.case.label),
+                csv_field(&r.case.label),
                 r.case.decay.to_string(),
                 format!("{:e}", r.case.k),
                 r.case.ck_limit.map_or("".into(), |l| format!("{l:.6e}")),
@@ -605,7 +606,7 @@ fn race_csv(rows: &[RaceRow]) -> String {
                 format!("{:.3e}", r.agreement.max_dv),
                 format!("{:.3e}", r.agreement.max_df),
                 r.agreement.differing.to_string(),
-                harness::csv_field(&r.status),
+                csv_field(&r.status),
             ]
         }),
     )
@@ -618,7 +619,7 @@ fn race_panel(
     value: fn(&RaceRow) -> f64,
     y_desc: &str,
 ) -> Result<()> {
-    let err = harness::chart_error("race.svg");
+    let err = chart_error("race.svg");
     let labels: Vec<String> = rows
         .iter()
         .step_by(2)
@@ -682,7 +683,7 @@ fn race_panel(
 
 /// race.svg: contact-solve time and Newton iterations per step.
 fn race_svg(rows: &[RaceRow], title: &str) -> Result<String> {
-    let err = harness::chart_error("race.svg");
+    let err = chart_error("race.svg");
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (1400, 560)).into_drawing_area();
@@ -974,14 +975,14 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     let plan = if opts.quick { Plan::quick() } else { Plan::full() };
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let bk_plan = if opts.quick {
-        super::bookkeeping::BookkeepingPlan::quick()
+        crate::bookkeeping::BookkeepingPlan::quick()
     } else {
-        super::bookkeeping::BookkeepingPlan::full()
+        crate::bookkeeping::BookkeepingPlan::full()
     };
     if opts.bookkeeping_only {
-        let rows = super::bookkeeping::run_part(&bk_plan, out)?;
-        write(out, "bookkeeping.csv", &super::bookkeeping::csv(&rows))?;
-        return Ok(super::bookkeeping::report(&rows));
+        let rows = crate::bookkeeping::run_part(&bk_plan, out)?;
+        write(out, "bookkeeping.csv", &crate::bookkeeping::csv(&rows))?;
+        return Ok(crate::bookkeeping::report(&rows));
     }
     if opts.floor_only {
         let (floor_csv, floor_text) = floor_report(&floor_runs(&plan)?, FLOOR_2D);
@@ -1019,14 +1020,14 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     let floor_text = floor_text + &text3;
 
     let scaling_plan =
-        if opts.quick { super::scaling::ScalingPlan::quick() } else { super::scaling::ScalingPlan::full() };
-    let scaling_rows = super::scaling::run(&scaling_plan, &progress)?;
-    write(out, "scaling.csv", &super::scaling::csv(&scaling_rows))?;
-    write(out, "scaling.svg", &super::scaling::svg(&scaling_rows, &scaling_plan)?)?;
+        if opts.quick { crate::scaling::ScalingPlan::quick() } else { crate::scaling::ScalingPlan::full() };
+    let scaling_rows = crate::scaling::run(&scaling_plan, &progress)?;
+    write(out, "scaling.csv", &crate::scaling::csv(&scaling_rows))?;
+    write(out, "scaling.svg", &crate::scaling::svg(&scaling_rows, &scaling_plan)?)?;
 
     progress("bookkeeping: the default scene's body at 256 x 128 without contact, with outputs");
-    let bk_rows = super::bookkeeping::run_part(&bk_plan, out)?;
-    write(out, "bookkeeping.csv", &super::bookkeeping::csv(&bk_rows))?;
+    let bk_rows = crate::bookkeeping::run_part(&bk_plan, out)?;
+    write(out, "bookkeeping.csv", &crate::bookkeeping::csv(&bk_rows))?;
 
     let mut race = Vec::new();
     for case in race_cases(&plan.race)? {
@@ -1042,9 +1043,9 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     report.push('\n');
     report.push_str(&floor_text);
     report.push('\n');
-    report.push_str(&super::scaling::report(&scaling_rows));
+    report.push_str(&crate::scaling::report(&scaling_rows));
     report.push('\n');
-    report.push_str(&super::bookkeeping::report(&bk_rows));
+    report.push_str(&crate::bookkeeping::report(&bk_rows));
     report.push('\n');
     report.push_str(&race_report(&plan.race, &race));
     let _ = writeln!(

@@ -22,6 +22,15 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     written
 }
 
+/// Write several files into `dir` (created), each atomically (a study's tables and charts).
+pub fn write_files(dir: &Path, files: &[(&str, &[u8])]) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    for (name, bytes) in files {
+        write_atomic(&dir.join(name), bytes)?;
+    }
+    Ok(())
+}
+
 /// A file written by appending whole records (rows of a CSV file): each [`AppendFile::append`]
 /// writes its bytes or, when the write fails part-way (a full disk), cuts the file back to the
 /// last whole record before returning the error.

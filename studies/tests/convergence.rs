@@ -4,10 +4,11 @@
 //! errors must fall under refinement (they do), and the observed orders go into the report.
 //! `cargo xtask bench` repeats this with one more level and every scheme, mass and solver.
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use dyncontact::scene::SchemeKind;
-use dyncontact::studies::convergence::convergence;
+use studies::convergence::convergence;
 
 fn orders(e: &[f64]) -> Vec<f64> {
     e.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
@@ -19,8 +20,7 @@ fn orders(e: &[f64]) -> Vec<f64> {
 fn academic_scene_converges_under_refinement() {
     for scheme in [SchemeKind::Midpoint, SchemeKind::BackwardEuler] {
         let rows = convergence(scheme, 3, 0.3).expect("study");
-        let col =
-            |f: fn(&dyncontact::studies::convergence::ConvergenceRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+        let col = |f: fn(&studies::convergence::ConvergenceRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
         let (force, imp, disp) = (col(|r| r.error_force), col(|r| r.error_impulse), col(|r| r.error_disp));
         println!("{scheme:?}: force {force:?} orders {:?}", orders(&force));
         println!("{scheme:?}: impulse {imp:?} orders {:?}", orders(&imp));

@@ -1,10 +1,7 @@
-//! What the studies share: CSV fields, least-squares log–log slopes, chart ranges and errors,
-//! and writing a study's files.
-
-use std::path::Path;
+//! Log–log helpers shared by the ε-study and the developer studies: least-squares slopes, padded
+//! log ranges and the error charts (one line with markers per series).
 
 use crate::error::{Error, Result};
-use crate::output::write_atomic;
 
 /// Least-squares slope of log10(y) against log10(x) over the positive pairs (NaN with fewer
 /// than two).
@@ -21,22 +18,6 @@ pub fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
     sxy / sxx
 }
 
-/// A CSV field: one line, quoted (RFC 4180) when it holds a comma or a quote.
-pub fn csv_field(s: &str) -> String {
-    let one_line = s.replace(['\n', '\r'], " ");
-    if one_line.contains([',', '"']) { format!("\"{}\"", one_line.replace('"', "\"\"")) } else { one_line }
-}
-
-/// A CSV table: the header line, then one line per row of already formatted fields.
-pub fn csv_table(header: &str, rows: impl IntoIterator<Item = Vec<String>>) -> String {
-    let mut s = format!("{header}\n");
-    for r in rows {
-        s.push_str(&r.join(","));
-        s.push('\n');
-    }
-    s
-}
-
 /// The error of a chart named `file`.
 pub fn chart_error(file: &'static str) -> impl Fn(&dyn std::fmt::Display) -> Error {
     move |e| Error::Output(format!("{file}: {e}"))
@@ -47,15 +28,6 @@ pub fn log_range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) =
         vals.filter(|v| v.is_finite() && *v > 0.0).fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
     if lo.is_finite() { (lo / 1.6, hi * 1.6) } else { (0.1, 1.0) }
-}
-
-/// Write a study's files into `dir` (created), each atomically.
-pub fn write_files(dir: &Path, files: &[(&str, &[u8])]) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    for (name, bytes) in files {
-        write_atomic(&dir.join(name), bytes)?;
-    }
-    Ok(())
 }
 
 /// One line of a log–log chart: its legend and its points (non-positive ones are left out).
@@ -102,7 +74,7 @@ pub fn loglog_chart(
             .draw()
             .map_err(|e| err(&e))?;
         for (k, s) in series.iter().enumerate() {
-            let color = crate::output::plots::PALETTE[k % crate::output::plots::PALETTE.len()];
+            let color = super::plots::PALETTE[k % super::plots::PALETTE.len()];
             let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(pos).collect();
             chart
                 .draw_series(LineSeries::new(pts.clone(), ShapeStyle::from(&color).stroke_width(2)))

@@ -8,11 +8,11 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use crate::error::Result;
-use crate::output::summary::Timing;
-use crate::problem::Problem;
-use crate::run::{RunOptions, run};
-use crate::scene::Scene;
+use dyncontact::error::Result;
+use dyncontact::output::summary::Timing;
+use dyncontact::problem::Problem;
+use dyncontact::run::{RunOptions, run};
+use dyncontact::scene::Scene;
 
 /// Cells, horizon and repetitions of the part.
 pub struct BookkeepingPlan {

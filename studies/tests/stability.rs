@@ -7,7 +7,7 @@
 
 use dyncontact::error::{Error, SolverFailure};
 use dyncontact::scene::{EnforcementKind as Enforcement, NumOrStr, Scene};
-use dyncontact::studies::stability::*;
+use studies::stability::*;
 
 fn var(name: &str) -> Variant {
     variant(name).unwrap_or_else(|| panic!("no variant {name}"))
@@ -54,8 +54,7 @@ fn lost_fraction(m: &Measured) -> f64 {
 fn quick_sweep_writes_csv_and_svg_with_a_row_per_run() {
     let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("stability_quick");
     let _ = std::fs::remove_dir_all(&out);
-    let report =
-        dyncontact::studies::stability::run(&out, &StabilityOptions { quick: true, jobs: 2 }).expect("quick sweep");
+    let report = studies::stability::run(&out, &StabilityOptions { quick: true, jobs: 2 }).expect("quick sweep");
     println!("{report}");
     let n = cases(true).len();
     assert!(n >= 7 * variants().len(), "the quick sweep has every sweep × every variant, got {n} cases");

@@ -1,7 +1,7 @@
 //! `dyncontact study bench --quick`: the benchmark runs end to end and writes its CSV and SVG
 //! files with the documented columns and one row per run.
 
-use dyncontact::studies::bench::{self, BenchOptions};
+use studies::bench::{self, BenchOptions};
 
 const WORK_COLUMNS: [&str; 14] = [
     "scheme",

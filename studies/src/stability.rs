@@ -25,19 +25,20 @@ use std::time::Instant;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::energy::EnergyTerms;
-use crate::error::{Error, Result};
-use crate::failure::StepFailureCause;
-use crate::model::kinds::{self, EnforcementKind, FixedPointAcceleration, InnerSolver, MassKind, SchemeKind};
-use crate::output::summary::ModelInfo;
-use crate::output::write_atomic;
-use crate::problem::Problem;
-use crate::scene::Scene;
-use crate::simulation::Simulation;
+use dyncontact::energy::EnergyTerms;
+use dyncontact::error::{Error, Result};
+use dyncontact::failure::StepFailureCause;
+use dyncontact::model::kinds::{self, EnforcementKind, FixedPointAcceleration, InnerSolver, MassKind, SchemeKind};
+use dyncontact::output::summary::ModelInfo;
+use dyncontact::output::write_atomic;
+use dyncontact::problem::Problem;
+use dyncontact::scene::Scene;
+use dyncontact::simulation::Simulation;
 
-use super::harness;
-use crate::sweep::runner::{self, RunnerOptions};
-use crate::sweep::{Base, Plan, SweepFile};
+use dyncontact::output::csv::{csv_field, csv_table};
+use dyncontact::output::loglog::chart_error;
+use dyncontact::sweep::runner::{self, RunnerOptions};
+use dyncontact::sweep::{Base, Plan, SweepFile};
 
 /// Options of the stability sweep.
 #[derive(Debug, Clone, Default)]
@@ -322,7 +323,8 @@ pub fn base_scene(end: f64) -> Scene {
     s
 }
 
-const IMPACT_SCENE: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/scenes/impact_friction.toml"));
+const IMPACT_SCENE: &str =
+    include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../fixtures/scenes/impact_friction.toml"));
 
 /// fixtures/scenes/impact_friction.toml (embedded) with horizon `end` (its k = 5e-4).
 pub fn impact_scene(end: f64) -> Result<Scene> {
@@ -616,12 +618,12 @@ pub fn cases(quick: bool) -> Vec<Case> {
 const SWEEPS: [(&str, &str, &str); 2] = [
     (
         "stability_academic.toml",
-        include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sweeps/stability_academic.toml")),
-        crate::scene::DEFAULT_SCENE,
+        include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../fixtures/sweeps/stability_academic.toml")),
+        dyncontact::scene::DEFAULT_SCENE,
     ),
     (
         "stability_impact.toml",
-        include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/sweeps/stability_impact.toml")),
+        include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../fixtures/sweeps/stability_impact.toml")),
         IMPACT_SCENE,
     ),
 ];
@@ -637,7 +639,7 @@ pub fn parse_case(label: &str) -> Option<(Sweep, f64)> {
 pub fn plans(quick: bool) -> Result<Vec<(SweepFile, Base, Plan)>> {
     let mut out = Vec::new();
     for (file, text, base_text) in SWEEPS {
-        let mut sweep = crate::sweep::parse(text, &format!("fixtures/sweeps/{file}"))?;
+        let mut sweep = dyncontact::sweep::parse(text, &format!("fixtures/sweeps/{file}"))?;
         let extra = if quick {
             // keep the cases whose value is among its sweep's quick values
             let case = &mut sweep.axes[0];
@@ -650,7 +652,7 @@ pub fn plans(quick: bool) -> Result<Vec<(SweepFile, Base, Plan)>> {
             case.sets.retain(|_| *k.next().unwrap_or(&false));
             let mut k = keep.iter();
             case.labels.retain(|_| *k.next().unwrap_or(&false));
-            vec![crate::overrides::Override::new("time.end", toml::Value::Float(QUICK_END))?]
+            vec![dyncontact::overrides::Override::new("time.end", toml::Value::Float(QUICK_END))?]
         } else {
             Vec::new()
         };
@@ -702,11 +704,11 @@ pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
                     };
                     let case_set = &plan.axes[0].overrides[proto.choice[0]];
                     for (vi, v) in variants().into_iter().enumerate() {
-                        let mut ovs: Vec<crate::overrides::Override> = case_set
+                        let mut ovs: Vec<dyncontact::overrides::Override> = case_set
                             .iter()
                             .map(|o| {
                                 if o.key == "contact.penalty" {
-                                    crate::overrides::Override { value: toml::Value::Float(value), ..o.clone() }
+                                    dyncontact::overrides::Override { value: toml::Value::Float(value), ..o.clone() }
                                 } else {
                                     o.clone()
                                 }
@@ -715,7 +717,7 @@ pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
                         ovs.extend(plan.axes[1].overrides[vi].iter().cloned());
                         found.push(RunResult {
                             case: Case { sweep: sw, value, variant: v },
-                            m: refused(crate::sweep::scene_for(&sweep, &base, &ovs)),
+                            m: refused(dyncontact::sweep::scene_for(&sweep, &base, &ovs)),
                         });
                     }
                 }
@@ -795,7 +797,7 @@ pub fn measure_point(pd: &Path, energy_conserving: bool) -> Result<Measured> {
     m.fallbacks = summary.get("unfrozen_fallbacks").and_then(serde_json::Value::as_u64).unwrap_or(0) as usize;
     m.wall_time_s = num(summary.get("wall_time_s")).unwrap_or(0.0);
     let mut non_finite = false;
-    if let Some(h) = crate::sweep::collect::History::read(&pd.join("history.csv")) {
+    if let Some(h) = dyncontact::sweep::collect::History::read(&pd.join("history.csv")) {
         let col = |name: &str| {
             h.numbers(name).ok_or_else(|| Error::Output(format!("{}: history.csv has no column {name}", pd.display())))
         };
@@ -869,7 +871,7 @@ max_energy_gain,wall_time_s,note";
 
 /// stability.csv: one row per run.
 pub fn csv(rows: &[RunResult]) -> String {
-    harness::csv_table(
+    csv_table(
         CSV_HEADER,
         rows.iter().map(|r| {
             let (v, m) = (&r.case.variant, &r.m);
@@ -897,7 +899,7 @@ pub fn csv(rows: &[RunResult]) -> String {
                 format!("{:.4e}", m.drift),
                 format!("{:.4e}", m.max_gain),
                 format!("{:.4}", m.wall_time_s),
-                harness::csv_field(&m.note),
+                csv_field(&m.note),
             ]
         }),
     )
@@ -940,7 +942,7 @@ pub fn svg(rows: &[RunResult]) -> Result<String> {
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, (w as u32, h as u32)).into_drawing_area();
-        let err = harness::chart_error("stability.svg");
+        let err = chart_error("stability.svg");
         root.fill(&WHITE).map_err(|e| err(&e))?;
         let font = |size: i32| ("sans-serif", size).into_font();
         let centered = |size: i32| TextStyle::from(font(size)).pos(Pos::new(HPos::Center, VPos::Center));

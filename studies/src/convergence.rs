@@ -7,11 +7,11 @@
 use std::path::Path;
 use std::time::Instant;
 
-use crate::error::{Error, Result};
-use crate::model::kinds::SchemeKind;
-use crate::problem::Problem;
-use crate::scene::Scene;
-use crate::simulation::Simulation;
+use dyncontact::error::{Error, Result};
+use dyncontact::model::kinds::SchemeKind;
+use dyncontact::problem::Problem;
+use dyncontact::scene::Scene;
+use dyncontact::simulation::Simulation;
 
 /// Material points (x, y) where displacements are compared: nodes of every nested rectangle mesh
 /// (right corners, bottom and top midpoints, centre; the left corners are clamped).

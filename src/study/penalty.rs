@@ -21,7 +21,9 @@ use crate::scene::Scene;
 use crate::sweep::runner::{self, RunnerOptions};
 use crate::sweep::{Base, Plan, SweepFile};
 
-use super::harness::{self, loglog_slope};
+use crate::output::csv::csv_table;
+use crate::output::loglog::{self, LogSeries, loglog_slope};
+use crate::output::write_files;
 
 /// One row of the study.
 #[derive(Debug, Clone, Copy)]
@@ -206,7 +208,7 @@ fn wall_time(pd: &Path) -> f64 {
 impl PenaltyStudy {
     /// study/penalty.csv.
     pub fn csv(&self) -> String {
-        harness::csv_table(
+        csv_table(
             "eps,e_V,e_H,delta,wall_time_s",
             self.rows.iter().map(|r| [r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s].map(|x| x.to_string()).to_vec()),
         )
@@ -220,22 +222,19 @@ impl PenaltyStudy {
             ("e_H", self.slope_e_h, |r| r.e_h),
             ("δ (penetration beyond g)", self.slope_delta, |r| r.delta),
         ];
-        let series: Vec<harness::LogSeries> = series
+        let series: Vec<LogSeries> = series
             .iter()
-            .map(|(name, slope, f)| harness::LogSeries {
+            .map(|(name, slope, f)| LogSeries {
                 name: format!("{name}, slope {slope:.2}"),
                 points: self.rows.iter().map(|r| (r.eps, f(r))).collect(),
             })
             .collect();
-        harness::loglog_chart("study/penalty.svg", title, ("ε (penalty compliance)", "error"), &series, (2.0, 3.0))
+        loglog::loglog_chart("study/penalty.svg", title, ("ε (penalty compliance)", "error"), &series, (2.0, 3.0))
     }
 
     /// Write study/penalty.csv and study/penalty.svg under `dir`.
     pub fn write(&self, dir: &Path, title: &str) -> Result<()> {
         let svg = self.svg(title)?;
-        harness::write_files(
-            &dir.join("study"),
-            &[("penalty.csv", self.csv().as_bytes()), ("penalty.svg", svg.as_bytes())],
-        )
+        write_files(&dir.join("study"), &[("penalty.csv", self.csv().as_bytes()), ("penalty.svg", svg.as_bytes())])
     }
 }

@@ -8,13 +8,14 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use crate::error::Result;
-use crate::model::kinds::ContactSolve;
-use crate::problem::Problem;
-use crate::scene::Scene;
+use dyncontact::error::Result;
+use dyncontact::model::kinds::ContactSolve;
+use dyncontact::problem::Problem;
+use dyncontact::scene::Scene;
 
-use super::convergence::simulate;
-use super::harness::{self, LogSeries, loglog_slope};
+use crate::convergence::simulate;
+use dyncontact::output::csv::csv_table;
+use dyncontact::output::loglog::{self, LogSeries, loglog_slope};
 
 /// What the scaling part runs.
 #[derive(Debug, Clone)]
@@ -121,7 +122,7 @@ pub fn run(plan: &ScalingPlan, progress: &dyn Fn(&str)) -> Result<Vec<ScalingRow
 
 /// scaling.csv.
 pub fn csv(rows: &[ScalingRow]) -> String {
-    harness::csv_table(
+    csv_table(
         "contact_nodes,form,steps,contact_per_step_s,step_time_s,floor_s,contact_over_free,delassus_setup_s,factorizations",
         rows.iter().map(|r| {
             vec![
@@ -168,7 +169,7 @@ pub fn svg(rows: &[ScalingRow], plan: &ScalingPlan) -> Result<String> {
         LogSeries { name: "3-D: one A_k solve pair".into(), points: points(rows, "3-D", |r| 0.5 * r.floor) },
     ];
     let title = format!("contact solve per step, strips [n, 16] ({} steps of {}) and 3-D boxes", plan.steps, plan.k);
-    harness::loglog_chart("scaling.svg", &title, ("contact nodes n_c", "seconds per step"), &series, (1.3, 2.0))
+    loglog::loglog_chart("scaling.svg", &title, ("contact nodes n_c", "seconds per step"), &series, (1.3, 2.0))
 }
 
 /// The printed lines of the scaling part.

@@ -11,13 +11,15 @@
 use std::path::Path;
 use std::time::Instant;
 
-use crate::error::{Error, Result};
-use crate::model::kinds::{self, BoundAt, FrictionBound};
-use crate::problem::Problem;
-use crate::scene::{NumOrStr, Scene};
+use dyncontact::error::{Error, Result};
+use dyncontact::model::kinds::{self, BoundAt, FrictionBound};
+use dyncontact::problem::Problem;
+use dyncontact::scene::{NumOrStr, Scene};
 
-use super::convergence::{Trajectory, relative_l2, simulate, step_ratio, steps_in, window_means};
-use super::harness::{self, loglog_slope};
+use crate::convergence::{Trajectory, relative_l2, simulate, step_ratio, steps_in, window_means};
+use dyncontact::output::csv::csv_table;
+use dyncontact::output::loglog::{self, LogSeries, loglog_slope};
+use dyncontact::output::write_files;
 
 /// The compliances of the study.
 pub const COMPLIANCES: [f64; 6] = [1e3, 1e4, 1e5, 1e6, 1e7, 1e8];
@@ -53,7 +55,7 @@ pub struct BoundAtRow {
     pub wall_time_s: f64,
 }
 
-const BLOCK_SCENE: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/scenes/sliding_block.toml"));
+const BLOCK_SCENE: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../fixtures/scenes/sliding_block.toml"));
 
 /// The scene of a case with compliance c, step k and evaluation point `at`.
 fn scene(case: &Case, c: f64, k: f64, at: BoundAt) -> Result<Scene> {
@@ -149,7 +151,7 @@ pub fn signorini_limit(opts: &BoundAtOptions) -> Result<Vec<LimitRow>> {
 
 /// bound_at.csv.
 pub fn csv(rows: &[BoundAtRow]) -> String {
-    harness::csv_table(
+    csv_table(
         "case,compliance,bound_at,k,error_tangential_impulse,wall_time_s",
         rows.iter().map(|r| {
             vec![
@@ -222,7 +224,7 @@ pub fn svg(rows: &[BoundAtRow]) -> Result<String> {
     let mut series = Vec::new();
     for case in &CASES {
         for at in [BoundAt::Predictor, BoundAt::Midpoint] {
-            series.push(harness::LogSeries {
+            series.push(LogSeries {
                 name: format!("{}, {}", case.name, kinds::name(&at)),
                 points: rows
                     .iter()
@@ -234,7 +236,7 @@ pub fn svg(rows: &[BoundAtRow]) -> Result<String> {
         }
     }
     let title = "friction_bound_at: tangential impulse error at the finest k";
-    harness::loglog_chart("bound_at.svg", title, ("compliance c_ν", "relative error"), &series, (1.6, 1.6))
+    loglog::loglog_chart("bound_at.svg", title, ("compliance c_ν", "relative error"), &series, (1.6, 1.6))
 }
 
 /// Run the study and write its files into `out`.
@@ -244,13 +246,13 @@ pub fn run(out: &Path, opts: &BoundAtOptions) -> Result<String> {
     let limit = signorini_limit(opts)?;
     let report = report(&rows, &limit, clock.elapsed().as_secs_f64());
     let svg = svg(&rows)?;
-    let limit_csv = harness::csv_table(
+    let limit_csv = csv_table(
         "compliance,bound_at,k,distance_tangential_impulse",
         limit.iter().map(|r| {
             vec![format!("{:e}", r.compliance), kinds::name(&r.at), format!("{:e}", r.k), format!("{:.6e}", r.distance)]
         }),
     );
-    harness::write_files(
+    write_files(
         out,
         &[
             ("bound_at.csv", csv(&rows).as_bytes()),
