@@ -498,8 +498,9 @@ impl<'p> Simulation<'p> {
         Ok(rec)
     }
 
-    /// The contact terms of (E.1) (compliance energy, friction and constraint dissipation),
-    /// the forces and counts of the history row, and the contact.csv records.
+    /// (E.1) The contact terms: the compliance energy Σ ω_i (P(d_i') − P(d_i)), the friction
+    /// dissipation Σ ω_i S_i |Δu_τ,i| and the constraint dissipation Σ ω_i λ_i (g − d_i^n); with
+    /// them the forces and counts of the history row and the contact.csv records.
     fn contact_terms(
         &self,
         c: &ContactModel,

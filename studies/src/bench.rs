@@ -1,9 +1,9 @@
-//! Work–precision benchmark (`dyncontact study bench`, run by `cargo xtask bench`).
+//! Work–precision benchmark (`dyncontact-studies bench`, run by `cargo xtask bench`).
 //!
 //! All runs use the academic scene (`Scene::default_scene()`: a 2×1 m Kelvin–Voigt block
 //! clamped on the left, pressed onto a compliant foundation with a penetration bound, then
 //! driven tangentially from t = 0.2 s under exponential velocity weakening), shortened to a
-//! horizon T. Three parts:
+//! horizon T. Five parts:
 //!
 //! 1. **Work–precision** (`work_precision.csv`, `work_precision.svg`): schemes × inner solvers ×
 //!    masses × levels of joint refinement (h and k halved together), each run's error against a
@@ -23,8 +23,10 @@
 //!    problems) against `newton-unfrozen` (N.4, F.1 as fallback) on the academic friction law and
 //!    a 5× steeper one, at a k inside (C.k) and beyond it: time and linear-algebra work per step,
 //!    and the largest per-step difference of their solutions from the same state.
-//! 4. **Scaling** (`scaling.csv`, `scaling.svg`, src/studies/scaling.rs): the contact solve per
+//! 4. **Scaling** (`scaling.csv`, `scaling.svg`, studies/src/scaling.rs): the contact solve per
 //!    step against the number of contact nodes, dense and sparse Delassus operator.
+//! 5. **Bookkeeping** (`bookkeeping.csv`, studies/src/bookkeeping.rs): the share of a step spent
+//!    outside the solves ((E.1) terms, records, outputs) at 66k unknowns.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -87,7 +89,7 @@ struct RacePlan {
 
 /// What the benchmark runs.
 #[derive(Debug, Clone)]
-struct Plan {
+struct BenchPlan {
     t_end: f64,
     /// coarse to fine; h and k halved together
     levels: Vec<Level>,
@@ -107,11 +109,11 @@ struct Plan {
     floor3d_end: Option<f64>,
 }
 
-impl Plan {
+impl BenchPlan {
     /// The full benchmark (~5 min in release): T = 0.3 s; the reference is one level finer than
     /// the finest bench level (two levels finer would cost ~8× the whole benchmark).
-    fn full() -> Plan {
-        Plan {
+    fn full() -> BenchPlan {
+        BenchPlan {
             t_end: 0.3,
             levels: joint_levels(4),
             reference: Level { cells: [128, 64], k: 1.25e-4 },
@@ -128,8 +130,8 @@ impl Plan {
     }
 
     /// The smoke-test configuration: 2 levels, newton only, T = 0.05 s.
-    fn quick() -> Plan {
-        Plan {
+    fn quick() -> BenchPlan {
+        BenchPlan {
             t_end: 0.05,
             levels: joint_levels(2),
             reference: Level { cells: [32, 16], k: 5e-4 },
@@ -208,7 +210,7 @@ impl WorkRow {
 
 /// Run one configuration and measure its errors against the reference; a failed run becomes a
 /// row whose status says why (the conic twin can stall, and that is a result).
-fn work_row(spec: RunSpec, plan: &Plan, reference: &Trajectory) -> Result<WorkRow> {
+fn work_row(spec: RunSpec, plan: &BenchPlan, reference: &Trajectory) -> Result<WorkRow> {
     let p = Problem::new(spec.model(plan.t_end)?, Path::new("."))?;
     let probes = probe_dofs(&p)?;
     match simulate(&p, &probes) {
@@ -232,7 +234,7 @@ fn work_row(spec: RunSpec, plan: &Plan, reference: &Trajectory) -> Result<WorkRo
 }
 
 /// The configurations of the sweep, conic restricted to the coarse levels.
-fn run_specs(plan: &Plan) -> Vec<RunSpec> {
+fn run_specs(plan: &BenchPlan) -> Vec<RunSpec> {
     let mut v = Vec::new();
     for &scheme in &plan.schemes {
         for &inner in &plan.inners {
@@ -704,7 +706,7 @@ fn progress(msg: &str) {
 }
 
 /// The printed summary of the work–precision part.
-fn work_report(plan: &Plan, rows: &[WorkRow], ref_stats: &RunStats) -> String {
+fn work_report(plan: &BenchPlan, rows: &[WorkRow], ref_stats: &RunStats) -> String {
     let mut s = String::new();
     let r = plan.reference;
     let _ = writeln!(
@@ -860,14 +862,14 @@ const FLOOR_3D_BLOCK: &str = "sliding_block3d (3-D, 49 contact nodes, friction o
 
 /// Part 2, the floor on the default scene (`academic`, as `cargo run --release -- run` runs it,
 /// without outputs): time per step ÷ the floor of two triangular-solve pairs, `repeats` times.
-fn floor_runs(plan: &Plan) -> Result<Vec<FloorRun>> {
+fn floor_runs(plan: &BenchPlan) -> Result<Vec<FloorRun>> {
     floor_runs_of(plan.floor_repeats, plan.floor_end, Scene::default_scene())
 }
 
 /// The 3-D rows of part 2, as `run` runs them without outputs: the 3-D default fixture
 /// academic3d (Ex-A extruded, 312 contact nodes, shaken obliquely) and the sliding_block3d
 /// fixture (B.3 pulled at 30°, 49 contact nodes).
-fn floor_runs_3d(plan: &Plan) -> Result<(Vec<FloorRun>, Vec<FloorRun>)> {
+fn floor_runs_3d(plan: &BenchPlan) -> Result<(Vec<FloorRun>, Vec<FloorRun>)> {
     let academic = Scene::from_toml(include_str!("../../fixtures/scenes/academic3d.toml"), "academic3d.toml")?;
     let block = Scene::from_toml(include_str!("../../fixtures/scenes/sliding_block3d.toml"), "sliding_block3d.toml")?;
     Ok((
@@ -877,7 +879,7 @@ fn floor_runs_3d(plan: &Plan) -> Result<(Vec<FloorRun>, Vec<FloorRun>)> {
 }
 
 /// floor3d.csv (both 3-D scenes, a `scene` column first) and their printed lines.
-fn floor3d_report(plan: &Plan) -> Result<(String, String)> {
+fn floor3d_report(plan: &BenchPlan) -> Result<(String, String)> {
     let (academic, block) = floor_runs_3d(plan)?;
     let (csv_a, text_a) = floor_report(&academic, FLOOR_3D);
     let (csv_b, text_b) = floor_report(&block, FLOOR_3D_BLOCK);
@@ -972,7 +974,7 @@ fn write(out: &Path, name: &str, text: &str) -> Result<()> {
 /// Run the benchmark and write its CSV and SVG files under `out`.
 pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     let clock = Instant::now();
-    let plan = if opts.quick { Plan::quick() } else { Plan::full() };
+    let plan = if opts.quick { BenchPlan::quick() } else { BenchPlan::full() };
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let bk_plan = if opts.quick {
         crate::bookkeeping::BookkeepingPlan::quick()

@@ -1,4 +1,4 @@
-//! `dyncontact study bound-at`: where the friction bound is evaluated (S.5, Co.2). For normal
+//! `cargo xtask bound-at`: where the friction bound is evaluated (S.5, Co.2). For normal
 //! compliances c_ν = 1e3 … 1e8, on the academic scene (coarse) and on the pulled block of B.3,
 //! each evaluation point — the predictor û = u_ν^n + (k/2) v_ν^n and u_ν^{n+½} of the iterate —
 //! is run at three steps k0, k0/2, k0/4 and compared with one fine reference (k0/16, the bound at
@@ -33,15 +33,15 @@ pub struct BoundAtOptions {
 
 /// One scene family of the study.
 #[derive(Debug, Clone, Copy)]
-struct Case {
+struct SceneFamily {
     name: &'static str,
     /// the coarsest step and the horizon
     k0: f64,
     t_end: f64,
 }
 
-const CASES: [Case; 2] =
-    [Case { name: "academic", k0: 1e-3, t_end: 0.4 }, Case { name: "block", k0: 1e-3, t_end: 0.2 }];
+const CASES: [SceneFamily; 2] =
+    [SceneFamily { name: "academic", k0: 1e-3, t_end: 0.4 }, SceneFamily { name: "block", k0: 1e-3, t_end: 0.2 }];
 
 /// One row of bound_at.csv.
 #[derive(Debug, Clone)]
@@ -58,7 +58,7 @@ pub struct BoundAtRow {
 const BLOCK_SCENE: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../fixtures/scenes/sliding_block.toml"));
 
 /// The scene of a case with compliance c, step k and evaluation point `at`.
-fn scene(case: &Case, c: f64, k: f64, at: BoundAt) -> Result<Scene> {
+fn scene(case: &SceneFamily, c: f64, k: f64, at: BoundAt) -> Result<Scene> {
     let mut s = match case.name {
         "academic" => {
             let mut s = Scene::default_scene();
@@ -79,7 +79,7 @@ fn scene(case: &Case, c: f64, k: f64, at: BoundAt) -> Result<Scene> {
 }
 
 /// Run one configuration to its end and return its trajectory and wall time.
-fn trajectory(case: &Case, c: f64, k: f64, at: BoundAt) -> Result<(Trajectory, f64)> {
+fn trajectory(case: &SceneFamily, c: f64, k: f64, at: BoundAt) -> Result<(Trajectory, f64)> {
     let clock = Instant::now();
     let p = Problem::from_scene(&scene(case, c, k, at)?, Path::new("."))?;
     let (traj, _) = simulate(&p, &[])?;

@@ -1,4 +1,4 @@
-//! The contact solve against the number of contact nodes (`dyncontact study bench`, part 4):
+//! The contact solve against the number of contact nodes (`cargo xtask bench`, part 4):
 //! strips [n, 16] of the academic material and loads (contact on the bottom, n + 1 contact
 //! nodes), each run with the dense and the sparse Delassus operator, the dense one only up to
 //! where its m³ factorizations stay affordable. Per step: the contact solve, the whole step, and

@@ -1,4 +1,4 @@
-//! Stability map (`dyncontact study stability`, run by `cargo xtask stability`).
+//! Stability map (`cargo xtask stability`).
 //!
 //! For each variant (midpoint, trapezoid, backward Euler, midpoint with the modified mass R.1,
 //! midpoint with velocity persistency R.2, midpoint with the unfrozen Newton N.4) one
@@ -27,7 +27,6 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use dyncontact::energy::EnergyTerms;
 use dyncontact::error::{Error, Result};
-use dyncontact::failure::StepFailureCause;
 use dyncontact::model::kinds::{self, EnforcementKind, FixedPointAcceleration, InnerSolver, MassKind, SchemeKind};
 use dyncontact::output::summary::ModelInfo;
 use dyncontact::output::write_atomic;
@@ -335,13 +334,13 @@ pub fn impact_scene(end: f64) -> Result<Scene> {
 
 /// One run of the map: a sweep, its parameter value and a variant.
 #[derive(Debug, Clone, Copy)]
-pub struct Case {
+pub struct MapRun {
     pub sweep: Sweep,
     pub value: f64,
     pub variant: Variant,
 }
 
-impl Case {
+impl MapRun {
     /// The scene of this case with horizon `end`.
     pub fn scene(&self, end: f64) -> Result<Scene> {
         let mut s = match self.sweep {
@@ -425,25 +424,20 @@ pub fn stored(e: &EnergyTerms) -> f64 {
     e.kinetic + e.elastic + e.compliance
 }
 
-/// The class of a run from its facts (see [`RunClass`] for the precedence).
-pub fn classify(stop: Option<&Error>, non_finite: bool, m: &Measured, energy_conserving: bool) -> RunClass {
-    if non_finite {
-        return RunClass::NonFinite;
-    }
-    match stop {
-        Some(Error::Solver(f)) if matches!(f.cause, StepFailureCause::NonFinite { .. }) => return RunClass::NonFinite,
-        Some(Error::Solver(_)) => return RunClass::NewtonFailed,
-        Some(_) => return RunClass::ClearError,
-        None => {}
-    }
-    if m.max_gain > GAIN_TOLERANCE {
-        RunClass::EnergyGrew
-    } else if m.fp_capped_steps > 0 {
-        RunClass::FixedPointCapped
-    } else if energy_conserving && m.max_defect > DEFECT_TOLERANCE {
-        RunClass::EnergyDefect
-    } else {
-        RunClass::Converged
+/// The class of a run from its facts (see [`RunClass`] for the precedence): `failure_kind` is
+/// the kind of the error that stopped it (summary.json's `failure_kind`, [`Error::kind`] in
+/// process), so a run measured in process and one read from its folder are classified by the
+/// same rule.
+pub fn classify(failure_kind: Option<&str>, non_finite: bool, m: &Measured, energy_conserving: bool) -> RunClass {
+    match failure_kind {
+        _ if non_finite => RunClass::NonFinite,
+        Some("non_finite") => RunClass::NonFinite,
+        Some("solver") => RunClass::NewtonFailed,
+        Some(_) => RunClass::ClearError,
+        None if m.max_gain > GAIN_TOLERANCE => RunClass::EnergyGrew,
+        None if m.fp_capped_steps > 0 => RunClass::FixedPointCapped,
+        None if energy_conserving && m.max_defect > DEFECT_TOLERANCE => RunClass::EnergyDefect,
+        None => RunClass::Converged,
     }
 }
 
@@ -460,7 +454,7 @@ pub fn run_scene(scene: &Scene, energy_conserving: bool) -> Measured {
     if !m.max_gain.is_finite() {
         m.max_gain = 0.0;
     }
-    m.class = classify(stop.as_ref(), non_finite, &m, energy_conserving);
+    m.class = classify(stop.as_ref().map(Error::kind), non_finite, &m, energy_conserving);
     m.wall_time_s = clock.elapsed().as_secs_f64();
     m
 }
@@ -579,13 +573,13 @@ impl Tally {
 /// One row of the map.
 #[derive(Debug, Clone)]
 pub struct RunResult {
-    pub case: Case,
+    pub case: MapRun,
     pub m: Measured,
 }
 
 /// Run one case of the map in this process (horizon [`QUICK_END`] or [`FULL_END`]): the map
 /// itself runs its cases as sweeps ([`map_runs`]); this is what a test compares that path with.
-pub fn run_case(case: &Case, quick: bool) -> RunResult {
+pub fn run_case(case: &MapRun, quick: bool) -> RunResult {
     let end = if quick { QUICK_END } else { FULL_END };
     let m = match case.scene(end) {
         Ok(s) => run_scene(&s, case.variant.energy_conserving()),
@@ -600,13 +594,13 @@ pub fn run_case(case: &Case, quick: bool) -> RunResult {
 }
 
 /// Every case of the sweep, sweep by sweep, value by value, variant by variant.
-pub fn cases(quick: bool) -> Vec<Case> {
+pub fn cases(quick: bool) -> Vec<MapRun> {
     let mut out = Vec::new();
     for sweep in Sweep::ALL {
         let values = if quick { sweep.quick_values() } else { sweep.values() };
         for value in values {
             for variant in variants() {
-                out.push(Case { sweep, value, variant });
+                out.push(MapRun { sweep, value, variant });
             }
         }
     }
@@ -689,7 +683,7 @@ pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
                 )));
             };
             let m = measure_point(&Plan::point_dir(&dir, &p.id), v.energy_conserving())?;
-            found.push(RunResult { case: Case { sweep: sw, value, variant: v }, m });
+            found.push(RunResult { case: MapRun { sweep: sw, value, variant: v }, m });
         }
         // the refused values of this file's sweeps, validated as the points would be
         if !opts.quick {
@@ -716,7 +710,7 @@ pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
                             .collect();
                         ovs.extend(plan.axes[1].overrides[vi].iter().cloned());
                         found.push(RunResult {
-                            case: Case { sweep: sw, value, variant: v },
+                            case: MapRun { sweep: sw, value, variant: v },
                             m: refused(dyncontact::sweep::scene_for(&sweep, &base, &ovs)),
                         });
                     }
@@ -852,15 +846,7 @@ pub fn measure_point(pd: &Path, energy_conserving: bool) -> Result<Measured> {
     if !m.max_gain.is_finite() {
         m.max_gain = 0.0;
     }
-    m.class = if non_finite || (failed && kind == "non_finite") {
-        RunClass::NonFinite
-    } else if failed && kind == "solver" {
-        RunClass::NewtonFailed
-    } else if failed {
-        RunClass::ClearError
-    } else {
-        classify(None, false, &m, energy_conserving)
-    };
+    m.class = classify(failed.then_some(kind), non_finite, &m, energy_conserving);
     Ok(m)
 }
 

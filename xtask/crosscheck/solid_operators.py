@@ -1,4 +1,4 @@
-"""scikit-fem reference operators of a 3-D box for dyncontact's tetrahedra (issue 14).
+"""scikit-fem reference operators of a 3-D box for dyncontact's tetrahedra.
 
 usage: python solid_operators.py OUT_PREFIX [MESH.msh]
 

@@ -12,6 +12,8 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
+use crate::source::{code_only, ident};
+
 /// A module path from the crate root (`[]` is the root, `["step", "delassus"]` is step::delassus).
 type ModPath = Vec<String>;
 
@@ -53,97 +55,6 @@ fn crate_modules(name: &str, src: &Path, root_file: &str) -> Crate {
         }
     }
     Crate { name: name.to_string(), files }
-}
-
-/// The text with comments, string and char literals blanked (newlines kept for line numbers).
-fn code_only(text: &str) -> String {
-    let b: Vec<char> = text.chars().collect();
-    let mut out = String::with_capacity(text.len());
-    let mut i = 0;
-    let blank = |c: char| if c == '\n' { '\n' } else { ' ' };
-    while i < b.len() {
-        let c = b[i];
-        let next = b.get(i + 1).copied();
-        if c == '/' && next == Some('/') {
-            while i < b.len() && b[i] != '\n' {
-                out.push(' ');
-                i += 1;
-            }
-        } else if c == '/' && next == Some('*') {
-            let mut depth = 0;
-            while i < b.len() {
-                if b[i] == '/' && b.get(i + 1) == Some(&'*') {
-                    depth += 1;
-                    out.push_str("  ");
-                    i += 2;
-                } else if b[i] == '*' && b.get(i + 1) == Some(&'/') {
-                    depth -= 1;
-                    out.push_str("  ");
-                    i += 2;
-                    if depth == 0 {
-                        break;
-                    }
-                } else {
-                    out.push(blank(b[i]));
-                    i += 1;
-                }
-            }
-        } else if c == 'r' && (next == Some('"') || next == Some('#')) && !b[..i].last().is_some_and(|p| ident(*p)) {
-            // raw string r"…" / r#"…"#
-            let mut j = i + 1;
-            let mut hashes = 0;
-            while b.get(j) == Some(&'#') {
-                hashes += 1;
-                j += 1;
-            }
-            if b.get(j) != Some(&'"') {
-                out.push(c);
-                i += 1;
-                continue;
-            }
-            j += 1;
-            let closing: Vec<char> = std::iter::once('"').chain(std::iter::repeat_n('#', hashes)).collect();
-            while j < b.len() && !b[j..].starts_with(&closing) {
-                j += 1;
-            }
-            let end = (j + closing.len()).min(b.len());
-            out.extend(b[i..end].iter().map(|c| blank(*c)));
-            i = end;
-        } else if c == '"' {
-            let mut j = i + 1;
-            while j < b.len() && b[j] != '"' {
-                j += if b[j] == '\\' { 2 } else { 1 };
-            }
-            let end = (j + 1).min(b.len());
-            out.extend(b[i..end].iter().map(|c| blank(*c)));
-            i = end;
-        } else if c == '\'' {
-            // a char literal ('a', '\n', '\u{..}') — not a lifetime ('a without a closing quote)
-            let close = if next == Some('\\') {
-                (i + 2..b.len().min(i + 12)).find(|&j| b[j] == '\'')
-            } else {
-                (b.get(i + 2) == Some(&'\'')).then_some(i + 2)
-            };
-            match close {
-                Some(j) => {
-                    out.extend(b[i..=j].iter().map(|c| blank(*c)));
-                    i = j + 1;
-                }
-                None => {
-                    out.push(c);
-                    i += 1;
-                }
-            }
-        } else {
-            out.push(c);
-            i += 1;
-        }
-    }
-    out
-}
-
-fn ident(c: char) -> bool {
-    c.is_alphanumeric() || c == '_'
 }
 
 /// Every path starting with `crate::`, `super::` or `self::` in the code, with its line: a path is

@@ -1,22 +1,27 @@
 //! Project tasks: `cargo xtask verify | crosscheck | trace | bench | stability | bound-at`.
 //!
 //! `verify` is the project's test command. It
-//! 1. builds every test target (`cargo test -p dyncontact -p dyncontact-studies --no-run`: xtask has no tests, and its
-//!    test harness would build criterion, a dev-dependency of its benches) and runs each test binary
-//!    directly, as many at a time as the machine has cores, recording which test passed (so a
-//!    test is tied to its file); meanwhile a thread prepares the cross-check's Python (venv, pip,
-//!    GetFEM), which waits mostly on the network;
-//! 2. checks the equation trace (spec/equations.toml): every `implemented` ID names code anchors
-//!    that exist — a function whose doc comment starts with `/// (ID)` — and at least one test
-//!    that exists and passed in this run; every ID cited in a doc comment under src/ or tests/
-//!    is in the spec; every ID is defined in the index of spec/model.md; `planned` IDs are
-//!    listed as open;
-//! 3. runs the Python cross-check (`crosscheck`);
-//! 4. writes target/verify/trace.md and exits non-zero on any failure.
+//! 1. checks the formatting (`cargo fmt --all --check`, rustfmt.toml);
+//! 2. builds every test target (`cargo test -p dyncontact -p dyncontact-studies --no-run`: xtask
+//!    has no tests, and its test harness would build criterion, a dev-dependency of its benches),
+//!    then checks the lints (`cargo clippy --workspace --all-targets -- -D warnings`); meanwhile a
+//!    thread prepares the cross-check's Python (venv, pip, GetFEM), which waits mostly on the
+//!    network;
+//! 3. runs each test binary directly, as many at a time as the machine has cores, recording which
+//!    test passed (so a test is tied to its file: a grouped binary's modules are its files);
+//! 4. checks the equation trace (spec/equations.toml): every `implemented` ID names code anchors
+//!    that exist — `file.rs::function` or `file.rs::Type::method`, found exactly once, whose doc
+//!    comment starts with `/// (ID)` — and at least one test that exists and passed in this run;
+//!    every ID cited in a doc comment under src/ or tests/ is in the spec; every ID is defined in
+//!    the index of spec/model.md; and no module cycle (cycles.rs);
+//! 5. runs the Python cross-check (`crosscheck`) and the Snakemake check (`workflow`);
+//! 6. writes target/verify/trace.md and report.md and exits non-zero on any failure (all of them
+//!    listed).
 
 mod crosscheck;
 mod cycles;
 mod process;
+mod source;
 mod workflow;
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -244,8 +249,10 @@ fn run_tests(root: &Path, bins: &[TestBinary], jobs: usize) -> Result<Outcomes, 
     Ok(outcomes)
 }
 
-/// Look up a test reference `file.rs::name` (integration tests) or
-/// `src/a/b.rs::tests::name` (unit tests: the lib target with module path a::b::tests::name).
+/// Look up a test reference `file.rs::name`: a test binary's own file (its root), a module file
+/// of a grouped binary (`tests/<group>/<module>.rs::name` is the test `<module>::name` of the
+/// binary `tests/<group>/main.rs`), or `src/a/b.rs::tests::name` (unit tests: the lib target
+/// with module path a::b::tests::name).
 fn test_passed(outcomes: &Outcomes, reference: &str) -> Option<bool> {
     let (file, name) = reference.split_once("::")?;
     if file.starts_with("src/") && file != "src/main.rs" {
@@ -254,50 +261,84 @@ fn test_passed(outcomes: &Outcomes, reference: &str) -> Option<bool> {
         let full = if module == "lib" { name.to_string() } else { format!("{module}::{name}") };
         return outcomes.get(&("src/lib.rs".to_string(), full)).copied();
     }
-    outcomes.iter().find(|((f, n), _)| f == file && (n == name || n.ends_with(&format!("::{name}")))).map(|(_, p)| *p)
-}
-
-/// Does `file` contain `fn name` whose doc comment starts with `/// (ID)`?
-fn anchor_ok(root: &Path, anchor: &str, id: &str) -> Result<(), String> {
-    let (file, name) =
-        anchor.split_once("::").ok_or_else(|| format!("anchor `{anchor}` is not `file.rs::function`"))?;
-    let text = std::fs::read_to_string(root.join(file))
-        .map_err(|_| format!("anchor `{anchor}`: file {file} does not exist"))?;
-    let lines: Vec<&str> = text.lines().collect();
-    let want = format!("/// ({id})");
-    let mut found_fn = false;
-    for (k, l) in lines.iter().enumerate() {
-        let t = l.trim_start();
-        let is_fn = ["fn ", "pub fn ", "pub(crate) fn ", "pub const fn ", "const fn "]
-            .iter()
-            .any(|p| t.starts_with(&format!("{p}{name}(")) || t.starts_with(&format!("{p}{name}<")));
-        if !is_fn {
+    let matches = |n: &str, name: &str| n == name || n.ends_with(&format!("::{name}"));
+    if let Some(hit) = outcomes.iter().find(|((f, n), _)| f == file && matches(n, name)) {
+        return Some(*hit.1);
+    }
+    // a module of a grouped binary: the nearest folder above `file` whose main.rs is a test binary
+    let path = Path::new(file);
+    for dir in path.ancestors().skip(1) {
+        let root = dir.join("main.rs").to_string_lossy().to_string();
+        if !outcomes.keys().any(|(f, _)| *f == root) {
             continue;
         }
-        found_fn = true;
-        // walk up over attributes to the start of the doc block
-        let mut j = k;
-        let mut first_doc: Option<&str> = None;
-        while j > 0 {
-            j -= 1;
-            let p = lines[j].trim_start();
-            if p.starts_with("#[") {
-                continue;
-            }
-            if p.starts_with("///") {
-                first_doc = Some(p);
-                continue;
-            }
-            break;
-        }
-        if first_doc.is_some_and(|d| d.starts_with(&want)) {
-            return Ok(());
-        }
+        let module = path.strip_prefix(dir).ok()?.with_extension("").to_string_lossy().replace('/', "::");
+        let module = module.trim_end_matches("::mod").to_string();
+        return outcomes
+            .iter()
+            .find(|((f, n), _)| *f == root && n.starts_with(&format!("{module}::")) && matches(n, name))
+            .map(|(_, p)| *p);
     }
-    if found_fn {
-        Err(format!("anchor `{anchor}`: the doc comment of `{name}` does not start with `{want}`"))
+    None
+}
+
+/// Does the anchor name exactly one function whose doc comment starts with `/// (ID)`? An anchor
+/// is `file.rs::function` (a free function) or `file.rs::Type::method` (a function of an `impl`
+/// or `trait` block of that type); a name found twice, or a method named without its type, fails
+/// with what to write instead.
+fn anchor_ok(root: &Path, anchor: &str, id: &str) -> Result<(), String> {
+    let (file, item) = anchor
+        .split_once(".rs::")
+        .map(|(f, i)| (format!("{f}.rs"), i))
+        .ok_or_else(|| format!("anchor `{anchor}` is not `file.rs::function` or `file.rs::Type::method`"))?;
+    let (owner, name) = match item.split_once("::") {
+        Some((t, m)) => (Some(t), m),
+        None => (None, item),
+    };
+    let text = std::fs::read_to_string(root.join(&file))
+        .map_err(|_| format!("anchor `{anchor}`: file {file} does not exist"))?;
+    let defs = source::functions(&text);
+    let hits: Vec<&source::FnDef> = defs.iter().filter(|d| d.name == name && d.owner.as_deref() == owner).collect();
+    let hit = match hits.as_slice() {
+        [one] => one,
+        [] => {
+            let others: Vec<String> = defs
+                .iter()
+                .filter(|d| d.name == name)
+                .map(|d| d.owner.as_ref().map_or(format!("{file}::{name}"), |t| format!("{file}::{t}::{name}")))
+                .collect();
+            return Err(if others.is_empty() {
+                format!("anchor `{anchor}`: no function `{name}` in {file}")
+            } else {
+                format!("anchor `{anchor}`: no such function; {file} has {}", others.join(", "))
+            });
+        }
+        many => {
+            let lines: Vec<String> = many.iter().map(|d| (d.line + 1).to_string()).collect();
+            return Err(format!("anchor `{anchor}` is ambiguous: defined at lines {} of {file}", lines.join(", ")));
+        }
+    };
+    // walk up over attributes to the start of the doc block
+    let lines: Vec<&str> = text.lines().collect();
+    let want = format!("/// ({id})");
+    let mut j = hit.line;
+    let mut first_doc: Option<&str> = None;
+    while j > 0 {
+        j -= 1;
+        let p = lines[j].trim_start();
+        if p.starts_with("#[") {
+            continue;
+        }
+        if p.starts_with("///") {
+            first_doc = Some(p);
+            continue;
+        }
+        break;
+    }
+    if first_doc.is_some_and(|d| d.starts_with(&want)) {
+        Ok(())
     } else {
-        Err(format!("anchor `{anchor}`: no function `{name}` in {file}"))
+        Err(format!("anchor `{anchor}`: the doc comment of `{item}` does not start with `{want}`"))
     }
 }
 
@@ -504,8 +545,10 @@ fn report(target: &Path, trace: &TraceResult, outcomes: &Outcomes, crosscheck: &
         .collect();
     let snapshots: Vec<String> = outcomes
         .iter()
-        .filter(|((f, _), _)| f == "tests/snapshots.rs")
-        .map(|((_, n), p)| format!("{n}: {}", if *p { "matches" } else { "CHANGED" }))
+        .filter(|((f, n), _)| f == "tests/solver/main.rs" && n.starts_with("snapshots::"))
+        .map(|((_, n), p)| {
+            format!("{}: {}", n.trim_start_matches("snapshots::"), if *p { "matches" } else { "CHANGED" })
+        })
         .collect();
     r.push_str(&format!("- largest (E.1) residual, relative to the energy scale: {worst_e1:.2e}\n"));
     r.push_str(&format!("- twin solvers (newton vs conic), worst per-step difference: {}\n", twins.join("; ")));
@@ -531,6 +574,46 @@ fn report(target: &Path, trace: &TraceResult, outcomes: &Outcomes, crosscheck: &
     r
 }
 
+/// `cargo fmt --all --check`: the code is as rustfmt.toml formats it.
+fn formatted(root: &Path) -> Result<(), String> {
+    let out = Command::new(env!("CARGO"))
+        .args(["fmt", "--all", "--check"])
+        .current_dir(root)
+        .output()
+        .map_err(|e| format!("cannot run cargo fmt: {e}"))?;
+    if out.status.success() {
+        return Ok(());
+    }
+    let diff = String::from_utf8_lossy(&out.stdout);
+    let files: BTreeSet<&str> =
+        diff.lines().filter_map(|l| l.strip_prefix("Diff in ")).filter_map(|l| l.split(':').next()).collect();
+    println!("{diff}");
+    Err(format!(
+        "formatting: {} file(s) differ from rustfmt.toml's format ({}); `cargo fmt --all` fixes them{}",
+        files.len(),
+        files.into_iter().collect::<Vec<_>>().join(", "),
+        String::from_utf8_lossy(&out.stderr).lines().next().map(|l| format!(" ({l})")).unwrap_or_default()
+    ))
+}
+
+/// `cargo clippy --workspace --all-targets -- -D warnings`: no lint anywhere in the workspace
+/// (the lints the crates allow are allowed in their roots, each with its reason).
+fn lints(root: &Path) -> Result<(), String> {
+    let out = Command::new(env!("CARGO"))
+        .args(["clippy", "--workspace", "--all-targets", "--quiet", "--", "-D", "warnings"])
+        .current_dir(root)
+        .output()
+        .map_err(|e| format!("cannot run cargo clippy: {e}"))?;
+    if out.status.success() {
+        return Ok(());
+    }
+    let text = String::from_utf8_lossy(&out.stderr);
+    println!("{text}");
+    let first: Vec<&str> =
+        text.lines().filter(|l| l.starts_with("error") || l.trim_start().starts_with("-->")).take(6).collect();
+    Err(format!("lints: cargo clippy --workspace --all-targets -- -D warnings failed: {}", first.join(" ")))
+}
+
 /// `cargo xtask crosscheck`: the test build (a no-op when verify has just built it) for the
 /// solver binary, then the cross-check.
 fn crosscheck_only(root: &Path, target: &Path) -> Result<(), String> {
@@ -543,8 +626,17 @@ fn verify(root: &Path, target: &Path, skip_crosscheck: bool) -> Result<(), Strin
     let start = Instant::now();
     std::thread::scope(|scope| {
         let prepared = (!skip_crosscheck).then(|| scope.spawn(|| crosscheck::prepare(root, target)));
+        let mut failures = Vec::new();
+        let t = Instant::now();
+        if let Err(e) = formatted(root) {
+            failures.push(e);
+        }
         let build = build_tests(root)?;
         println!("== built in {:.1} s", start.elapsed().as_secs_f64());
+        match lints(root) {
+            Ok(()) => println!("== formatting and lints clean ({:.1} s)", t.elapsed().as_secs_f64()),
+            Err(e) => failures.push(e),
+        }
         let _ = std::fs::remove_file(target.join("verify").join("measurements.jsonl"));
         let jobs = std::thread::available_parallelism().map_or(2, usize::from);
         let t = Instant::now();
@@ -559,7 +651,7 @@ fn verify(root: &Path, target: &Path, skip_crosscheck: bool) -> Result<(), Strin
         println!("\n{}", trace.markdown);
         let path = write_report(target, "trace.md", &trace.markdown)?;
         println!("trace written to {}", path.display());
-        let mut failures = trace.failures.clone();
+        failures.extend(trace.failures.iter().cloned());
         let mut cross = String::from("skipped (--no-crosscheck)");
         match prepared.map(|h| h.join().unwrap_or_else(|_| Err("the cross-check's setup panicked".into()))) {
             None => println!("cross-check skipped (--no-crosscheck)"),

@@ -1,0 +1,109 @@
+//! `dyncontact-studies bench --quick`: the benchmark runs end to end and writes its CSV and SVG
+//! files with the documented columns and one row per run.
+
+use studies::bench::{self, BenchOptions};
+
+const WORK_COLUMNS: [&str; 14] = [
+    "scheme",
+    "inner",
+    "mass",
+    "cells",
+    "k",
+    "steps",
+    "wall_time_s",
+    "time_per_step_s",
+    "floor_s",
+    "ratio_to_floor",
+    "error_force",
+    "error_disp",
+    "newton_iterations",
+    "fixed_point_iterations",
+];
+
+const RACE_COLUMNS: [&str; 6] =
+    ["case", "method", "time_per_step_s", "newton_iterations_per_step", "unfrozen_steps", "fallback_steps"];
+
+/// The rows of a CSV file as maps from column name to field.
+fn read_csv(path: &std::path::Path) -> (Vec<String>, Vec<std::collections::HashMap<String, String>>) {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().expect("a header").split(',').map(str::to_string).collect();
+    let rows = lines
+        .map(|l| {
+            let fields: Vec<&str> = l.split(',').collect();
+            assert_eq!(fields.len(), header.len(), "{}: row {l:?} does not match the header", path.display());
+            header.iter().cloned().zip(fields.into_iter().map(str::to_string)).collect()
+        })
+        .collect();
+    (header, rows)
+}
+
+fn number(row: &std::collections::HashMap<String, String>, col: &str) -> f64 {
+    row[col].parse().unwrap_or_else(|e| panic!("{col} = {:?}: {e}", row[col]))
+}
+
+/// The quick benchmark writes work_precision.csv/svg (3 schemes × 2 masses × 2 levels, newton
+/// only, every run successful with finite positive errors and a floor below the step time) and
+/// race.csv/svg (both methods on every case).
+#[test]
+fn quick_bench_writes_its_files() {
+    let dir = std::env::temp_dir().join(format!("dyncontact-bench-smoke-{}", std::process::id()));
+    let report = bench::run(&dir, &BenchOptions { quick: true, floor_only: false, bookkeeping_only: false })
+        .expect("the quick benchmark runs");
+    assert!(report.contains("work–precision") && report.contains("race"), "{report}");
+
+    let (header, rows) = read_csv(&dir.join("work_precision.csv"));
+    for c in WORK_COLUMNS {
+        assert!(header.iter().any(|h| h == c), "work_precision.csv lacks column {c}");
+    }
+    assert_eq!(rows.len(), 3 * 2 * 2, "one row per run");
+    for r in &rows {
+        assert_eq!(r["inner"], "newton");
+        assert_eq!(r["status"], "ok", "{r:?}");
+        for c in ["error_force", "error_disp", "wall_time_s", "floor_s"] {
+            let v = number(r, c);
+            assert!(v.is_finite() && v > 0.0, "{c} = {v} in {r:?}");
+        }
+        // the floor is two solve pairs; a step does at least the free solve's pair (its recovery
+        // may read the kept responses G instead of solving)
+        assert!(number(r, "ratio_to_floor") >= 0.5, "a step costs at least its free solve: {r:?}");
+        assert_eq!(number(r, "steps"), (0.05 / number(r, "k")).round());
+    }
+
+    let (header, rows) = read_csv(&dir.join("race.csv"));
+    for c in RACE_COLUMNS {
+        assert!(header.iter().any(|h| h == c), "race.csv lacks column {c}");
+    }
+    assert!(!rows.is_empty() && rows.len() % 2 == 0, "two methods per case");
+    assert!(rows.iter().any(|r| r["method"] == "newton") && rows.iter().any(|r| r["method"] == "newton-unfrozen"));
+    assert!(rows.iter().any(|r| r["inside_ck"] == "yes"), "a case inside (C.k)");
+
+    let (header, rows) = read_csv(&dir.join("bookkeeping.csv"));
+    assert!(header.iter().any(|h| h == "share_balance_output") && !rows.is_empty(), "bookkeeping.csv");
+    for r in &rows {
+        let share = number(r, "share_balance_output");
+        assert!(share > 0.0 && share < 1.0, "a share of the step: {r:?}");
+    }
+
+    // the 3-D rows of part 2 and the 3-D points of part 4
+    let (header, rows) = read_csv(&dir.join("floor3d.csv"));
+    assert!(
+        header.iter().any(|h| h == "ratio_to_floor") && header.iter().any(|h| h == "contact_nodes"),
+        "floor3d.csv columns"
+    );
+    assert!(
+        rows.iter().any(|r| r["scene"] == "academic3d") && rows.iter().any(|r| r["scene"] == "sliding_block3d"),
+        "floor3d.csv rows"
+    );
+    let (_, rows) = read_csv(&dir.join("scaling.csv"));
+    assert!(
+        rows.iter().any(|r| r["form"] == "3-D" && number(r, "contact_per_step_s") > 0.0),
+        "a 3-D point in scaling.csv"
+    );
+
+    for svg in ["work_precision.svg", "race.svg", "scaling.svg"] {
+        let text = std::fs::read_to_string(dir.join(svg)).expect(svg);
+        assert!(text.starts_with("<svg") && text.contains("</svg>"), "{svg} is not an SVG document");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

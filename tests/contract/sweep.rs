@@ -1,0 +1,382 @@
+//! `--set KEY=VALUE` overrides and sweeps (SCENES.md, "Overrides and sweeps"): overrides read
+//! exactly like a file (errors name the key), a sweep's points are validated before anything
+//! runs, run in parallel into their folders, skipped when completed with the same scene, and a
+//! failing point is recorded while the others complete; sweep.csv's figures are those of
+//! separate `run`s of the same scenes.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use dyncontact::overrides::Override;
+use dyncontact::scene::{DEFAULT_SCENE, FrictionLaw, Scene};
+use dyncontact::sweep::Plan;
+use dyncontact::sweep::collect::{self, FIGURES};
+use dyncontact::sweep::runner::{Outcome, RunnerOptions, run_points};
+
+const BIN: &str = env!("CARGO_BIN_EXE_dyncontact");
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("tmp dir");
+    d
+}
+
+fn with(sets: &[&str]) -> Result<Scene, dyncontact::Error> {
+    let ovs = sets.iter().map(|s| Override::parse(s)).collect::<Result<Vec<_>, _>>()?;
+    Scene::from_toml_with(DEFAULT_SCENE, "academic.toml", &ovs)
+}
+
+/// `--set` reaches nested keys, arrays (whole and by index), arrays of tables, inline tables
+/// and strings (quoted, or bare where the value is not TOML).
+#[test]
+fn set_overrides_nested_keys_arrays_and_strings() {
+    let s = with(&[
+        "contact.friction.law=constant",
+        "contact.friction.coefficient=0.4",
+        "contact.friction.static=0.5",
+        "domain.cells=[8, 4]",
+        "domain.cells[1]=6",
+        "loads.traction[0].value=[\"0\", \"-10\"]",
+        "material.viscosity={ theta = 1.0, zeta = 0.5 }",
+        "name=\"renamed\"",
+        "description=a bare string",
+        "time.end=0.05",
+    ])
+    .expect("valid overrides");
+    let c = s.contact.as_ref().expect("contact");
+    assert_eq!(c.friction.law, FrictionLaw::Constant);
+    assert_eq!(c.friction.coefficient, Some(0.4));
+    assert_eq!(s.domain.cells, Some(vec![8, 6]));
+    assert_eq!(s.loads.traction[0].value, vec!["0".to_string(), "-10".to_string()]);
+    assert_eq!((s.material.viscosity.theta, s.material.viscosity.zeta), (1.0, 0.5));
+    assert_eq!((s.name.as_str(), s.description.as_str(), s.time.end), ("renamed", "a bare string", 0.05));
+}
+
+/// A wrong `--set` is refused with its key named: an unknown key and a wrong type as in a
+/// file (the same key-path errors), an index out of range, a path through a value that is not
+/// a table, and an argument without `=`.
+#[test]
+fn set_errors_name_the_key() {
+    let cases: [(&[&str], &str, &str); 5] = [
+        (&["contact.penaltyy=1e-5"], "contact.penaltyy", "unknown field `penaltyy`"),
+        (&["domain.cells=3"], "domain.cells", "invalid type"),
+        (&["domain.cells[4]=2"], "domain.cells[4]", "out of range"),
+        (&["name.x=1"], "name.x", "`name` is a string, not a table"),
+        (&["contact.penalty"], "--set", "is not KEY=VALUE"),
+    ];
+    for (sets, key, what) in cases {
+        let e = with(sets).expect_err("refused").to_string();
+        println!("{sets:?}: {e}");
+        assert!(e.contains(key) && e.contains(what), "{sets:?}: expected {key} / {what}, got {e}");
+    }
+    // the same key-path message as the same mistake in a file
+    let in_file = Scene::from_toml(
+        &DEFAULT_SCENE.replace("penetration_bound = 0.02", "penetration_bound = 0.02\npenaltyy = 1e-5"),
+        "f",
+    )
+    .expect_err("refused")
+    .to_string();
+    let by_set = with(&["contact.penaltyy=1e-5"]).expect_err("refused").to_string();
+    let tail = |m: &str| m.rsplit('|').next().unwrap_or_default().trim().to_string();
+    assert_eq!(tail(&in_file), tail(&by_set), "file: {in_file}\n--set: {by_set}");
+    // a value that passes reading but not validation is refused by `validate`, naming the key
+    let e = with(&["contact.friction.decay=-3"]).expect("reads").validate().expect_err("refused").to_string();
+    assert!(e.starts_with("contact.friction.decay:"), "{e}");
+}
+
+/// The CLI: `run --set` runs the overridden scene (the number of steps follows time.end), and
+/// `check --set` with a bad key exits 1 naming it.
+#[test]
+fn cli_run_and_check_take_set() {
+    let out = tmp("set_run");
+    let o = Command::new(BIN)
+        .args(["run", "--set", "time.end=0.01", "--set", "domain.cells=[8,4]", "--set", "output.every=100", "--out"])
+        .arg(&out)
+        .output()
+        .expect("spawn");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let history = std::fs::read_to_string(out.join("history.csv")).expect("history");
+    assert_eq!(history.lines().count(), 1 + 1 + 20, "header, t = 0 and 20 steps of 5e-4");
+    let o = Command::new(BIN)
+        .args(["check"])
+        .arg(root().join("fixtures/scenes/academic.toml"))
+        .args(["--set", "contact.friction.decayy=3"])
+        .output()
+        .expect("spawn");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("contact.friction.decayy") && err.contains("with --set"), "{err}");
+}
+
+fn six_points() -> PathBuf {
+    root().join("fixtures/sweeps/six_points.toml")
+}
+
+fn run_sweep(plan: &Plan, dir: &Path, jobs: usize) -> Vec<Outcome> {
+    let done = plan.write(dir).expect("the folder");
+    run_points(plan, dir, &done, &RunnerOptions { jobs, progress: false, interrupt: None }).expect("run")
+}
+
+/// A 6-point sweep (3 penalties × 2 steps) run in-process with 2 jobs gives sweep.csv with one
+/// row per point in the plan's order, its axis columns, status completed and every figure; each
+/// point's history.csv equals, byte for byte, a separate `dyncontact run --set …` of the same
+/// scene, and its figures equal those read from that run. Run again, every point is skipped
+/// (completed with the same scene: its files untouched); with one point's summary removed, only
+/// that point runs.
+#[test]
+fn six_point_sweep_matches_separate_runs_and_resumes() {
+    let dir = tmp("sweep_six");
+    let plan = Plan::from_file(&six_points(), &[]).expect("the plan");
+    assert_eq!(plan.points.len(), 6);
+    let outcomes = run_sweep(&plan, &dir, 2);
+    assert!(outcomes.iter().all(|o| *o == Outcome::Completed), "{outcomes:?}");
+    let (_, rows) = collect::collect(&dir).expect("collect");
+    let csv = std::fs::read_to_string(dir.join("sweep.csv")).expect("sweep.csv");
+    let header: Vec<&str> = csv.lines().next().expect("header").split(',').collect();
+    assert_eq!(&header[..5], &["point", "contact.penalty", "time.step", "status", "wall_time_s"]);
+    assert!(FIGURES.iter().all(|f| header.contains(f)) && header.last() == Some(&"reason"));
+    assert_eq!(csv.lines().count(), 7);
+    let expected = [
+        ("0.001", "0.001"),
+        ("0.001", "0.0005"),
+        ("0.0001", "0.001"),
+        ("0.0001", "0.0005"),
+        ("0.00001", "0.001"),
+        ("0.00001", "0.0005"),
+    ];
+    for (r, (pen, k)) in rows.iter().zip(expected) {
+        assert_eq!((r.axes[0].as_str(), r.axes[1].as_str(), r.status.as_str()), (pen, k, "completed"), "{}", r.point);
+        assert!(r.figures.iter().all(|f| !f.is_empty()), "{}: a figure is missing", r.point);
+    }
+    // separate runs of the same scenes through the CLI
+    for (r, (pen, k)) in rows.iter().zip(expected) {
+        let out = dir.join("separate").join(&r.point);
+        let sets = ["contact.enforcement=\"penalty\"", "domain.cells=[16, 8]", "time.end=0.3", "output.every=100"];
+        let mut cmd = Command::new(BIN);
+        cmd.arg("run");
+        for s in sets.iter().map(|s| s.to_string()).chain([format!("contact.penalty={pen}"), format!("time.step={k}")])
+        {
+            cmd.args(["--set", &s]);
+        }
+        let o = cmd.arg("--out").arg(&out).output().expect("spawn");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let a = std::fs::read(out.join("history.csv")).expect("separate history");
+        let b = std::fs::read(dir.join("points").join(&r.point).join("history.csv")).expect("point history");
+        assert!(a == b, "{}: history.csv differs from a separate run", r.point);
+        let h = collect::History::read(&out.join("history.csv")).expect("history");
+        let last = |c: &str| h.rows.last().expect("rows")[h.column(c).expect("column")].clone();
+        assert_eq!(r.figures[FIGURES.iter().position(|f| *f == "final_kinetic").expect("figure")], last("kinetic"));
+        let peak = h.numbers("normal_force").expect("column").into_iter().fold(f64::NEG_INFINITY, f64::max);
+        assert_eq!(r.figure("max_normal_force"), Some(peak));
+    }
+    println!("6 points: sweep.csv rows and figures equal separate runs");
+    // resume: nothing runs again
+    let stamp = |id: &str| {
+        std::fs::metadata(dir.join("points").join(id).join("history.csv")).and_then(|m| m.modified()).expect("mtime")
+    };
+    let before = stamp("p003");
+    let again = run_sweep(&plan, &dir, 2);
+    assert!(again.iter().all(|o| *o == Outcome::Skipped), "{again:?}");
+    assert_eq!(stamp("p003"), before, "a skipped point's files were rewritten");
+    std::fs::remove_file(dir.join("points/p002/summary.json")).expect("remove");
+    let partial = run_sweep(&plan, &dir, 2);
+    let ran: Vec<usize> =
+        partial.iter().enumerate().filter(|(_, o)| **o == Outcome::Completed).map(|(i, _)| i).collect();
+    assert_eq!(ran, vec![2], "{partial:?}");
+    let (_, again_rows) = collect::collect(&dir).expect("collect");
+    assert_eq!(
+        again_rows.iter().map(|r| &r.figures).collect::<Vec<_>>(),
+        rows.iter().map(|r| &r.figures).collect::<Vec<_>>(),
+        "the rerun point's figures changed"
+    );
+    // the cluster files: a rule per point, one collector, a resource entry per point
+    let snakefile = std::fs::read_to_string(dir.join("Snakefile")).expect("Snakefile");
+    assert!(
+        snakefile.contains("rule point:")
+            && snakefile.contains("rule collect:")
+            && snakefile.contains("sweep collect .")
+    );
+    let config = std::fs::read_to_string(dir.join("config.yaml")).expect("config.yaml");
+    assert_eq!(config.lines().filter(|l| l.trim_start().starts_with('p') && l.contains("mem_mb")).count(), 6);
+}
+
+/// A point that fails at run time (Newton capped at one iteration on the frictional impact) is
+/// recorded — status failed and its reason in sweep.csv, summary.json saying why — and the other
+/// points complete.
+#[test]
+fn a_failing_point_is_recorded_and_the_others_complete() {
+    let dir = tmp("sweep_failing");
+    let file = dir.join("failing.toml");
+    std::fs::write(
+        &file,
+        r#"
+name = "failing"
+base = "../../../fixtures/scenes/impact_friction.toml"
+[[axis]]
+key = "solver.max_newton_iterations"
+values = [50, 1, 40]
+[set]
+"time.end" = 0.05
+"#,
+    )
+    .expect("write");
+    // the base path is relative to the sweep file: resolve from the test's temporary folder
+    let sweep_text = std::fs::read_to_string(&file)
+        .expect("read")
+        .replace("../../../fixtures", &root().join("fixtures").display().to_string());
+    std::fs::write(&file, sweep_text).expect("write");
+    let plan = Plan::from_file(&file, &[]).expect("plan");
+    let outcomes = run_sweep(&plan, &dir.join("out"), 2);
+    assert_eq!(outcomes[0], Outcome::Completed);
+    assert!(matches!(&outcomes[1], Outcome::Failed(r) if r.contains("newton solver failed")), "{outcomes:?}");
+    assert_eq!(outcomes[2], Outcome::Completed);
+    let (_, rows) = collect::collect(&dir.join("out")).expect("collect");
+    assert_eq!(rows.iter().map(|r| r.status.as_str()).collect::<Vec<_>>(), ["completed", "failed", "completed"]);
+    assert!(rows[1].reason.contains("newton solver failed"), "{}", rows[1].reason);
+    let csv = std::fs::read_to_string(dir.join("out/sweep.csv")).expect("csv");
+    assert!(csv.lines().nth(2).is_some_and(|l| l.contains(",failed,") && l.contains("newton solver failed")), "{csv}");
+}
+
+/// Every point is validated before anything runs: one bad point refuses the sweep, naming its
+/// axis values and the key; a sweep file's own mistakes name their key path.
+#[test]
+fn a_bad_point_refuses_the_sweep_before_anything_runs() {
+    let dir = tmp("sweep_refused");
+    let bad = |name: &str, text: &str| {
+        let f = dir.join(name);
+        std::fs::write(&f, text).expect("write");
+        Plan::from_file(&f, &[]).expect_err("refused").to_string()
+    };
+    let e = bad(
+        "p.toml",
+        "name = \"p\"\n[[axis]]\nkey = \"contact.penalty\"\nvalues = [1e-3, -1.0]\n[set]\n\"contact.enforcement\" = \"penalty\"\n",
+    );
+    println!("{e}");
+    assert!(
+        e.contains("point p001 (contact.penalty = -1)") && e.contains("contact.penalty: must be a finite number > 0"),
+        "{e}"
+    );
+    assert!(!dir.join("out").exists());
+    let e = bad("k.toml", "name = \"k\"\n[[axis]]\nkey = \"time.stepp\"\nvalues = [1e-3]\n");
+    assert!(e.contains("point p000 (time.stepp = 0.001)") && e.contains("unknown field `stepp`"), "{e}");
+    let e = bad("u.toml", "name = \"u\"\nmodee = \"grid\"\n");
+    assert!(e.contains("modee"), "{e}");
+    let e = bad(
+        "z.toml",
+        "name = \"z\"\nmode = \"zip\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-3, 5e-4]\n[[axis]]\nkey = \"contact.compliance\"\nvalues = [1.0]\n",
+    );
+    assert!(e.contains("\"zip\" needs axes of one length"), "{e}");
+    let e =
+        bad("s.toml", "name = \"s\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-3]\n[set]\n\"time.step\" = 5e-4\n");
+    assert!(e.contains("time.step and time.step of [set] set the same value"), "{e}");
+    // two axes, or an axis and a key below it in [set], touching one value
+    let e = bad(
+        "a.toml",
+        "name = \"a\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-3]\n[[axis]]\nname = \"v\"\nsets = [{ \"time.step\" = 2e-3 }]\n",
+    );
+    assert!(e.contains("time.step and time.step of axis[0]"), "{e}");
+    let e = bad(
+        "f.toml",
+        "name = \"f\"\n[[axis]]\nkey = \"contact.friction\"\nvalues = [{ decay = 5.0 }, { decay = 10.0 }]\n[set]\n\"contact.friction.decay\" = 5.0\n",
+    );
+    assert!(e.contains("contact.friction and contact.friction.decay of [set] set the same value"), "{e}");
+    // name and labels go with `sets`; the columns of sweep.csv are taken; an empty set says nothing
+    let e = bad("n.toml", "name = \"n\"\n[[axis]]\nkey = \"time.step\"\nname = \"k\"\nvalues = [1e-3]\n");
+    assert!(e.contains("axis[0]") && e.contains("`name` and `labels` go with `sets`"), "{e}");
+    let e = bad("r.toml", "name = \"r\"\n[[axis]]\nname = \"status\"\nsets = [{ \"time.step\" = 1e-3 }]\n");
+    assert!(e.contains("\"status\" is a column of sweep.csv already"), "{e}");
+    let e = bad("e.toml", "name = \"e\"\n[[axis]]\nname = \"x\"\nsets = [{}]\n");
+    assert!(e.contains("axis[0].sets[0]") && e.contains("is empty"), "{e}");
+    // the checks of building the problem: a gap below the body puts u^0 beyond the bound
+    let e = bad("g.toml", "name = \"g\"\n[[axis]]\nkey = \"contact.gap\"\nvalues = [\"0\", \"-0.1\"]\n");
+    assert!(e.contains("point p001 (contact.gap = -0.1)"), "{e}");
+    // `--set` on a value an axis sets
+    let f = dir.join("six.toml");
+    std::fs::copy(six_points(), &f).expect("copy");
+    let e =
+        Plan::from_file(&f, &[Override::parse("time.step=1e-3").expect("override")]).expect_err("refused").to_string();
+    assert!(e.contains("of --set set the same value"), "{e}");
+    assert!(Override::parse("domain.cells[1=0").is_err(), "an unclosed index");
+}
+
+/// A table in `[set]` (an unquoted dotted key is one in TOML) is merged into the scene's table:
+/// the base's other keys of that table stay.
+#[test]
+fn a_table_in_set_is_merged_into_the_scene() {
+    let dir = tmp("sweep_merge");
+    let f = dir.join("m.toml");
+    std::fs::write(&f, "name = \"m\"\n[set]\nsolver.relaxation = 0.5\n").expect("write");
+    let plan = Plan::from_file(&f, &[]).expect("plan");
+    let scene = Scene::from_toml(&plan.points[0].scene_text, "point").expect("scene");
+    assert_eq!(scene.solver.relaxation, 0.5);
+    assert_eq!(scene.solver.mass, dyncontact::scene::MassKind::Lumped, "the base's other solver keys stay");
+    assert!(plan.points[0].scene_text.contains("inner = \"newton\""), "{}", plan.points[0].scene_text);
+}
+
+/// When the axes change, a point whose scene was run before keeps its run: its folder moves to
+/// its new id and only the new point runs.
+#[test]
+fn points_moved_by_a_changed_axis_keep_their_runs() {
+    let dir = tmp("sweep_moved");
+    let write = |values: &str| {
+        let f = dir.join("k.toml");
+        std::fs::write(&f, format!("name = \"k\"\n[[axis]]\nkey = \"time.step\"\nvalues = {values}\n[set]\n\"domain.cells\" = [8, 4]\n\"time.end\" = 0.02\n")).expect("write");
+        Plan::from_file(&f, &[]).expect("plan")
+    };
+    let out = dir.join("out");
+    let first = write("[1e-3, 5e-4]");
+    assert!(run_sweep(&first, &out, 2).iter().all(|o| *o == Outcome::Completed));
+    let history = std::fs::read(out.join("points/p001/history.csv")).expect("history");
+    let second = write("[2e-3, 1e-3, 5e-4]");
+    let outcomes = run_sweep(&second, &out, 2);
+    assert_eq!(outcomes, vec![Outcome::Completed, Outcome::Skipped, Outcome::Skipped]);
+    assert_eq!(
+        std::fs::read(out.join("points/p002/history.csv")).expect("moved history"),
+        history,
+        "k = 5e-4 moved from p001 to p002"
+    );
+}
+
+/// `dyncontact sweep` from the command line: `--plan-only` writes the folder (a scene per point,
+/// the Snakefile) without running; the run writes sweep.csv and a chart per numeric axis;
+/// `sweep collect DIR` writes the same sweep.csv.
+#[test]
+fn cli_sweep_plan_run_and_collect() {
+    let dir = tmp("sweep_cli");
+    let o = Command::new(BIN)
+        .arg("sweep")
+        .arg(six_points())
+        .arg("--out")
+        .arg(&dir)
+        .arg("--plan-only")
+        .output()
+        .expect("spawn");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        dir.join("points/p005/scene.toml").is_file()
+            && dir.join("Snakefile").is_file()
+            && !dir.join("sweep.csv").exists()
+    );
+    let o = Command::new(BIN)
+        .arg("sweep")
+        .arg(six_points())
+        .arg("--out")
+        .arg(&dir)
+        .args(["--jobs", "2"])
+        .output()
+        .expect("spawn");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let first = std::fs::read_to_string(dir.join("sweep.csv")).expect("sweep.csv");
+    for axis in ["contact.penalty", "time.step"] {
+        let svg = std::fs::read_to_string(dir.join("plots").join(format!("{axis}.svg"))).expect("chart");
+        assert!(svg.starts_with("<svg") && svg.contains("max_penetration"), "{axis}.svg");
+    }
+    let o = Command::new(BIN).args(["sweep", "collect"]).arg(&dir).output().expect("spawn");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_to_string(dir.join("sweep.csv")).expect("sweep.csv"), first);
+}

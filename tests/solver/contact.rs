@@ -1,0 +1,484 @@
+//! The contact step (spec/model.md §4.3–§4.5): model no more than a scene needs, the twin inner
+//! solvers, the fixed point (F.1) as a majorization–minimization, and the Alart–Curnier
+//! parameters' irrelevance to the solution (N.1–N.3).
+
+use crate::common;
+
+use common::{fixture, problem, records, records_with};
+use dyncontact::linalg;
+use dyncontact::problem::Problem;
+use dyncontact::scene::{Bound, FixedPointAcceleration, FrictionLaw, NumOrStr};
+use dyncontact::simulation::{Settings, Simulation};
+use dyncontact::step::conic::ConicSettings;
+use dyncontact::step::fixed_point::Inner;
+use dyncontact::step::newton::{self, NewtonSettings};
+use dyncontact::step::{StepData, conic};
+use faer::linalg::solvers::DenseSolveCore;
+
+/// A frictionless scene does zero fixed-point iterations (one convex solve per step).
+#[test]
+fn f1_frictionless_does_no_fixed_point_iterations() {
+    let mut s = fixture("impact_friction");
+    s.contact.as_mut().expect("contact").friction.law = FrictionLaw::None;
+    let c = s.contact.as_mut().expect("contact");
+    c.friction.static_ = None;
+    c.friction.kinetic = None;
+    c.friction.decay = None;
+    let recs = records(&problem(s));
+    assert!(recs.iter().all(|r| r.report.fixed_point_iterations == 0 && r.report.friction_unknowns == 0));
+    assert!(recs.iter().any(|r| r.contact_nodes > 0), "the scene must touch the foundation");
+}
+
+/// A constant-μ scene does exactly one convex solve per step: the bound S = μ p_τ(û) is known
+/// before the solve (p_τ at the predictor û, decision 2 as refined in spec/README.md).
+#[test]
+fn f1_constant_mu_does_one_convex_solve_per_step() {
+    let mut s = fixture("impact_friction");
+    let f = &mut s.contact.as_mut().expect("contact").friction;
+    f.law = FrictionLaw::Constant;
+    f.coefficient = Some(0.4);
+    (f.static_, f.kinetic, f.decay) = (None, None, None);
+    let recs = records(&problem(s));
+    assert!(recs[1..].iter().all(|r| r.report.fixed_point_iterations == 1), "constant μ needed more than one solve");
+    assert!(recs.iter().any(|r| r.slip_nodes > 0) && recs.iter().any(|r| r.contact_nodes > 0));
+}
+
+/// A scene with g = "inf" (pure normal compliance) has no multipliers: the model says so,
+/// every step report counts 0 multipliers, and no λ is ever nonzero.
+#[test]
+fn s4_infinite_bound_has_no_multipliers() {
+    let mut s = fixture("impact_friction");
+    s.contact.as_mut().expect("contact").penetration_bound = NumOrStr::Str("inf".into());
+    let p = problem(s);
+    let c = p.contact.as_ref().expect("contact");
+    assert!(c.constraint.is_none() && c.bound == Bound::Infinite);
+    assert_eq!(dyncontact::output::ModelInfo::of(&p).multipliers, 0);
+    let recs = records(&p);
+    assert!(recs.iter().all(|r| r.report.multipliers == 0));
+    assert!(recs.iter().all(|r| r.nodes.iter().all(|n| n.lambda == 0.0)));
+    // without the bound the penetration is free to exceed the g of the original scene
+    assert!(recs.iter().any(|r| r.max_penetration > 0.01));
+}
+
+/// Relative distance between two vectors.
+fn rel(a: &[f64], b: &[f64], scale: f64) -> f64 {
+    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
+}
+
+/// Solve the frozen problem of every step with both inner solvers and compare.
+/// Returns the worst relative differences (velocity, force) over the run.
+fn twins_on(p: &Problem, steps: usize) -> (f64, f64) {
+    let newton_set = NewtonSettings { tolerance: 1e-12, ..NewtonSettings::default() };
+    let conic_set = ConicSettings { tolerance: 1e-11, max_rounds: 100, verbose: false };
+    let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);
+    // the S of the converged fixed point, then one frozen solve by each twin
+    common::each_frozen_step(p, steps, newton_set, |sim, data, s, _| {
+        let a = newton::solve(data, s, &sim.state.lambda, &sim.state.t_fric, &newton_set).expect("newton");
+        let b = conic::solve(data, s, &conic_set).expect("conic");
+        let vs = data.velocity_scale(&a.y).max(1e-300);
+        let ra = data.forces(&a.y, &a.lambda, &a.t);
+        let rb = data.forces(&b.y, &b.lambda, &b.t);
+        // the conic solver works in r̃ = r/V with V the velocity scale, so its absolute force
+        // accuracy is relative to V/‖W‖ as well as to the forces themselves
+        let w_norm = (0..data.delassus.dim())
+            .map(|i| (0..data.delassus.dim()).map(|j| data.delassus[(i, j)].abs()).sum::<f64>())
+            .fold(0.0, f64::max);
+        let fs = linalg::norm_inf(&ra).max(data.velocity_scale(&data.y_free) / w_norm).max(1e-300);
+        if linalg::norm_inf(&ra) > 0.0 {
+            let (dv, df) = (rel(&a.y, &b.y, vs), rel(&ra, &rb, fs));
+            if std::env::var_os("TWIN_DEBUG").is_some() && (dv > 1e-6 || df > 1e-6) {
+                println!(
+                    "step {}: dv {dv:.3e} df {df:.3e} vs {vs:.3e} fs {fs:.3e} y_newton {:?} y_conic {:?} status {:?} {:?}",
+                    sim.state.n + 1,
+                    &a.y[..6],
+                    &b.y[..6],
+                    &a.status[..3],
+                    &b.status[..3]
+                );
+            }
+            worst_v = worst_v.max(dv);
+            worst_f = worst_f.max(df);
+        }
+    });
+    (worst_v, worst_f)
+}
+
+/// The twins `newton` and `conic` solve the same frozen step problem (S.6) to the same
+/// solution on every step of four scenes: a frictional impact (separation, compliance,
+/// active constraint, stick, slip), a coarse academic scene, the penalty problem, and the
+/// start of the default academic scene.
+/// Tolerance 1e-5 relative: Newton stops at 1e-12 of the velocity scale; Clarabel's interior
+/// point stops at gap/feasibility 1e-11 on the scaled program, which bounds its primal error
+/// by about the square root of the gap, 3.2e-6, at degenerate (weakly active, stick-to-slip)
+/// contacts — 1e-5 is that bound with a factor 3 of margin. Regular steps agree to ~1e-8.
+#[test]
+fn s6_twins_newton_and_conic_agree() {
+    let mut academic = fixture("academic");
+    academic.domain.cells = Some([16, 8].to_vec());
+    academic.time.step = 1e-3;
+    academic.time.end = 0.3;
+    let mut penalty = fixture("impact_friction");
+    let c = penalty.contact.as_mut().expect("contact");
+    c.enforcement = dyncontact::scene::EnforcementKind::Penalty;
+    c.penalty = Some(1e-3);
+    // the start of the default academic scene: at rest the constraint is 1e12 velocity scales
+    // away, which stalled the interior point before the conic solver left such rows out
+    let mut start = fixture("academic");
+    start.time.end = 0.02;
+    for (name, s, steps) in [
+        ("impact_friction", fixture("impact_friction"), 400),
+        ("academic 16x8", academic, 300),
+        ("penalty", penalty, 300),
+        ("academic 32x16, first 40 steps", start, 40),
+    ] {
+        let p = problem(s);
+        let (v, f) = twins_on(&p, steps);
+        println!("{name}: worst relative difference: velocity {v:.3e}, force {f:.3e}");
+        common::measured(
+            "contact::s6_twins_newton_and_conic_agree",
+            &format!("twins: velocity difference ({name})"),
+            v,
+            "≤ 1e-5",
+        );
+        common::measured(
+            "contact::s6_twins_newton_and_conic_agree",
+            &format!("twins: force difference ({name})"),
+            f,
+            "≤ 1e-5",
+        );
+        assert!(v <= 1e-5 && f <= 1e-5, "{name}: the twins disagree: velocity {v:.3e}, force {f:.3e}");
+    }
+}
+
+/// (N.2) (N.3) The Alart–Curnier parameters do not change the solution: rescaling ρ_ν and
+/// ρ_τ by 10 and by 1/10 gives the same contact velocities and forces (to 1e-9 relative:
+/// three solves each stopped at 1e-12 of the velocity scale, amplified by the condition of
+/// the small contact system).
+#[test]
+fn n2_n3_alart_curnier_parameters_do_not_change_the_solution() {
+    let mut s = fixture("impact_friction");
+    s.time.end = 0.2;
+    let p = problem(s);
+    let mut sim = Simulation::new(&p).expect("setup");
+    let mut worst = 0.0f64;
+    for rec in sim
+        .steps()
+        .before_each(|sim| {
+            let (w, _) = sim.free_velocity();
+            let c = p.contact.as_ref().expect("contact");
+            let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
+            let base = NewtonSettings { tolerance: 1e-12, max_iterations: 100, ..NewtonSettings::default() };
+            let (_, sb, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(base), None).expect("F.1");
+            let a = newton::solve(&data, &sb, &sim.state.lambda, &sim.state.t_fric, &base).expect("base");
+            for scale in [10.0, 0.1] {
+                let set = NewtonSettings { scale_normal: scale, scale_tangent: scale, ..base };
+                let b = newton::solve(&data, &sb, &sim.state.lambda, &sim.state.t_fric, &set).expect("rescaled");
+                let vs = data.velocity_scale(&a.y).max(1e-300);
+                worst = worst.max(rel(&a.y, &b.y, vs));
+                let (ra, rb) = (data.forces(&a.y, &a.lambda, &a.t), data.forces(&b.y, &b.lambda, &b.t));
+                let fs = linalg::norm_inf(&ra);
+                if fs > 0.0 {
+                    worst = worst.max(rel(&ra, &rb, fs));
+                }
+            }
+        })
+        .take(p.steps)
+    {
+        rec.expect("step");
+    }
+    println!("worst relative change under rescaling: {worst:.3e}");
+    common::measured(
+        "contact::n2_n3_alart_curnier_parameters_do_not_change_the_solution",
+        "change under r ×10, ×0.1",
+        worst,
+        "≤ 1e-9",
+    );
+    assert!(worst <= 1e-9, "rescaled Alart–Curnier parameters changed the solution by {worst:.3e}");
+}
+
+/// ∫_a^x DP(a, s) ds by 20-point Gauss–Legendre on pieces split at the hinges.
+fn compliance_potential(law: &dyncontact::model::laws::NormalLaw, a: f64, x: f64) -> f64 {
+    const N: usize = 20;
+    // nodes/weights of Gauss–Legendre by Newton on P_N
+    let mut nodes = [0.0; N];
+    let mut weights = [0.0; N];
+    for i in 0..N {
+        let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (N as f64 + 0.5)).cos();
+        for _ in 0..100 {
+            let (mut p1, mut p2) = (1.0, 0.0);
+            for j in 0..N {
+                let p3 = p2;
+                p2 = p1;
+                p1 = ((2 * j + 1) as f64 * z * p2 - j as f64 * p3) / (j + 1) as f64;
+            }
+            let pp = N as f64 * (z * p1 - p2) / (z * z - 1.0);
+            let dz = p1 / pp;
+            z -= dz;
+            if dz.abs() < 1e-16 {
+                nodes[i] = z;
+                weights[i] = 2.0 / ((1.0 - z * z) * pp * pp);
+                break;
+            }
+        }
+    }
+    let mut cuts = vec![a, x];
+    for h in &law.hinges {
+        if (h.s - a) * (h.s - x) < 0.0 {
+            cuts.push(h.s);
+        }
+    }
+    cuts.sort_by(f64::total_cmp);
+    let sign = if x >= a { 1.0 } else { -1.0 };
+    let mut total = 0.0;
+    for w in cuts.windows(2) {
+        let (lo, hi) = (w[0], w[1]);
+        for k in 0..N {
+            let s = 0.5 * (hi - lo) * nodes[k] + 0.5 * (hi + lo);
+            total += 0.5 * (hi - lo) * weights[k] * law.discrete_gradient(a, s);
+        }
+    }
+    sign * total
+}
+
+/// The true (unfrozen) step functional of (S.6) in the contact velocities y:
+/// ½(y − y_free)ᵀW⁻¹(y − y_free) + Σ (ω/a_d) F(d^{n+1}(y)) + Σ (ω p̂_τ/a_v) ψ(v̄(y)).
+fn step_functional(
+    data: &StepData,
+    winv: &faer::Mat<f64>,
+    mu: &dyncontact::model::laws::FrictionCoefficient,
+    p_hat: &[f64],
+    y: &[f64],
+) -> f64 {
+    let m = y.len();
+    let e: Vec<f64> = (0..m).map(|j| y[j] - data.y_free[j]).collect();
+    let mut phi = 0.0;
+    for i in 0..m {
+        for j in 0..m {
+            phi += 0.5 * e[i] * winv[(i, j)] * e[j];
+        }
+    }
+    for (i, nd) in data.nodes.iter().enumerate() {
+        phi += nd.omega / data.a_d * compliance_potential(data.law, nd.d_n, data.d_end(i, y));
+        phi += nd.omega * p_hat[i] / data.a_v * mu.psi(data.slip(i, y));
+    }
+    phi
+}
+
+/// (F.1) (C.k) Under (C.k), the fixed point is a majorization–minimization: the true step
+/// functional does not increase over the fixed-point iterations (checked on every step of the
+/// academic scene at k = 3e-4 < the (C.k) limit 3.47e-4, over the first 0.4 s; allowance
+/// 1e-10 of |Φ| for the inner solver's tolerance). This is the plain iteration's property
+/// (`fixed_point_acceleration = "none"`); the Anderson extrapolation gives it up for speed and
+/// reaches the same fixed point (`f1_anderson_reaches_the_plain_fixed_point`).
+#[test]
+fn f1_step_functional_decreases_under_ck() {
+    let mut s = fixture("academic");
+    s.solver.fixed_point_acceleration = FixedPointAcceleration::None;
+    s.time.step = 2.5e-4;
+    s.time.end = 0.4;
+    let p = problem(s);
+    let info = dyncontact::output::ModelInfo::of(&p);
+    assert!(info.ck_step_limit.expect("C.k applies") > p.k, "the test step must satisfy (C.k)");
+    let mu = p.contact.as_ref().and_then(|c| c.friction.clone()).expect("friction");
+    let mut sim = Simulation::new(&p).expect("setup");
+    let wmat = sim.delassus.as_ref().expect("W").to_dense();
+    let winv = wmat.partial_piv_lu().inverse();
+    let (mut checked, mut worst) = (0usize, 0.0f64);
+    for rec in sim
+        .steps()
+        .before_each(|sim| {
+            let (w, _) = sim.free_velocity();
+            let c = p.contact.as_ref().expect("contact");
+            let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
+            let mut trace = Vec::new();
+            let inner = Inner::Newton(NewtonSettings { tolerance: 1e-12, ..NewtonSettings::default() });
+            sim.solve_frozen_sequence(&data, &p_hat, &inner, Some(&mut trace)).expect("F.1");
+            let phis: Vec<f64> = trace.iter().map(|y| step_functional(&data, &winv, &mu, &p_hat, y)).collect();
+            for w in phis.windows(2) {
+                let allowance = 1e-10 * w[0].abs().max(w[1].abs());
+                worst = worst.max((w[1] - w[0]) / w[0].abs().max(1e-300));
+                assert!(w[1] <= w[0] + allowance, "step {}: Φ rose from {} to {}", sim.state.n + 1, w[0], w[1]);
+                checked += 1;
+            }
+        })
+        .take(p.steps)
+    {
+        rec.expect("step");
+    }
+    println!(
+        "checked {checked} fixed-point iterations; largest relative change of Φ {worst:.3e} (negative = decrease)"
+    );
+    assert!(checked > 100, "too few fixed-point iterations to check");
+}
+
+/// (F.1) The fixed point with relaxation θ < 1 converges to the same steps as θ = 1 (to the
+/// fixed-point tolerance 1e-8, amplified over 200 steps: 1e-5 relative on the force history).
+#[test]
+fn f1_relaxation_gives_the_same_solution() {
+    let mut s = fixture("academic");
+    s.domain.cells = Some([16, 8].to_vec());
+    s.time.end = 0.1;
+    s.time.step = 5e-4;
+    let p = problem(s);
+    let a = records(&p);
+    let mut set = Settings::from_problem(&p);
+    set.fixed_point.relaxation = 0.5;
+    set.fixed_point.max_iterations = 200;
+    let b = records_with(&p, set);
+    let scale = a.iter().map(|r| r.normal_force.abs() + r.tangential_force.abs()).fold(0.0, f64::max);
+    let diff = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (x.tangential_force - y.tangential_force).abs() + (x.normal_force - y.normal_force).abs())
+        .fold(0.0, f64::max);
+    let fa: usize = a.iter().map(|r| r.report.fixed_point_iterations).sum();
+    let fb: usize = b.iter().map(|r| r.report.fixed_point_iterations).sum();
+    println!("θ = 1: {fa} fixed-point iterations, θ = 0.5: {fb}; force difference {:.3e} of {scale:.3e}", diff);
+    assert!(diff <= 1e-5 * scale, "relaxed fixed point differs by {diff:.3e}");
+    assert!(b.iter().all(|r| r.report.fixed_point_converged()));
+}
+
+/// Worst per-step differences between the reduced Newton system (Cholesky on the force
+/// unknowns, factorization reused; in 3-D also the slipping nodes' frames and conjugate
+/// gradients, or the velocity form) and the full m × m LU, each solving the frozen problem of
+/// the converged F.1 bound from the same state to `tolerance`; and the worst difference between
+/// the simulation's warm factor cache and a fresh one (0: the same bits).
+fn reduced_vs_full(p: &Problem, steps: usize, tolerance: f64) -> (f64, f64, f64) {
+    let reduced = NewtonSettings { tolerance, ..NewtonSettings::default() };
+    let full = NewtonSettings { reduced: false, ..reduced };
+    let (mut worst_v, mut worst_f, mut warm_cold) = (0.0f64, 0.0f64, 0.0f64);
+    common::each_frozen_step(p, steps, reduced, |sim, data, s, y_free| {
+        let a = newton::solve(data, s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced");
+        let b = newton::solve(data, s, &sim.state.lambda, &sim.state.t_fric, &full).expect("full");
+        let fresh = dyncontact::step::delassus::DelassusFactors::default();
+        let (mut cold, _) = sim.step_data(y_free.to_vec()).expect("data");
+        cold.factors = &fresh;
+        let a_cold = newton::solve(&cold, s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced, cold");
+        let vs = data.velocity_scale(&a.y).max(1e-300);
+        warm_cold = warm_cold
+            .max(rel(&a_cold.y, &a.y, vs))
+            .max(rel(&a_cold.lambda, &a.lambda, 1.0))
+            .max(rel(&a_cold.t, &a.t, 1.0));
+        let ra = data.forces(&a.y, &a.lambda, &a.t);
+        let rb = data.forces(&b.y, &b.lambda, &b.t);
+        if linalg::norm_inf(&ra) > 0.0 {
+            worst_v = worst_v.max(rel(&a.y, &b.y, vs));
+            worst_f = worst_f.max(rel(&ra, &rb, linalg::norm_inf(&ra)));
+        }
+    });
+    (worst_v, worst_f, warm_cold)
+}
+
+/// (S.6) The reduced Newton system (Cholesky of W_UU + D on the force unknowns, its
+/// factorization reused while U and D do not change) gives the same step solution as the full
+/// m × m LU on every step of a frictional impact, the compliant layer and the start of the
+/// default academic scene, to 1e-12 (the two directions are the same linear algebra in another
+/// order, so they differ by round-off, measured ≤ 1.1e-15; 1e-12 leaves room for the
+/// conditioning of W_UU); and a reused factorization gives the same bits as a fresh one.
+#[test]
+fn reduced_newton_system_agrees_with_the_full_one() {
+    for (name, steps) in [("impact_friction", usize::MAX), ("compliant_layer", usize::MAX), ("academic", 600)] {
+        let p = problem(fixture(name));
+        let (dv, df, warm_cold) = reduced_vs_full(&p, steps, 1e-12);
+        println!(
+            "{name}: reduced vs full Newton system, worst per-step difference: velocity {dv:.3e}, force {df:.3e}; cache warm vs cold {warm_cold:.1e}"
+        );
+        assert!(dv <= 1e-12 && df <= 1e-12, "{name}: velocity {dv:.3e}, force {df:.3e}");
+        assert!(warm_cold == 0.0, "{name}: a reused factorization changed the answer ({warm_cold:.3e})");
+    }
+}
+
+/// (S.6) (N.3) In 3-D a slipping node's friction force follows its velocity across the slip (the
+/// disk's 2 × 2 block), and the reduced directions take it in two ways: in force form in each
+/// slipping node's (ẑ, ẑ^⊥) frame (sliding_block3d, 147 contact unknowns), and in velocity form
+/// with W⁻¹ and conjugate gradients (academic3d at 12×8×4 cells, 324 unknowns; the first 0.3 s:
+/// pressing with half the nodes slipping outward, then shaking). Each gives the full m × m LU's
+/// step solution on every step, all solving Newton to 1e-13 of the velocity scale: velocities to
+/// 1e-12 (10× the tolerance; measured 5.1e-16 in force form, 9.7e-14 in velocity form, whose
+/// inexact directions reach the tolerance by another path) and forces to 1e-9 of the largest
+/// force (a force follows from velocities through W⁻¹, whose entries are ~1e3× the velocity
+/// scale's inverse here: measured 7.3e-11); a fresh factor cache gives the warm one's solution
+/// to the same bounds. The velocity form is checked to run exactly where its rule says.
+#[test]
+fn reduced_newton_system_agrees_with_the_full_one_in_3d() {
+    let mut big = fixture("academic3d");
+    big.domain.cells = Some(vec![12, 8, 4]);
+    big.time.end = 0.3;
+    for (name, s, steps) in
+        [("sliding_block3d", fixture("sliding_block3d"), 400), ("academic3d 12×8×4", big, usize::MAX)]
+    {
+        let p = problem(s);
+        let (dv, df, warm_cold) = reduced_vs_full(&p, steps, 1e-13);
+        println!(
+            "{name}: reduced vs full Newton system in 3-D, worst per-step difference: velocity {dv:.3e}, force {df:.3e}; cache warm vs cold {warm_cold:.1e}"
+        );
+        common::measured(
+            "reduced_newton_system_agrees_with_the_full_one_in_3d",
+            &format!("{name}: per-step force difference"),
+            df,
+            "≤ 1e-9",
+        );
+        assert!(dv <= 1e-12 && df <= 1e-9, "{name}: velocity {dv:.3e}, force {df:.3e}");
+        assert!(warm_cold <= 1e-9, "{name}: warm and cold factor caches differ by {warm_cold:.3e}");
+        let sim = Simulation::new(&p).expect("setup");
+        assert_eq!(
+            sim.inverse.is_some(),
+            p.contact.as_ref().is_some_and(|c| c.dim * c.n() >= 256),
+            "{name}: the velocity form's rule"
+        );
+    }
+}
+
+/// (F.1) The Anderson-extrapolated fixed point and the plain one, each from the same state on
+/// every step of the academic scene's first 0.6 s (press, then stick–slip), give the same step
+/// solution to 1e-6 of the force scale: both stop when ‖G(S) − S‖ ≤ 1e-8 ‖S‖, which puts each
+/// within 1e-8/(1 − ρ) of the fixed point for a contraction factor ρ (≤ 0.99 here: F.1 needs at
+/// most 50 iterations); and the extrapolation saves convex solves (reported).
+#[test]
+fn f1_anderson_reaches_the_plain_fixed_point() {
+    let mut s = fixture("academic");
+    s.time.end = 0.6;
+    let p = problem(s);
+    let mut sim = Simulation::new(&p).expect("setup");
+    let set = NewtonSettings::default();
+    let plain = dyncontact::step::fixed_point::FixedPointSettings { anderson: false, ..sim.settings.fixed_point };
+    let accelerated = dyncontact::step::fixed_point::FixedPointSettings { anderson: true, ..sim.settings.fixed_point };
+    let (mut worst, mut solves) = (0.0f64, [0usize; 2]);
+    for rec in sim.steps().before_each(|sim| {
+        let (w, _) = sim.free_velocity();
+        let c = p.contact.as_ref().expect("contact");
+        let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
+        let normal = dyncontact::step::fixed_point::NormalPart::Predictor(&p_hat);
+        let vn = c.restrict(&sim.state.v);
+        let run = |fp| {
+            dyncontact::step::fixed_point::solve(
+                &data,
+                c.friction.as_ref(),
+                &normal,
+                &vn,
+                &sim.state.lambda,
+                &sim.state.t_fric,
+                &Inner::Newton(set),
+                &fp,
+                None,
+            )
+            .expect("F.1")
+        };
+        let (a, _, ra) = run(plain);
+        let (b, _, rb) = run(accelerated);
+        solves[0] += ra.fixed_point_iterations;
+        solves[1] += rb.fixed_point_iterations;
+        let (fa, fb) = (data.forces(&a.y, &a.lambda, &a.t), data.forces(&b.y, &b.lambda, &b.t));
+        if linalg::norm_inf(&fa) > 0.0 {
+            worst = worst.max(rel(&fa, &fb, linalg::norm_inf(&fa)));
+        }
+    }) {
+        rec.expect("step");
+    }
+    println!(
+        "F.1 plain vs Anderson from the same state: worst force difference {worst:.3e}; convex solves {} vs {}",
+        solves[0], solves[1]
+    );
+    assert!(worst <= 1e-6, "{worst:.3e}");
+    assert!(solves[1] < solves[0], "the extrapolation should save solves: {solves:?}");
+}
