@@ -33,6 +33,7 @@ pub struct Scene {
     pub output: Output,
 }
 
+/// `name` when omitted.
 fn default_name() -> String {
     "scene".into()
 }
@@ -235,15 +236,15 @@ pub struct Solver {
     pub inner: InnerSolver,
     #[serde(default)]
     pub mass: MassKind,
-    #[serde(default = "d_newton_tol")]
+    #[serde(default = "default_newton_tolerance")]
     pub newton_tolerance: f64,
-    #[serde(default = "d_fp_tol")]
+    #[serde(default = "default_fixed_point_tolerance")]
     pub fixed_point_tolerance: f64,
-    #[serde(default = "d_iters")]
+    #[serde(default = "default_max_iterations")]
     pub max_newton_iterations: i64,
-    #[serde(default = "d_iters")]
+    #[serde(default = "default_max_iterations")]
     pub max_fixed_point_iterations: i64,
-    #[serde(default = "d_one")]
+    #[serde(default = "default_relaxation")]
     pub relaxation: f64,
     /// (R.2) velocity-level persistency on nodes that stay on the constraint or in stick
     #[serde(default)]
@@ -256,26 +257,35 @@ pub struct Solver {
     pub fixed_point_acceleration: FixedPointAcceleration,
     /// the (E.1) guard of a midpoint run: a step whose residual exceeds this fraction of the
     /// energy scale ends the run ("fail") or is reported ("warn")
-    #[serde(default = "d_e1_limit")]
+    #[serde(default = "default_energy_residual_limit")]
     pub energy_residual_limit: f64,
     #[serde(default)]
     pub energy_residual_action: EnergyResidualAction,
 }
 
-fn d_e1_limit() -> f64 {
+/// `solver.energy_residual_limit` when omitted: [`defaults::ENERGY_RESIDUAL_LIMIT`].
+fn default_energy_residual_limit() -> f64 {
     defaults::ENERGY_RESIDUAL_LIMIT
 }
 
-fn d_newton_tol() -> f64 {
+/// `solver.newton_tolerance` when omitted: [`defaults::NEWTON_TOLERANCE`].
+fn default_newton_tolerance() -> f64 {
     defaults::NEWTON_TOLERANCE
 }
-fn d_fp_tol() -> f64 {
+
+/// `solver.fixed_point_tolerance` when omitted: [`defaults::FIXED_POINT_TOLERANCE`].
+fn default_fixed_point_tolerance() -> f64 {
     defaults::FIXED_POINT_TOLERANCE
 }
-fn d_iters() -> i64 {
+
+/// `solver.max_newton_iterations` and `solver.max_fixed_point_iterations` when omitted:
+/// [`defaults::MAX_ITERATIONS`].
+fn default_max_iterations() -> i64 {
     defaults::MAX_ITERATIONS as i64
 }
-fn d_one() -> f64 {
+
+/// `solver.relaxation` when omitted: [`defaults::RELAXATION`] (no relaxation).
+fn default_relaxation() -> f64 {
     defaults::RELAXATION
 }
 
@@ -284,15 +294,15 @@ impl Default for Solver {
         Solver {
             inner: InnerSolver::Newton,
             mass: MassKind::Lumped,
-            newton_tolerance: d_newton_tol(),
-            fixed_point_tolerance: d_fp_tol(),
-            max_newton_iterations: d_iters(),
-            max_fixed_point_iterations: d_iters(),
-            relaxation: d_one(),
+            newton_tolerance: default_newton_tolerance(),
+            fixed_point_tolerance: default_fixed_point_tolerance(),
+            max_newton_iterations: default_max_iterations(),
+            max_fixed_point_iterations: default_max_iterations(),
+            relaxation: default_relaxation(),
             persistency: false,
             contact_solve: ContactSolve::Auto,
             fixed_point_acceleration: FixedPointAcceleration::Anderson,
-            energy_residual_limit: d_e1_limit(),
+            energy_residual_limit: default_energy_residual_limit(),
             energy_residual_action: EnergyResidualAction::Fail,
         }
     }
@@ -301,7 +311,7 @@ impl Default for Solver {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Output {
-    #[serde(default = "d_every")]
+    #[serde(default = "default_output_every")]
     pub every: i64,
     /// write trajectory.f64: u and v of every free DOF at every step (studies that compare
     /// whole trajectories read it)
@@ -309,12 +319,13 @@ pub struct Output {
     pub trajectory: bool,
 }
 
-fn d_every() -> i64 {
+/// `output.every` when omitted: [`defaults::OUTPUT_EVERY`].
+fn default_output_every() -> i64 {
     defaults::OUTPUT_EVERY as i64
 }
 
 impl Default for Output {
     fn default() -> Self {
-        Output { every: d_every(), trajectory: false }
+        Output { every: default_output_every(), trajectory: false }
     }
 }
