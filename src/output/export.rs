@@ -38,7 +38,7 @@ pub fn export_operators(p: &Problem, dir: &Path) -> Result<()> {
     let n = mesh.nodes.len();
     let zero = vec![[0.0; 3]; n];
     let contact = vec![(0.0, 0.0, 0.0, 0.0, -1); n];
-    let frame = vtu::Frame { mesh: &p.mesh, material: &p.material, u: &zero, v: &zero, contact: &contact };
+    let frame = vtu::Snapshot { mesh: &p.mesh, material: &p.material, u: &zero, v: &zero, contact: &contact };
     write_atomic(&dir.join("mesh.vtu"), vtu::vtu(&frame).as_bytes())?;
     let model = &p.model;
     let (m, k, c) = assemble_full(mesh, &p.material, model.solver.mass)?;

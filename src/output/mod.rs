@@ -264,7 +264,7 @@ impl Writer {
         self.frames.push((rec.t, name.clone()));
         let (dir, mesh, material, frames) = (self.dir.clone(), Arc::clone(&self.mesh), p.material, self.frames.clone());
         self.pending = Some(std::thread::spawn(move || {
-            let frame = vtu::Frame { mesh: &mesh, material: &material, u: &u, v: &v, contact: &contact };
+            let frame = vtu::Snapshot { mesh: &mesh, material: &material, u: &u, v: &v, contact: &contact };
             write_atomic(&dir.join(&name), vtu::vtu(&frame).as_bytes())?;
             write_atomic(&dir.join("series.pvd"), vtu::pvd(&frames).as_bytes())
         }));
