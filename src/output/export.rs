@@ -45,7 +45,7 @@ pub fn export_operators(p: &Problem, dir: &Path) -> Result<()> {
     write_atomic(&dir.join("M.mtx"), matrix_market(&m).as_bytes())?;
     write_atomic(&dir.join("K.mtx"), matrix_market(&k).as_bytes())?;
     write_atomic(&dir.join("C.mtx"), matrix_market(&c).as_bytes())?;
-    let all = Dofs::new(n, &vec![false; n]);
+    let all = Dofs::with_dim(n, &vec![false; n], 2);
     let f = build_loads(model, &p.mesh, &all)?.at(0.0);
     let mut ft = String::new();
     for v in f {

@@ -348,7 +348,8 @@ impl Writer {
         save("energy.svg", energy)?;
         // the charts of the mesh and of Γ3 along its arc are 2-D (3-D maps of Γ3: issue 14)
         if let Some(mesh) = p.mesh.plane() {
-            save("deformed.svg", contact_charts::deformed(mesh, &p.dofs.expand(&state.u), p.time(state.n)))?;
+            let u: Vec<[f64; 2]> = p.dofs.expand_dim(&state.u).iter().map(|u| [u[0], u[1]]).collect();
+            save("deformed.svg", contact_charts::deformed(mesh, &u, p.time(state.n)))?;
         }
         let Some(c) = &p.contact else {
             for stale in ["forces.svg", "contact_status.svg", "normal_stress.svg", "status_fractions.svg"] {
