@@ -544,10 +544,10 @@ impl<'p> Simulation<'p> {
                 NodeStatus::Stick => rec.stick_nodes += 1,
                 NodeStatus::Slip => rec.slip_nodes += 1,
             }
-            let k = self.kinematics;
+            let kin = self.kinematics;
             let v_now = c.tangential(i, &self.state.v);
             let vbar: [f64; 2] = std::array::from_fn(|j| {
-                if j + 1 < c.dim { k.a_v * (sol.y[c.dim * i + 1 + j] + k.b_v * v_now[j]) } else { 0.0 }
+                if j + 1 < c.dim { kin.a_v * (sol.y[c.dim * i + 1 + j] + kin.b_v * v_now[j]) } else { 0.0 }
             });
             let (v_t, friction) =
                 if c.dim == 2 { (vbar[0], -sol.t[i]) } else { (vbar[0].hypot(vbar[1]), t_i[0].hypot(t_i[1])) };
@@ -626,24 +626,26 @@ impl<'p> Simulation<'p> {
         let (c, w) = (self.problem.contact.as_ref()?, self.delassus.as_ref()?);
         let d_n = c.penetration(&self.state.u);
         let vn = c.restrict(&self.state.v);
-        let k = self.kinematics;
+        let kin = self.kinematics;
         let nodes: Vec<NodeData> = (0..c.n())
             .map(|i| NodeData {
                 omega: c.omega[i],
                 d_n: d_n[i],
-                d_aff: d_n[i] + k.a_d * k.b_d * vn[c.dim * i],
-                v_aff: std::array::from_fn(|j| if j + 1 < c.dim { k.a_v * k.b_v * vn[c.dim * i + 1 + j] } else { 0.0 }),
+                d_aff: d_n[i] + kin.a_d * kin.b_d * vn[c.dim * i],
+                v_aff: std::array::from_fn(
+                    |j| if j + 1 < c.dim { kin.a_v * kin.b_v * vn[c.dim * i + 1 + j] } else { 0.0 },
+                ),
                 bound: c.constraint,
             })
             .collect();
-        let p_tau_hat: Vec<f64> = (0..c.n()).map(|i| c.p_tau.p_tau(d_n[i] + k.p_d * vn[c.dim * i])).collect();
+        let p_tau_hat: Vec<f64> = (0..c.n()).map(|i| c.p_tau.p_tau(d_n[i] + kin.p_d * vn[c.dim * i])).collect();
         let data = StepData {
             delassus: w,
             y_free,
             nodes,
-            a_d: k.a_d,
-            a_v: k.a_v,
-            force_rule: k.force,
+            a_d: kin.a_d,
+            a_v: kin.a_v,
+            force_rule: kin.force,
             law: &c.normal,
             friction: c.friction.is_some(),
             dim: c.dim,

@@ -10,7 +10,7 @@ use crate::model::material::Material;
 
 use super::{element, tet};
 
-/// Numbering of the free DOFs: (node k, component c) → map[2k + c] = Some(free index), or
+/// Numbering of the free DOFs: (node k, component c) → map[d k + c] = Some(free index), or
 /// None on Γ̄1.
 #[derive(Debug, Clone)]
 pub struct Dofs {
@@ -22,11 +22,6 @@ pub struct Dofs {
 }
 
 impl Dofs {
-    /// (P.3) u = 0 on Γ1 in two dimensions (see [`Dofs::with_dim`]).
-    pub fn new(n_nodes: usize, clamped: &[bool]) -> Dofs {
-        Dofs::with_dim(n_nodes, clamped, 2)
-    }
-
     /// (P.3) u = 0 on Γ1: all d components of every node on a clamped side are removed from
     /// the unknowns; the remaining DOFs are numbered in node order, (node k, component c) →
     /// map[d k + c].
@@ -42,16 +37,6 @@ impl Dofs {
             }
         }
         Dofs { map, n_free, n_nodes, dim }
-    }
-
-    /// Nodal vectors from a free-DOF vector (zero on Γ̄1).
-    pub fn expand(&self, x: &[f64]) -> Vec<[f64; 2]> {
-        (0..self.n_nodes)
-            .map(|k| {
-                let g = |c: usize| self.map[2 * k + c].map(|i| x[i]).unwrap_or(0.0);
-                [g(0), g(1)]
-            })
-            .collect()
     }
 
     /// Free-DOF vector from nodal values with three components (the first d are read).
@@ -77,20 +62,6 @@ impl Dofs {
                 })
             })
             .collect()
-    }
-
-    /// Free-DOF vector from nodal values.
-    pub fn gather(&self, nodal: impl Fn(usize) -> [f64; 2]) -> Vec<f64> {
-        let mut x = vec![0.0; self.n_free];
-        for k in 0..self.n_nodes {
-            let v = nodal(k);
-            for c in 0..2 {
-                if let Some(i) = self.map[2 * k + c] {
-                    x[i] = v[c];
-                }
-            }
-        }
-        x
     }
 }
 
@@ -234,7 +205,7 @@ pub fn nodal_masses(
 ) -> Result<Vec<f64>> {
     match (mesh, mass) {
         (_, MassKind::Modified) => Ok(per_dof(&modified_masses(mesh, mat, dofs, contact_nodes)?, dofs)),
-        (Geometry::Plane(m), _) => Ok(lumped_masses(m, mat, dofs)),
+        (Geometry::Plane(m), _) => Ok(per_dof(&vertex_masses(m, mat), dofs)),
         (Geometry::Solid(m), _) => Ok(per_dof(&solid_vertex_masses(m, mat), dofs)),
     }
 }
@@ -446,12 +417,7 @@ pub fn vertex_masses(mesh: &Mesh, mat: &Material) -> Vec<f64> {
     mass
 }
 
-/// Row-sum lumped mass per free DOF (both DOFs of a node carry the node's mass).
-pub fn lumped_masses(mesh: &Mesh, mat: &Material, dofs: &Dofs) -> Vec<f64> {
-    per_dof(&vertex_masses(mesh, mat), dofs)
-}
-
-/// A nodal quantity on the free DOFs (both components of a node get the node's value).
+/// A nodal quantity on the free DOFs (every component of a node gets the node's value).
 fn per_dof(per_node: &[f64], dofs: &Dofs) -> Vec<f64> {
     let mut d = vec![0.0; dofs.n_free];
     for (k, m) in per_node.iter().enumerate() {

@@ -16,7 +16,7 @@ use crate::simulation::NodeRecord;
 use crate::step::NodeStatus;
 
 /// The frames the writer kept: (step, t, one record per contact node).
-pub type Frame = (usize, f64, Vec<NodeRecord>);
+pub type ContactFrame = (usize, f64, Vec<NodeRecord>);
 
 /// Status maps with more cells than this draw every k-th frame only (keeps the SVG small).
 const MAX_CELLS: usize = 200_000;
@@ -184,9 +184,9 @@ pub fn forces(rows: &[ChartRow], reference: Option<f64>) -> Result<String, Strin
 
 /// Normal stress q + λ along Γ3 at about five frames spread over the contact phase, with p(g),
 /// to show where the constraint lifts the stress above the compliance bound.
-pub fn normal_stress(frames: &[Frame], along: &Along, p_g: Option<f64>) -> Result<String, String> {
-    let loaded: Vec<&Frame> = frames.iter().filter(|f| f.2.iter().any(|r| r.p + r.lambda > 0.0)).collect();
-    let pool: Vec<&Frame> = if loaded.len() >= 5 { loaded } else { frames.iter().collect() };
+pub fn normal_stress(frames: &[ContactFrame], along: &Along, p_g: Option<f64>) -> Result<String, String> {
+    let loaded: Vec<&ContactFrame> = frames.iter().filter(|f| f.2.iter().any(|r| r.p + r.lambda > 0.0)).collect();
+    let pool: Vec<&ContactFrame> = if loaded.len() >= 5 { loaded } else { frames.iter().collect() };
     let mut picks: Vec<usize> =
         (0..5).map(|j| (j * pool.len().saturating_sub(1) + 2) / 4).filter(|&k| k < pool.len()).collect();
     picks.dedup();
@@ -232,10 +232,10 @@ fn draw_status_legend(
 
 /// Space–time map of the contact status along Γ3 (one row per frame), so the spread of
 /// separation, compliance, active constraint, stick and slip over the run is seen at once.
-pub fn contact_status(frames: &[Frame], along: &Along) -> Result<String, String> {
+pub fn contact_status(frames: &[ContactFrame], along: &Along) -> Result<String, String> {
     let n = along.order.len();
     let stride = (frames.len() * n).div_ceil(MAX_CELLS).max(1);
-    let rows: Vec<&Frame> = frames.iter().step_by(stride).filter(|f| f.1.is_finite()).collect();
+    let rows: Vec<&ContactFrame> = frames.iter().step_by(stride).filter(|f| f.1.is_finite()).collect();
     let s_sorted: Vec<f64> = along.order.iter().map(|&i| along.s[i]).collect();
     let ts: Vec<f64> = rows.iter().map(|f| f.1).collect();
     let xe = cell_edges(&s_sorted, 1.0);
@@ -403,7 +403,7 @@ pub fn deformed(mesh: &Mesh, u: &[[f64; 2]], t: f64) -> Result<String, String> {
 
 /// The share of Γ3's nodes in each status category against t, over the contact frames (any
 /// dimension): the 3-D counterpart of the space–time map, which needs a 1-D Γ3.
-pub fn status_fractions(frames: &[Frame]) -> Result<String, String> {
+pub fn status_fractions(frames: &[ContactFrame]) -> Result<String, String> {
     let series: Vec<plots::Series> = Category::ALL
         .iter()
         .map(|&cat| plots::Series {
@@ -423,9 +423,9 @@ pub fn status_fractions(frames: &[Frame]) -> Result<String, String> {
 /// Maps of the contact status on a 2-D Γ3 (a surface of a 3-D body) at four frames spread over
 /// the run: each node a square at its in-plane coordinates `xy` (along the tangents of the first
 /// contact node's frame), coloured by its category.
-pub fn status_maps(frames: &[Frame], xy: &[[f64; 2]]) -> Result<String, String> {
-    let with_nodes: Vec<&Frame> = frames.iter().filter(|f| !f.2.is_empty() && f.1.is_finite()).collect();
-    let picks: Vec<&Frame> = match with_nodes.len() {
+pub fn status_maps(frames: &[ContactFrame], xy: &[[f64; 2]]) -> Result<String, String> {
+    let with_nodes: Vec<&ContactFrame> = frames.iter().filter(|f| !f.2.is_empty() && f.1.is_finite()).collect();
+    let picks: Vec<&ContactFrame> = match with_nodes.len() {
         0 => Vec::new(),
         n => {
             let mut idx: Vec<usize> = (0..4).map(|k| k * (n - 1) / 3).collect();

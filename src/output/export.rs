@@ -38,14 +38,14 @@ pub fn export_operators(p: &Problem, dir: &Path) -> Result<()> {
     let n = mesh.nodes.len();
     let zero = vec![[0.0; 3]; n];
     let contact = vec![(0.0, 0.0, 0.0, 0.0, -1); n];
-    let frame = vtu::Frame { mesh: &p.mesh, material: &p.material, u: &zero, v: &zero, contact: &contact };
+    let frame = vtu::Snapshot { mesh: &p.mesh, material: &p.material, u: &zero, v: &zero, contact: &contact };
     write_atomic(&dir.join("mesh.vtu"), vtu::vtu(&frame).as_bytes())?;
     let model = &p.model;
     let (m, k, c) = assemble_full(mesh, &p.material, model.solver.mass)?;
     write_atomic(&dir.join("M.mtx"), matrix_market(&m).as_bytes())?;
     write_atomic(&dir.join("K.mtx"), matrix_market(&k).as_bytes())?;
     write_atomic(&dir.join("C.mtx"), matrix_market(&c).as_bytes())?;
-    let all = Dofs::new(n, &vec![false; n]);
+    let all = Dofs::with_dim(n, &vec![false; n], 2);
     let f = build_loads(model, &p.mesh, &all)?.at(0.0);
     let mut ft = String::new();
     for v in f {

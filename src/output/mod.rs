@@ -265,7 +265,7 @@ impl Writer {
         self.frames.push((rec.t, name.clone()));
         let (dir, mesh, material, frames) = (self.dir.clone(), Arc::clone(&self.mesh), p.material, self.frames.clone());
         self.pending = Some(std::thread::spawn(move || {
-            let frame = vtu::Frame { mesh: &mesh, material: &material, u: &u, v: &v, contact: &contact };
+            let frame = vtu::Snapshot { mesh: &mesh, material: &material, u: &u, v: &v, contact: &contact };
             write_atomic(&dir.join(&name), vtu::vtu(&frame).as_bytes())?;
             write_atomic(&dir.join("series.pvd"), vtu::pvd(&frames).as_bytes())
         }));
@@ -349,7 +349,8 @@ impl Writer {
         save("energy.svg", energy)?;
         // the charts of the mesh and of Γ3 along its arc are 2-D (3-D maps of Γ3: issue 14)
         if let Some(mesh) = p.mesh.plane() {
-            save("deformed.svg", contact_charts::deformed(mesh, &p.dofs.expand(&state.u), p.time(state.n)))?;
+            let u: Vec<[f64; 2]> = p.dofs.expand_dim(&state.u).iter().map(|u| [u[0], u[1]]).collect();
+            save("deformed.svg", contact_charts::deformed(mesh, &u, p.time(state.n)))?;
         }
         let Some(c) = &p.contact else {
             for stale in ["forces.svg", "contact_status.svg", "normal_stress.svg", "status_fractions.svg"] {

@@ -14,7 +14,7 @@ use crate::mesh::Geometry;
 use crate::model::material::Material;
 
 /// Point and cell fields of one frame.
-pub struct Frame<'a> {
+pub struct Snapshot<'a> {
     pub mesh: &'a Geometry,
     pub material: &'a Material,
     /// nodal displacement and velocity (z = 0 in 2-D)
@@ -51,7 +51,7 @@ fn ints(out: &mut String, name: &str, comps: usize, vals: impl Iterator<Item = i
 
 /// The VTU document of a frame: triangles (VTK type 5) with the stress (σ_xx, σ_yy, σ_xy, σ_zz)
 /// per cell in 2-D, tetrahedra (VTK type 10) with (σ_xx, σ_yy, σ_zz, σ_yz, σ_xz, σ_xy) in 3-D.
-pub fn vtu(frame: &Frame) -> String {
+pub fn vtu(frame: &Snapshot) -> String {
     let mesh = frame.mesh;
     let (np, nc) = (mesh.n_nodes(), mesh.n_cells());
     let mut s = String::with_capacity(120 * np + 60 * nc);

@@ -197,17 +197,8 @@ impl StepData<'_> {
     /// y_free − W r.
     pub fn response(&self, r: &[f64]) -> Vec<f64> {
         let mut y = self.y_free.clone();
-        self.delassus_add(r, -1.0, &mut y);
+        self.delassus.add_times(r, -1.0, &mut y);
         y
-    }
-    /// W r.
-    pub fn apply_delassus(&self, r: &[f64]) -> Vec<f64> {
-        let mut out = vec![0.0; r.len()];
-        self.delassus_add(r, 1.0, &mut out);
-        out
-    }
-    fn delassus_add(&self, r: &[f64], alpha: f64, out: &mut [f64]) {
-        self.delassus.add_times(r, alpha, out);
     }
     /// A velocity scale for relative tests: the largest of the free velocity, `y`, and the
     /// velocities of the kinematics (v^n terms in d^{n+1} and v̄).

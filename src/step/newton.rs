@@ -39,7 +39,7 @@ use crate::model::laws::FrictionCoefficient;
 
 /// The friction bound the Newton solve sees.
 #[derive(Debug, Clone, Copy)]
-pub enum FrictionBound<'a> {
+pub enum SlipBound<'a> {
     /// S_i frozen (the convex problem (S.6) of one F.1 iteration)
     Frozen(&'a [f64]),
     /// (N.4) S_i = μ(|v̄_i|) p̂_i, a function of the unknowns (no fixed point)
@@ -54,15 +54,15 @@ pub enum FrictionBound<'a> {
 /// `ds_dv` is the derivative with respect to the slip speed ‖v̄_i‖ (S depends on v̄ only
 /// through it).
 #[derive(Debug, Clone, Copy)]
-struct BoundAt {
+struct NodeBound {
     s: f64,
     ds_dv: f64,
     ds_dn: f64,
 }
 
-impl FrictionBound<'_> {
+impl SlipBound<'_> {
     /// S_i and its derivatives at the iterate (y, λ).
-    fn at(&self, step: &StepData, i: usize, y: &[f64], lambda: &[f64]) -> BoundAt {
+    fn at(&self, step: &StepData, i: usize, y: &[f64], lambda: &[f64]) -> NodeBound {
         // μ(|v̄|) and dμ/dv̄ (2-D, signed) or dμ/d‖v̄‖ (3-D)
         let mu_at = |mu: &FrictionCoefficient| {
             if step.tdim() == 1 {
@@ -74,18 +74,18 @@ impl FrictionBound<'_> {
             }
         };
         match self {
-            FrictionBound::Frozen(s) => BoundAt { s: s[i], ds_dv: 0.0, ds_dn: 0.0 },
-            FrictionBound::Law { mu, p_hat } => {
+            SlipBound::Frozen(s) => NodeBound { s: s[i], ds_dv: 0.0, ds_dn: 0.0 },
+            SlipBound::Law { mu, p_hat } => {
                 let (m, dm) = mu_at(mu);
-                BoundAt { s: m * p_hat[i], ds_dv: dm * p_hat[i], ds_dn: 0.0 }
+                NodeBound { s: m * p_hat[i], ds_dv: dm * p_hat[i], ds_dn: 0.0 }
             }
-            FrictionBound::Coulomb { mu } => {
+            SlipBound::Coulomb { mu } => {
                 let n = step.q(i, y) + lambda[i];
                 let (m, dm) = mu_at(mu);
                 if n > 0.0 {
-                    BoundAt { s: m * n, ds_dv: dm * n, ds_dn: m }
+                    NodeBound { s: m * n, ds_dv: dm * n, ds_dn: m }
                 } else {
-                    BoundAt { s: 0.0, ds_dv: 0.0, ds_dn: 0.0 }
+                    NodeBound { s: 0.0, ds_dv: 0.0, ds_dn: 0.0 }
                 }
             }
         }
@@ -162,7 +162,7 @@ fn t_of(step: &StepData, t: &[f64], i: usize) -> [f64; 2] {
     std::array::from_fn(|j| if j < td { t[td * i + j] } else { 0.0 })
 }
 
-fn residual(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> Vec<f64> {
+fn residual(step: &StepData, s: &SlipBound, p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> Vec<f64> {
     let n = step.n();
     let mut f = momentum_residual(step, y, lambda, t);
     f.reserve(2 * n); // F_λ and F_t per node
@@ -201,14 +201,7 @@ fn residual(step: &StepData, s: &FrictionBound, p: &Params, y: &[f64], lambda: &
 }
 
 /// Active normal constraints and stick nodes at an iterate.
-fn sets(
-    step: &StepData,
-    s: &FrictionBound,
-    p: &Params,
-    y: &[f64],
-    lambda: &[f64],
-    t: &[f64],
-) -> (Vec<bool>, Vec<bool>) {
+fn sets(step: &StepData, s: &SlipBound, p: &Params, y: &[f64], lambda: &[f64], t: &[f64]) -> (Vec<bool>, Vec<bool>) {
     let n = step.n();
     let active = (0..n)
         .map(|i| step.beta(i).is_some_and(|beta| lambda[i] + p.rho_n[i] * (y[step.nu(i)] - beta) > 0.0))
@@ -240,7 +233,7 @@ pub fn solve(
     t0: &[f64],
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
-    solve_with(step, &FrictionBound::Frozen(s), lambda0, t0, set)
+    solve_with(step, &SlipBound::Frozen(s), lambda0, t0, set)
 }
 
 /// (N.4) Semismooth Newton on the unfrozen Alart–Curnier system: the friction bound
@@ -255,7 +248,7 @@ pub fn solve_unfrozen(
     t0: &[f64],
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
-    solve_with(step, &FrictionBound::Law { mu, p_hat }, lambda0, t0, set)
+    solve_with(step, &SlipBound::Law { mu, p_hat }, lambda0, t0, set)
 }
 
 /// (Co.3) Semismooth Newton on the coupled Alart–Curnier system of Coulomb's law with the
@@ -270,7 +263,7 @@ pub fn solve_coulomb(
     t0: &[f64],
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
-    solve_with(step, &FrictionBound::Coulomb { mu }, lambda0, t0, set)
+    solve_with(step, &SlipBound::Coulomb { mu }, lambda0, t0, set)
 }
 
 /// An iterate of the Newton solve: contact velocities, multipliers, friction forces, and the
@@ -286,7 +279,7 @@ struct Iterate {
 /// unfrozen problem of N.4): stop test, Newton direction on the reduced system, line search.
 pub fn solve_with(
     step: &StepData,
-    bound: &FrictionBound,
+    bound: &SlipBound,
     lambda0: &[f64],
     t0: &[f64],
     set: &NewtonSettings,
@@ -354,7 +347,7 @@ impl Params {
 
 /// The start: the warm-started λ (≥ 0) and t (inside the bound at the free motion), and the
 /// contact velocities they give.
-fn initial_iterate(step: &StepData, s: &FrictionBound, p: &Params, lambda0: &[f64], t0: &[f64]) -> Iterate {
+fn initial_iterate(step: &StepData, s: &SlipBound, p: &Params, lambda0: &[f64], t0: &[f64]) -> Iterate {
     let n = step.n();
     let lambda: Vec<f64> =
         (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda0[i].max(0.0) } else { 0.0 }).collect();
@@ -415,7 +408,7 @@ struct DiskSlip {
 }
 
 impl DiskSlip {
-    fn new(step: &StepData, s: &FrictionBound, p: &Params, x: &Iterate, i: usize) -> DiskSlip {
+    fn new(step: &StepData, s: &SlipBound, p: &Params, x: &Iterate, i: usize) -> DiskSlip {
         let (ti, v) = (t_of(step, &x.t, i), step.slip_vec(i, &x.y));
         let rho = p.rho_t[i];
         let z = [ti[0] + rho * v[0], ti[1] + rho * v[1]];
@@ -470,7 +463,7 @@ impl DiskSlip {
 /// None when the reduced matrix is singular.
 fn direction(
     step: &StepData,
-    s: &FrictionBound,
+    s: &SlipBound,
     p: &Params,
     x: &Iterate,
     sets: &(Vec<bool>, Vec<bool>),
@@ -835,7 +828,7 @@ fn general_direction(
 /// Backtracking line search on ½‖F‖² along (Δy, Δm): the first Armijo step, else the best
 /// decrease seen; with no decrease at all the full step is taken (semismooth Newton on a
 /// piecewise-linear system may need to cross a kink) and the iteration cap guards cycling.
-fn line_search(step: &StepData, s: &FrictionBound, p: &Params, x: Iterate, dy: &[f64], dm: &[f64]) -> Iterate {
+fn line_search(step: &StepData, s: &SlipBound, p: &Params, x: Iterate, dy: &[f64], dm: &[f64]) -> Iterate {
     let (n, m) = (step.n(), step.m());
     let at = |alpha: f64| {
         let y: Vec<f64> = (0..m).map(|l| x.y[l] + alpha * dy[l]).collect();

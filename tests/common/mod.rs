@@ -171,3 +171,9 @@ impl Regime {
         }
     }
 }
+
+/// The in-plane components (x, y) of nodal vectors of a 2-D problem (`Dofs::expand_dim` gives
+/// three, z = 0).
+pub fn in_plane(u: &[[f64; 3]]) -> Vec<[f64; 2]> {
+    u.iter().map(|u| [u[0], u[1]]).collect()
+}

@@ -62,7 +62,8 @@ enum Stage {
     Problem,
 }
 
-struct Case {
+/// A malformed scene: where it must be refused, with which key path and problem.
+struct Malformed {
     what: &'static str,
     toml: String,
     stage: Stage,
@@ -72,15 +73,15 @@ struct Case {
     problem: &'static str,
 }
 
-fn case(what: &'static str, toml: String, path: &'static str, problem: &'static str) -> Case {
-    Case { what, toml, stage: Stage::Scene, path, problem }
+fn case(what: &'static str, toml: String, path: &'static str, problem: &'static str) -> Malformed {
+    Malformed { what, toml, stage: Stage::Scene, path, problem }
 }
 
-fn mesh_case(what: &'static str, toml: String, path: &'static str, problem: &'static str) -> Case {
-    Case { what, toml, stage: Stage::Problem, path, problem }
+fn mesh_case(what: &'static str, toml: String, path: &'static str, problem: &'static str) -> Malformed {
+    Malformed { what, toml, stage: Stage::Problem, path, problem }
 }
 
-fn cases() -> Vec<Case> {
+fn cases() -> Vec<Malformed> {
     vec![
         // ---- schema: unknown keys, wrong types, unknown variants, missing keys (serde) ----
         case("unknown top-level key", format!("colour = \"red\"\n{BASE}"), "colour", "unknown field `colour`"),

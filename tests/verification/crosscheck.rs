@@ -69,9 +69,10 @@ fn p1_p2_p4_operators_match_scikit_fem() {
             report.push(format!("{label} {d:.2e}"));
             assert!(d <= 1e-12, "{name}: {label} differs from scikit-fem by {d:.3e}");
         }
-        let all = Dofs::new(
+        let all = Dofs::with_dim(
             p.mesh.plane().expect("a 2-D mesh").nodes.len(),
             &vec![false; p.mesh.plane().expect("a 2-D mesh").nodes.len()],
+            2,
         );
         let f = dyncontact::problem::build_loads(&p.model, &p.mesh, &all).expect("loads").at(0.0);
         let text = std::fs::read_to_string(reference(&format!("{name}_f.txt"))).expect("f");

@@ -201,7 +201,7 @@ fn check(regime: Regime) {
         let (_, e1) = error_norms(
             p.mesh.plane().expect("a 2-D mesh"),
             &mat,
-            &p.dofs.expand(&u),
+            &common::in_plane(&p.dofs.expand_dim(&u)),
             |x, y| m.u(x, y, END),
             |x, y| m.grad(x, y, END),
         );
@@ -247,7 +247,7 @@ fn b5_mms_velocity_weakening_slip_is_unstable() {
             error_norms(
                 p.mesh.plane().expect("a 2-D mesh"),
                 &mat,
-                &p.dofs.expand(&sim.state.u),
+                &common::in_plane(&p.dofs.expand_dim(&sim.state.u)),
                 |x, y| m.u(x, y, END),
                 |x, y| m.grad(x, y, END),
             )

@@ -112,7 +112,7 @@ proptest! {
     #[test]
     fn p4_constant_loads_sum_to_force(lx in 0.1..5.0f64, ly in 0.1..5.0f64, nx in 1usize..8, ny in 1usize..8, fx in -10.0..10.0f64, fy in -10.0..10.0f64) {
         let mesh = Mesh::rectangle(lx, ly, nx, ny);
-        let dofs = Dofs::new(mesh.nodes.len(), &vec![false; mesh.nodes.len()]);
+        let dofs = Dofs::with_dim(mesh.nodes.len(), &vec![false; mesh.nodes.len()], 2);
         let body = VecExpr::parse(&[format!("{fx}"), format!("{fy}")], &["x", "y", "t"], "b").expect("expr");
         let f = LoadVector::new(&mesh, &dofs, &body, &[]).at(0.3);
         let (sx, sy): (f64, f64) = (f.iter().step_by(2).sum(), f.iter().skip(1).step_by(2).sum());
@@ -130,7 +130,7 @@ proptest! {
     fn p3_clamped_dofs_are_eliminated(nx in 1usize..10, ny in 1usize..10) {
         let mesh = Mesh::rectangle(1.0, 1.0, nx, ny);
         let clamped = mesh.nodes_on(&["left".to_string()]).expect("left");
-        let dofs = Dofs::new(mesh.nodes.len(), &clamped);
+        let dofs = Dofs::with_dim(mesh.nodes.len(), &clamped, 2);
         prop_assert_eq!(dofs.n_free, 2 * (mesh.nodes.len() - (ny + 1)));
         for (k, c) in clamped.iter().enumerate() {
             prop_assert_eq!(dofs.map[2 * k].is_none(), *c);
