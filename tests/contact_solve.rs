@@ -1,5 +1,5 @@
 //! The two forms of the contact solve — the dense Delassus operator W = H A_k⁻¹ Hᵀ and the
-//! sparse one probed and truncated at 1e-12 of its diagonal (src/step/delassus.rs) — give the
+//! sparse one probed and truncated at 1e-12 of its diagonal (src/step/delassus/sparse.rs) — give the
 //! same answers, and `contact_solve = "auto"` picks the form the sizes call for.
 //!
 //! Why the answers can agree to ~1e-10: the sparse operator drops entries below 1e-12 of the
