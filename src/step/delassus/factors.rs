@@ -1,8 +1,6 @@
 //! The kept factorization of the Newton matrices W'_UU + D (force form), conjugate gradients
 //! preconditioned by it for nearby matrices, and the key a checkpoint carries to rebuild it.
 
-use std::cell::RefCell;
-
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::solvers::{Llt, Solve};
 use faer::matrix_free::{LinOp, Precond};
@@ -40,20 +38,29 @@ pub struct FactorCounts {
     pub velocity_iterations: usize,
 }
 
-/// Cholesky factorizations of W'_UU + D (a principal submatrix of the Delassus operator, read
-/// in the slipping nodes' frames, plus a nonnegative diagonal), the Newton matrix of the frozen
-/// step problem (see `newton::reduced_direction`). The last one is kept with its key (U, D,
-/// frames): Newton, the F.1 iterations and the next steps reuse it while their active and stick
-/// sets, and so the matrix, are unchanged — a reuse is bit-identical to refactoring. When only D
-/// or the slip frames moved (3-D slip: the friction force's stiffness across the slip and its
-/// direction change every iteration), the system is solved by conjugate gradients preconditioned
-/// with the kept factor, to [`PCG_TOLERANCE`](crate::defaults::PCG_TOLERANCE) of the right-hand
-/// side, and the factor is only recomputed when that takes more than
-/// [`PCG_MAX_ITERATIONS`](crate::defaults::PCG_MAX_ITERATIONS).
+/// The factor cache of the Newton matrices W'_UU + D (a principal submatrix of the Delassus
+/// operator, read in the slipping nodes' frames, plus a nonnegative diagonal), the matrices of the
+/// frozen step problem's force form (see `newton::reduced_direction`). It keeps the last Cholesky
+/// factor with its key (U, D, frames), so a solve depends on the solves before it: every method
+/// that may reuse or replace the kept factor takes `&mut self`, and whoever holds the cache (the
+/// run's `Simulation`, or a test's own) passes it down to the solvers.
+///
+/// A solve of (W'_UU + D) x = b takes the first of:
+/// * **reuse**: the kept factor's key is (U, D, frames) exactly — bit-identical to refactoring
+///   (Newton, the F.1 iterations and the next steps, while the active and stick sets hold);
+/// * **conjugate gradients** preconditioned with the kept factor (see `Preconditioner`), to
+///   [`PCG_TOLERANCE`](crate::defaults::PCG_TOLERANCE) of the right-hand side (or Newton's
+///   looser forcing), when the kept U is the same and the system has at least
+///   [`PCG_FROM`](crate::defaults::PCG_FROM) unknowns or some node is read in a slip frame (3-D
+///   slip: the stiffness across the slip and its direction move every iteration), or when the
+///   system has at least `PCG_FROM` unknowns and at most
+///   [`PCG_NEW_SHARE`](crate::defaults::PCG_NEW_SHARE) of U is new to the kept factor — and they
+///   converge within [`PCG_MAX_ITERATIONS`](crate::defaults::PCG_MAX_ITERATIONS);
+/// * **a new factorization**, which replaces the kept one.
 #[derive(Default)]
 pub struct DelassusFactors {
-    last: RefCell<Option<Factor>>,
-    counts: RefCell<FactorCounts>,
+    last: Option<Factor>,
+    counts: FactorCounts,
 }
 
 struct Factor {
@@ -111,7 +118,7 @@ impl DelassusFactors {
     /// Solve (W'_UU + D) x = b in place, U = `unknown` (indices of local components), D = `diag`,
     /// W' = W read in `frames`. None when the matrix is not numerically positive definite.
     pub fn solve(
-        &self,
+        &mut self,
         w: &Delassus,
         frames: &SlipFrames,
         unknown: &[usize],
@@ -125,7 +132,7 @@ impl DelassusFactors {
     /// `forcing` (≥ [`PCG_TOLERANCE`](crate::defaults::PCG_TOLERANCE)): Newton's inexact
     /// directions far from its solution (Eisenstat–Walker forcing).
     pub fn solve_to(
-        &self,
+        &mut self,
         w: &Delassus,
         frames: &SlipFrames,
         unknown: &[usize],
@@ -133,17 +140,17 @@ impl DelassusFactors {
         forcing: f64,
         b: &mut [f64],
     ) -> Option<()> {
-        let mut last = self.last.borrow_mut();
-        let hit = last.as_ref().is_some_and(|f| f.unknown == unknown && f.diag == diag && f.frames == *frames);
+        let hit = self.last.as_ref().is_some_and(|f| f.unknown == unknown && f.diag == diag && f.frames == *frames);
         if hit {
-            self.counts.borrow_mut().reuses += 1;
-            last.as_ref()?.llt.solve_in_place(b);
+            self.counts.reuses += 1;
+            self.last.as_ref()?.llt.solve_in_place(b);
             return b.iter().all(|v| v.is_finite()).then_some(());
         }
         // a nearby matrix: conjugate gradients preconditioned by the kept factor, on the
         // unknowns the two share (the others by their diagonal)
         let large = unknown.len() >= crate::defaults::PCG_FROM;
-        if let Some(f) = last
+        if let Some(f) = self
+            .last
             .as_ref()
             .filter(|f| f.unknown == unknown && (large || frames.any()) || large && Preconditioner::close(f, unknown))
         {
@@ -151,20 +158,19 @@ impl DelassusFactors {
             if let Some(iterations) =
                 pcg(w, frames, unknown, diag, &prec, forcing.max(crate::defaults::PCG_TOLERANCE), b)
             {
-                let mut c = self.counts.borrow_mut();
-                c.pcg_solves += 1;
-                c.pcg_iterations += iterations;
+                self.counts.pcg_solves += 1;
+                self.counts.pcg_iterations += iterations;
                 return b.iter().all(|v| v.is_finite()).then_some(());
             }
         }
-        *last = Some(Factor {
+        self.last = Some(Factor {
             unknown: unknown.to_vec(),
             diag: diag.to_vec(),
             frames: frames.clone(),
             llt: factor(w, frames, unknown, diag)?,
         });
-        self.counts.borrow_mut().factorizations += 1;
-        last.as_ref()?.llt.solve_in_place(b);
+        self.counts.factorizations += 1;
+        self.last.as_ref()?.llt.solve_in_place(b);
         b.iter().all(|v| v.is_finite()).then_some(())
     }
 
@@ -172,7 +178,7 @@ impl DelassusFactors {
     /// function of it and W, and the next Newton systems are preconditioned by it, so a resumed
     /// run rebuilds it to stay bit-identical with an uninterrupted one.
     pub fn key(&self) -> Option<FactorKey> {
-        self.last.borrow().as_ref().map(|f| FactorKey {
+        self.last.as_ref().map(|f| FactorKey {
             unknown: f.unknown.clone(),
             diag: f.diag.iter().map(|v| v.to_bits()).collect(),
             frames_dim: f.frames.dim,
@@ -182,7 +188,7 @@ impl DelassusFactors {
 
     /// Rebuild the kept factorization of a checkpoint's key (None: a key that does not fit W
     /// or a matrix that is not positive definite).
-    pub fn restore(&self, w: &Delassus, key: &FactorKey) -> Option<()> {
+    pub fn restore(&mut self, w: &Delassus, key: &FactorKey) -> Option<()> {
         let m = w.dim();
         if key.unknown.iter().any(|&l| l >= m) || key.diag.len() != key.unknown.len() {
             return None;
@@ -196,26 +202,24 @@ impl DelassusFactors {
         }
         let diag: Vec<f64> = key.diag.iter().map(|b| f64::from_bits(*b)).collect();
         let llt = factor(w, &frames, &key.unknown, &diag)?;
-        *self.last.borrow_mut() = Some(Factor { unknown: key.unknown.clone(), diag, frames, llt });
+        self.last = Some(Factor { unknown: key.unknown.clone(), diag, frames, llt });
         Some(())
     }
 
     /// (factorizations computed, factorizations reused) so far.
     pub fn counts(&self) -> (usize, usize) {
-        let c = *self.counts.borrow();
-        (c.factorizations, c.reuses)
+        (self.counts.factorizations, self.counts.reuses)
     }
 
     /// Count a Newton direction solved in velocity form (`InverseDelassus`).
-    pub fn record_velocity_solve(&self, iterations: usize) {
-        let mut c = self.counts.borrow_mut();
-        c.velocity_solves += 1;
-        c.velocity_iterations += iterations;
+    pub fn record_velocity_solve(&mut self, iterations: usize) {
+        self.counts.velocity_solves += 1;
+        self.counts.velocity_iterations += iterations;
     }
 
     /// Every count so far.
     pub fn all_counts(&self) -> FactorCounts {
-        *self.counts.borrow()
+        self.counts
     }
 }
 
