@@ -213,6 +213,17 @@ pub struct State {
     pub stick: Vec<bool>,
 }
 
+/// What a run needs beyond its [`State`] to continue bit for bit after a checkpoint: the key
+/// of the contact solve's kept factorization (U, D and the slip frames: the next Newton systems
+/// are solved or preconditioned with that factor). Opaque to the checkpoint, which stores it as
+/// it is ([`Simulation::solver_state`]) and hands it back ([`Simulation::resume_solver`]); its
+/// JSON is the key's own (null without one), checkpoint format 4's `factor` field.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
+pub struct SolverState {
+    factor: Option<delassus::FactorKey>,
+}
+
 /// The constant operators and the state of a run.
 pub struct Simulation<'p> {
     pub problem: &'p Problem,
@@ -709,6 +720,21 @@ impl<'p> Simulation<'p> {
             &self.settings.fixed_point,
             trace,
         )
+    }
+
+    /// The solver state a checkpoint stores beside [`State`] (see [`SolverState`]).
+    pub fn solver_state(&self) -> SolverState {
+        SolverState { factor: self.delassus_factors.key() }
+    }
+
+    /// Continue with a checkpoint's solver state: rebuild the kept factorization of its key.
+    /// None when the key does not fit this scene's Delassus operator (or its matrix is not
+    /// positive definite); a key without a Delassus operator (no contact) is ignored.
+    pub fn resume_solver(&mut self, s: &SolverState) -> Option<()> {
+        match (&s.factor, self.delassus.as_ref()) {
+            (Some(key), Some(w)) => self.delassus_factors.restore(w, key),
+            _ => Some(()),
+        }
     }
 
     /// Continue from a checkpointed state (sizes must match this problem).
