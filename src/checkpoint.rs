@@ -1,12 +1,13 @@
 //! Checkpoints (`--checkpoint-every N`, `--resume DIR`): the full state of a run at the end of
 //! a step — u, v, the multipliers λ and friction forces t that warm-start the next step, the
-//! energy totals and the run's counters — stored with every f64 as its exact bit pattern, so a
-//! resumed run reproduces an uninterrupted one bit for bit on the same machine.
+//! energy totals, the run's counters and the solver state (`SolverState`: the key of the contact
+//! solve's kept factorization) — stored with every f64 as its exact bit pattern, so a resumed
+//! run reproduces an uninterrupted one bit for bit on the same machine.
 //!
 //! A checkpoint names the run it belongs to (the `run_id` of its folder's summary.json) and
 //! the inputs it was computed from (their fingerprint), and carries a checksum of everything
-//! else in it: an edited, truncated or foreign checkpoint is refused when read, as is one with a
-//! value that is not finite. That it agrees with the folder's history.csv, contact.csv and
+//! else in it: an edited, truncated or foreign checkpoint is refused when read, as is one whose
+//! state (u, v, λ, t, the energy terms and scale) holds a value that is not finite. That it agrees with the folder's history.csv, contact.csv and
 //! frames is checked when the folder is reopened (output/resume.rs).
 
 use serde::{Deserialize, Serialize};
@@ -159,8 +160,8 @@ impl Checkpoint {
         crate::output::fs::write_atomic(&dir.join("checkpoint.json"), text.as_bytes())
     }
 
-    /// Read `dir/checkpoint.json`, checked: this version's format, the checksum, every value
-    /// finite. Any defect is a folder error naming the file and what is wrong.
+    /// Read `dir/checkpoint.json`, checked: this version's format, the checksum, every value of
+    /// the state finite. Any defect is a folder error naming the file and what is wrong.
     pub fn read(dir: &std::path::Path) -> Result<Checkpoint> {
         let p = dir.join("checkpoint.json");
         let refuse = |m: String| Error::folder(&p, m);

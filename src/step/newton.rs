@@ -717,8 +717,8 @@ fn velocity_direction(
 /// kept and reused by `factors` (exactly while U, D and the frames hold; as the
 /// preconditioner of conjugate gradients while U holds). Returns the unknown of each component
 /// (Δm on P, Δy elsewhere), None when W'_UU + D is not numerically positive definite.
-/// (Eight arguments: each is a different object of the linearized (N.3); bundling them would
-/// only rename them.)
+/// (Nine arguments: the step's data, the factor cache, and seven different objects of the
+/// linearized system; bundling them would only rename them.)
 #[allow(clippy::too_many_arguments)]
 fn reduced_direction(
     step: &StepData,

@@ -14,6 +14,7 @@ use super::{Delassus, SlipFrames};
 /// The key of a kept factorization (checkpoints): U, and D and the frames as exact bit patterns.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FactorKey {
+    /// U, the local components of the factored matrix (ascending)
     pub unknown: Vec<usize>,
     diag: Vec<u64>,
     frames_dim: usize,

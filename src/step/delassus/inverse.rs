@@ -16,10 +16,11 @@ use super::cg::conjugate_gradients;
 /// unfrozen one of N.4 under (C.k)), solved by conjugate gradients preconditioned with its node
 /// blocks — matrix–vector products only, no factorization per Newton iteration, and no slip
 /// frames (a slipping node's 2 × 2 block is just added). Kept when W is dense, has at least
-/// [`GEMV_FROM`](crate::defaults::GEMV_FROM) components and is well conditioned for that
-/// iteration: a trial solve at setup reaches 1e-10 within
+/// [`GEMV_FROM`](crate::defaults::GEMV_FROM) components, has a Cholesky factor (to invert it)
+/// and is well conditioned for conjugate gradients: a trial solve at setup reaches 1e-10 within
 /// [`VELOCITY_FORM_TRIAL`](crate::defaults::VELOCITY_FORM_TRIAL) iterations.
 pub struct InverseDelassus {
+    /// W⁻¹ (dense, m × m)
     pub winv: Mat<f64>,
     /// components per node
     pub dim: usize,

@@ -4,12 +4,13 @@
 //! * **dense** (d n_c solves, an m × m matrix, m = d n_c): exact; cost and memory grow like m²
 //!   per apply and m³ per factorization — the small scenes' form;
 //! * **sparse** (probing): W's entries decay with the distance between contact nodes (the step
-//!   operator A_k = M + (k/2) C + (k²/4) K is mass-dominated over a step, and the elastic response
-//!   of a strip decays over its height). One probe column at the middle of Γ3 measures the radius
-//!   R beyond which every entry is below `truncation` × the diagonal; contact nodes more than 2R
-//!   apart are then probed together (a greedy distance colouring), so W costs d × (colours) solves
-//!   and keeps only the entries within R. The error of the kept operator is measured on a random
-//!   vector against an exact solve and reported (`SparseStats`).
+//!   matrix A_k = M/k + C/2 + kK/4 of (S.2) is mass-dominated over a step, and the elastic
+//!   response of a strip decays over its height). The d columns of the contact node nearest the
+//!   centroid of the contact nodes (d solves) measure the radius R beyond which every entry is
+//!   below `truncation` × the diagonal; contact nodes more than 2R apart are then probed together
+//!   (a greedy distance colouring), so W costs d × (colours) solves and keeps only the entries
+//!   within R. The error of the kept operator is measured on a pseudo-random vector against an
+//!   exact solve (one more solve) and reported (`SparseStats`).
 //!
 //! The choice between them is automatic from the sizes (`[solver] contact_solve = "auto"`), or set.
 //!
@@ -39,7 +40,9 @@ use crate::model::kinds::ContactSolve;
 
 /// The Delassus operator in one of its two forms.
 pub enum Delassus {
+    /// the exact m × m matrix
     Dense(Mat<f64>),
+    /// the probed, truncated matrix
     Sparse(SparseDelassus),
 }
 
@@ -83,6 +86,7 @@ impl Delassus {
             Delassus::Sparse(_) => "sparse",
         }
     }
+    /// The sparse form's facts (None for the dense form).
     pub fn sparse_stats(&self) -> Option<SparseStats> {
         match self {
             Delassus::Dense(_) => None,

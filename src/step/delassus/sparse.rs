@@ -13,6 +13,7 @@ use crate::model::contact::ContactModel;
 
 /// The probed, truncated Delassus operator and what it cost.
 pub struct SparseDelassus {
+    /// the kept entries of W (symmetric, whole node blocks)
     pub w: SparseColMat<usize, f64>,
     /// each component's position in a fill-reducing order of W (AMD, computed once); the
     /// Newton matrices W_UU + D are factored in the order it induces on U
@@ -40,13 +41,17 @@ pub struct SparseStats {
 /// The decay of W measured at one node: the radius R beyond which every entry of its columns is
 /// below `truncation` × its diagonal, and the share of contact nodes within R.
 pub struct Probe {
+    /// the fraction of the diagonal below which an entry counts as decayed
     pub truncation: f64,
+    /// R (mesh units)
     pub radius: f64,
+    /// the share of contact nodes within R of the probed node (the estimate of W's density)
     pub density: f64,
 }
 
 impl Probe {
-    /// Probe the d columns of the contact node nearest the centroid of Γ3 (d solves).
+    /// Probe the d columns of the contact node nearest the centroid of the contact nodes
+    /// (`positions`; d solves).
     pub fn new(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], truncation: f64) -> Probe {
         let (d, nc) = (contact.dim, contact.n());
         let m = d * nc;
