@@ -1,19 +1,20 @@
 //! Checkpoints (`--checkpoint-every N`, `--resume DIR`): the full state of a run at the end of
 //! a step — u, v, the multipliers λ and friction forces t that warm-start the next step, the
-//! energy totals and the run's counters — stored with every f64 as its exact bit pattern, so a
-//! resumed run reproduces an uninterrupted one bit for bit on the same machine.
+//! energy totals, the run's counters and the solver state (`SolverState`: the key of the contact
+//! solve's kept factorization) — stored with every f64 as its exact bit pattern, so a resumed
+//! run reproduces an uninterrupted one bit for bit on the same machine.
 //!
 //! A checkpoint names the run it belongs to (the `run_id` of its folder's summary.json) and
 //! the inputs it was computed from (their fingerprint), and carries a checksum of everything
-//! else in it: an edited, truncated or foreign checkpoint is refused when read, as is one with a
-//! value that is not finite. That it agrees with the folder's history.csv, contact.csv and
+//! else in it: an edited, truncated or foreign checkpoint is refused when read, as is one whose
+//! state (u, v, λ, t, the energy terms and scale) holds a value that is not finite. That it agrees with the folder's history.csv, contact.csv and
 //! frames is checked when the folder is reopened (output/resume.rs).
 
 use serde::{Deserialize, Serialize};
 
 use crate::energy::EnergyTerms;
 use crate::error::{Error, Result};
-use crate::simulation::State;
+use crate::simulation::{SolverState, State};
 
 /// The checkpoint format this version writes and reads.
 const FORMAT: u32 = 4;
@@ -65,22 +66,16 @@ pub struct Checkpoint {
     stick: Vec<bool>,
     energy_scale: u64,
     pub counters: Counters,
-    /// the contact solve's kept factorization (format 3 on): the next Newton systems are solved
-    /// with it, so the resumed run rebuilds it
-    #[serde(default)]
-    pub factor: Option<crate::step::delassus::FactorKey>,
+    /// what the solver needs to continue bit for bit (the key of the contact solve's kept
+    /// factorization, format 3 on; JSON key `factor`): the resumed run rebuilds it
+    #[serde(rename = "factor", default)]
+    pub solver: SolverState,
     /// FNV-1a of the checkpoint's JSON with this field empty
     pub checksum: String,
 }
 
 impl Checkpoint {
-    pub fn new(
-        run_id: &str,
-        inputs: &str,
-        s: &State,
-        counters: Counters,
-        factor: Option<crate::step::delassus::FactorKey>,
-    ) -> Checkpoint {
+    pub fn new(run_id: &str, inputs: &str, s: &State, counters: Counters, solver: SolverState) -> Checkpoint {
         let e = &s.energy;
         let mut cp = Checkpoint {
             format: FORMAT,
@@ -107,7 +102,7 @@ impl Checkpoint {
             active: s.active.clone(),
             stick: s.stick.clone(),
             counters,
-            factor,
+            solver,
             checksum: String::new(),
         };
         cp.checksum = cp.sum();
@@ -165,8 +160,8 @@ impl Checkpoint {
         crate::files::write_atomic(&dir.join("checkpoint.json"), text.as_bytes())
     }
 
-    /// Read `dir/checkpoint.json`, checked: this version's format, the checksum, every value
-    /// finite. Any defect is a folder error naming the file and what is wrong.
+    /// Read `dir/checkpoint.json`, checked: this version's format, the checksum, every value of
+    /// the state finite. Any defect is a folder error naming the file and what is wrong.
     pub fn read(dir: &std::path::Path) -> Result<Checkpoint> {
         let p = dir.join("checkpoint.json");
         let refuse = |m: String| Error::folder(&p, m);
@@ -223,10 +218,28 @@ mod tests {
     #[test]
     fn a_checkpoint_round_trips() {
         let d = dir("roundtrip");
-        Checkpoint::new("run", "inputs", &state(1.25), Counters::default(), None).write(&d).expect("write");
+        Checkpoint::new("run", "inputs", &state(1.25), Counters::default(), SolverState::default())
+            .write(&d)
+            .expect("write");
         let cp = Checkpoint::read(&d).expect("read");
         assert_eq!((cp.run_id.as_str(), cp.inputs.as_str(), cp.step), ("run", "inputs", 7));
         assert_eq!(cp.state(), state(1.25));
+    }
+
+    /// A checkpoint keeps format 4's `factor` field: null without a kept factorization, and the
+    /// key of one (U, D and the slip frames as bits) reads and writes back as the same JSON.
+    #[test]
+    fn the_solver_state_is_format_4_s_factor_field() {
+        let d = dir("factor");
+        Checkpoint::new("run", "inputs", &state(1.25), Counters::default(), SolverState::default())
+            .write(&d)
+            .expect("write");
+        let text = std::fs::read_to_string(d.join("checkpoint.json")).expect("read");
+        assert!(text.contains("\"factor\":null"), "{text}");
+        let key = r#"{"unknown":[0,2],"diag":[0,4607182418800017408],"frames_dim":3,"frames":[null,[4607182418800017408,0]]}"#;
+        let solver: SolverState = serde_json::from_str(key).expect("a format-4 factor key");
+        assert_ne!(solver, SolverState::default());
+        assert_eq!(serde_json::to_string(&solver).expect("json"), key);
     }
 
     /// (issue 22) A checkpoint with a value that is not finite is refused even when its checksum
@@ -235,10 +248,14 @@ mod tests {
     #[test]
     fn non_finite_and_changed_checkpoints_are_refused() {
         let d = dir("nonfinite");
-        Checkpoint::new("run", "inputs", &state(f64::NAN), Counters::default(), None).write(&d).expect("write");
+        Checkpoint::new("run", "inputs", &state(f64::NAN), Counters::default(), SolverState::default())
+            .write(&d)
+            .expect("write");
         let e = Checkpoint::read(&d).expect_err("refused").to_string();
         assert!(e.contains("u[0] is not finite"), "{e}");
-        Checkpoint::new("run", "inputs", &state(1.25), Counters::default(), None).write(&d).expect("write");
+        Checkpoint::new("run", "inputs", &state(1.25), Counters::default(), SolverState::default())
+            .write(&d)
+            .expect("write");
         let p = d.join("checkpoint.json");
         let text = std::fs::read_to_string(&p).expect("read");
         std::fs::write(&p, text.replacen("\"run_id\":\"run\"", "\"run_id\":\"other\"", 1)).expect("edit");

@@ -1,7 +1,9 @@
 //! The discrete energy balance (E.1) of spec/model.md §6, computed from increments (decision 10):
 //!
-//! E^{n+1} − E^n = work − viscous − friction − constraint, with
-//! E = ½ vᵀMv + ½ uᵀKu + Σ ω_i P(d_i) (P includes the penalty energy for Problem P_ε).
+//! E^{n+1} − E^n = work − viscous − friction − constraint − persistency, with
+//! E = ½ vᵀMv + ½ uᵀKu + Σ ω_i P(d_i) (P includes the penalty energy for Problem P_ε), and
+//! persistency the kinetic energy ½ m (v_c^{n+1})² the velocity-level persistency (R.2)
+//! removes, booked as a dissipation in (E.1) (spec/model.md, (R.2); 0 when it is off).
 
 use crate::linalg::{self, SpMat};
 
@@ -43,8 +45,9 @@ pub struct StepEnergy {
 }
 
 impl StepEnergy {
-    /// (E.1) The per-step defect ΔE − work + viscous + friction + constraint; zero up to
-    /// solver tolerance for the midpoint scheme.
+    /// (E.1) The per-step defect ΔE − work + viscous + friction + constraint + persistency
+    /// (ΔE = Δkinetic + Δelastic + Δcompliance); zero up to solver tolerance for the midpoint
+    /// scheme.
     pub fn residual(&self) -> f64 {
         self.d_kinetic + self.d_elastic + self.d_compliance - self.work
             + self.viscous

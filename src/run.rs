@@ -204,14 +204,12 @@ fn start_resumed(
 ) -> Result<Writer> {
     crate::output::resume::check(&opts.out, problem, cp)?;
     sim.restore(cp.state())?;
-    if let (Some(key), Some(w)) = (&cp.factor, sim.delassus.as_ref()) {
-        sim.delassus_factors.restore(w, key).ok_or_else(|| {
-            Error::folder(
-                opts.out.join("checkpoint.json"),
-                "the checkpoint's contact factorization does not fit this scene",
-            )
-        })?;
-    }
+    sim.resume_solver(&cp.solver).ok_or_else(|| {
+        Error::folder(
+            opts.out.join("checkpoint.json"),
+            "the checkpoint's contact factorization does not fit this scene",
+        )
+    })?;
     restore_counters(summary, &cp.counters);
     summary.steps_completed = cp.step;
     summary.final_time = problem.time(cp.step);
@@ -376,8 +374,8 @@ fn steps_loop(
      -> Result<()> {
         // the frames up to this step are on disk before a checkpoint says they are
         writer.wait()?;
-        let factor = sim.delassus_factors.key();
-        Checkpoint::new(&summary.run_id, &problem.inputs_fingerprint, &sim.state, counters(summary, first_cap), factor)
+        let solver = sim.solver_state();
+        Checkpoint::new(&summary.run_id, &problem.inputs_fingerprint, &sim.state, counters(summary, first_cap), solver)
             .write(&opts.out)
     };
     // a signal during the setup stops the run before its first step

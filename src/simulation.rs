@@ -213,6 +213,17 @@ pub struct State {
     pub stick: Vec<bool>,
 }
 
+/// What a run needs beyond its [`State`] to continue bit for bit after a checkpoint: the key
+/// of the contact solve's kept factorization (U, D and the slip frames: the next Newton systems
+/// are solved or preconditioned with that factor). Opaque to the checkpoint, which stores it as
+/// it is ([`Simulation::solver_state`]) and hands it back ([`Simulation::resume_solver`]); its
+/// JSON is the key's own (null without one), checkpoint format 4's `factor` field.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
+pub struct SolverState {
+    factor: Option<delassus::FactorKey>,
+}
+
 /// The constant operators and the state of a run.
 pub struct Simulation<'p> {
     pub problem: &'p Problem,
@@ -221,7 +232,8 @@ pub struct Simulation<'p> {
     pub settings: Settings,
     /// W = H A_k⁻¹ Hᵀ (None without contact)
     pub delassus: Option<delassus::Delassus>,
-    /// factorizations of the Newton matrices W_UU + D, reused while unchanged
+    /// the factor cache of the Newton matrices W'_UU + D: each step's contact solve reuses,
+    /// replaces and counts its kept factor (see [`Simulation::step`])
     pub delassus_factors: delassus::DelassusFactors,
     /// W⁻¹ for Newton directions in velocity form (dense, well-conditioned W), or None
     pub inverse: Option<delassus::InverseDelassus>,
@@ -381,7 +393,12 @@ impl<'p> Simulation<'p> {
                 .unwrap_or_else(|| self.failure(StepFailureCause::NonFinite { entry })));
         }
         let mut timing = StepTiming { free_solve: clock.elapsed().as_secs_f64(), ..StepTiming::default() };
-        let contact = match self.contact_solve(&v_new) {
+        // the factor cache leaves the simulation for the contact solve, which reads the
+        // operators and the state (shared) and updates the cache (exclusive), and comes back
+        let mut factors = std::mem::take(&mut self.delassus_factors);
+        let solved = self.contact_solve(&mut factors, &v_new);
+        self.delassus_factors = factors;
+        let contact = match solved {
             Some(Ok(cs)) => Some(cs),
             Some(Err(e)) => return Err(self.failure(StepFailureCause::Contact(e))),
             None => None,
@@ -399,15 +416,22 @@ impl<'p> Simulation<'p> {
         self.balance(u_new, v_new, &f, contact, timing)
     }
 
-    /// The contact solve of the step for the free velocity `v_free` (None without contact).
-    fn contact_solve(&self, v_free: &[f64]) -> Option<std::result::Result<ContactStep, ContactFailure>> {
+    /// The contact solve of the step for the free velocity `v_free` (None without contact), with
+    /// the factor cache `factors`.
+    fn contact_solve(
+        &self,
+        factors: &mut delassus::DelassusFactors,
+        v_free: &[f64],
+    ) -> Option<std::result::Result<ContactStep, ContactFailure>> {
         let c = self.problem.contact.as_ref()?;
         let (data, p_tau_hat) = self.step_data(c.restrict(v_free))?;
         let d_n = data.nodes.iter().map(|nd| nd.d_n).collect();
-        Some(self.solve_frozen_sequence(&data, &p_tau_hat, &self.settings.inner, None).map(|(sol, s_bound, report)| {
-            let r = data.forces(&sol.y, &sol.lambda, &sol.t);
-            ContactStep { sol, s_bound, d_n, r, report }
-        }))
+        Some(self.solve_frozen_sequence(&data, factors, &p_tau_hat, &self.settings.inner, None).map(
+            |(sol, s_bound, report)| {
+                let r = data.forces(&sol.y, &sol.lambda, &sol.t);
+                ContactStep { sol, s_bound, d_n, r, report }
+            },
+        ))
     }
 
     /// (S.2) Recovery: v^{n+1} = v_free − A_k⁻¹ Hᵀ r with the contact forces r of the solution: by
@@ -649,18 +673,20 @@ impl<'p> Simulation<'p> {
             law: &c.normal,
             friction: c.friction.is_some(),
             dim: c.dim,
-            factors: &self.delassus_factors,
             inverse: self.inverse.as_ref(),
         };
         Some((data, p_tau_hat))
     }
 
-    /// (F.1) on the current state with a given inner solver; `trace` collects the contact
-    /// velocities of every convex solve. Without contact there is nothing to solve: an empty
-    /// solution.
+    /// (F.1) on the current state with a given inner solver and the factor cache `factors` (the
+    /// run's own, [`delassus_factors`](Self::delassus_factors), in a step; a caller that
+    /// re-solves a step from outside passes its own, so the run's path is not changed); `trace`
+    /// collects the contact velocities of every convex solve. Without contact there is nothing
+    /// to solve: an empty solution.
     pub fn solve_frozen_sequence(
         &self,
         data: &StepData,
+        factors: &mut delassus::DelassusFactors,
         p_tau_hat: &[f64],
         inner: &Inner,
         trace: Option<&mut Vec<Vec<f64>>>,
@@ -668,6 +694,7 @@ impl<'p> Simulation<'p> {
         let Some(c) = &self.problem.contact else {
             return fixed_point::solve(
                 data,
+                factors,
                 None,
                 &NormalPart::Total,
                 &[],
@@ -686,6 +713,7 @@ impl<'p> Simulation<'p> {
         let vn = c.restrict(&self.state.v);
         fixed_point::solve(
             data,
+            factors,
             c.friction.as_ref(),
             &normal,
             &vn,
@@ -695,6 +723,21 @@ impl<'p> Simulation<'p> {
             &self.settings.fixed_point,
             trace,
         )
+    }
+
+    /// The solver state a checkpoint stores beside [`State`] (see [`SolverState`]).
+    pub fn solver_state(&self) -> SolverState {
+        SolverState { factor: self.delassus_factors.key() }
+    }
+
+    /// Continue with a checkpoint's solver state: rebuild the kept factorization of its key.
+    /// None when the key does not fit this scene's Delassus operator (or its matrix is not
+    /// positive definite); a key without a Delassus operator (no contact) is ignored.
+    pub fn resume_solver(&mut self, s: &SolverState) -> Option<()> {
+        match (&s.factor, self.delassus.as_ref()) {
+            (Some(key), Some(w)) => self.delassus_factors.restore(w, key),
+            _ => Some(()),
+        }
     }
 
     /// Continue from a checkpointed state (sizes must match this problem).

@@ -223,13 +223,18 @@ pub fn solid_vertex_masses(mesh: &SolidMesh, mat: &Material) -> Vec<f64> {
 }
 
 /// (R.1) Modified mass (the Khenous–Laborde–Renard family, as classified by Doyen–Ern–Piperno):
-/// the lumped mass m_i of every contact node is set to zero and redistributed to the nodes
-/// within two edges of it (not on Γ3, not clamped), with weights w_j of least Σ w_j²/m_j such
-/// that Σ w_j = 1 and Σ w_j x_j = x_i: the total mass and the centre of mass are kept exactly.
-/// The boundary node lies outside its neighbours' hull, so some weights are negative (mass is
-/// moved in by extrapolation, e.g. +2 m_i to the first layer, −m_i from the second on a
-/// structured mesh); every resulting mass must stay positive, or this is an error. The same in
-/// 2-D (triangles; 3 conditions) and 3-D (tetrahedra; 4 conditions).
+/// the lumped mass m_i of every contact node is set to zero and redistributed to the candidate
+/// nodes near it that are not on Γ3 and not clamped — in 2-D (triangles) the nodes within two
+/// edges of it; in 3-D (tetrahedra) the nodes within three edges of it that are at most twice
+/// its longest edge away (a cloud a structured tetrahedral mesh keeps symmetric) — with weights
+/// w_j of least Σ w_j²/m_j such that Σ w_j = 1 and Σ w_j x_j = x_i (3 conditions in 2-D, 4 in
+/// 3-D): the total mass and the centre of mass are kept exactly. The boundary node lies outside
+/// its neighbours' hull, so some weights are negative (mass is moved in by extrapolation, e.g.
+/// +2 m_i to the first layer, −m_i from the second on a structured 2-D mesh). A candidate the
+/// weights would leave with less than [`MODIFIED_MASS_FLOOR`](crate::defaults::MODIFIED_MASS_FLOOR)
+/// of its own lumped mass is left out and the weights solved again, while more than d + 1
+/// candidates remain; it is an error when the weights cannot be found that way (too few
+/// candidates, a nearly singular system) or when a resulting mass is not positive.
 pub fn modified_masses(mesh: &Geometry, mat: &Material, dofs: &Dofs, contact_nodes: &[usize]) -> Result<Vec<f64>> {
     let dim = mesh.dim();
     let n = mesh.n_nodes();

@@ -10,6 +10,7 @@
 //! iterates too.
 
 use super::conic::{self, ConicSettings};
+use super::delassus::DelassusFactors;
 use super::newton::{self, NewtonSettings};
 use super::{ContactSolution, StepData};
 use crate::failure::{ContactFailure, FixedPointStatus, InnerFailure, NewtonFailure};
@@ -67,16 +68,19 @@ impl StepReport {
 /// One frozen-S solve with the chosen inner solver.
 fn inner_solve(
     step: &StepData,
+    factors: &mut DelassusFactors,
     s_bound: &[f64],
     lambda0: &[f64],
     t0: &[f64],
     inner: &Inner,
 ) -> Result<ContactSolution, InnerFailure> {
     match inner {
-        Inner::Newton(set) => newton::solve(step, s_bound, lambda0, t0, set).map_err(InnerFailure::Newton),
+        Inner::Newton(set) => newton::solve(step, factors, s_bound, lambda0, t0, set).map_err(InnerFailure::Newton),
         Inner::Conic(set) => conic::solve(step, s_bound, set).map_err(InnerFailure::Conic),
         // inside the fixed point (frictionless steps, fallback) the frozen Newton is used
-        Inner::NewtonUnfrozen(set) => newton::solve(step, s_bound, lambda0, t0, set).map_err(InnerFailure::Newton),
+        Inner::NewtonUnfrozen(set) => {
+            newton::solve(step, factors, s_bound, lambda0, t0, set).map_err(InnerFailure::Newton)
+        }
     }
 }
 
@@ -131,12 +135,13 @@ pub fn friction_bound(
 }
 
 /// (F.1) Solve one step: fixed point on the frozen friction bound S around the inner solver.
-/// `y0` is the initial guess of the contact velocities (v^n), `lambda0`, `t0` warm starts.
-/// Returns the solution, the bound S used by the last convex solve (the one (E.1) needs), and
+/// `y0` is the initial guess of the contact velocities (v^n), `lambda0`, `t0` warm starts;
+/// `factors` is the Newton solves' factor cache (it carries over to the next step). Returns the solution, the bound S used by the last convex solve (the one (E.1) needs), and
 /// the report. Hitting the iteration cap is not an error: the report says so.
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
     step: &StepData,
+    factors: &mut DelassusFactors,
     mu: Option<&FrictionCoefficient>,
     normal: &NormalPart,
     y0: &[f64],
@@ -156,7 +161,7 @@ pub fn solve(
     let Some(mu) = mu.filter(|_| step.friction) else {
         // frictionless: one convex solve, no fixed point
         let s_bound = vec![0.0; n];
-        let sol = inner_solve(step, &s_bound, lambda0, t0, inner).map_err(fail(0))?;
+        let sol = inner_solve(step, factors, &s_bound, lambda0, t0, inner).map_err(fail(0))?;
         if let Some(tr) = trace {
             tr.push(sol.y.clone());
         }
@@ -168,8 +173,10 @@ pub fn solve(
     // problem, F.1 as the fallback; the bound at the iterate's midpoint goes to F.1 directly
     if let Inner::NewtonUnfrozen(set) = inner {
         let unfrozen = match normal {
-            NormalPart::Predictor(p_tau_hat) => Some(newton::solve_unfrozen(step, mu, p_tau_hat, lambda0, t0, set)),
-            NormalPart::Total => Some(newton::solve_coulomb(step, mu, lambda0, t0, set)),
+            NormalPart::Predictor(p_tau_hat) => {
+                Some(newton::solve_unfrozen(step, factors, mu, p_tau_hat, lambda0, t0, set))
+            }
+            NormalPart::Total => Some(newton::solve_coulomb(step, factors, mu, lambda0, t0, set)),
             NormalPart::Midpoint { .. } => None,
         };
         match unfrozen {
@@ -190,7 +197,7 @@ pub fn solve(
             None => {}
         }
     }
-    iterate(step, mu, normal, y0, (lambda0, t0), inner, fp, trace, report)
+    iterate(step, factors, mu, normal, y0, (lambda0, t0), inner, fp, trace, report)
 }
 
 /// The fixed-point iterations of (F.1) proper: solve with S frozen, update S from the new slip
@@ -198,6 +205,7 @@ pub fn solve(
 #[allow(clippy::too_many_arguments)]
 fn iterate(
     step: &StepData,
+    factors: &mut DelassusFactors,
     mu: &FrictionCoefficient,
     normal: &NormalPart,
     y0: &[f64],
@@ -219,7 +227,7 @@ fn iterate(
     let mut change = crate::defaults::INNER_FORCING_START;
     for l in 1..=fp.max_iterations.max(1) {
         let loose = inexact(inner, change);
-        let mut sol = inner_solve(step, &s_bound, &lam, &tf, &loose).map_err(fail(l))?;
+        let mut sol = inner_solve(step, factors, &s_bound, &lam, &tf, &loose).map_err(fail(l))?;
         if let Some(tr) = trace.as_deref_mut() {
             tr.push(sol.y.clone());
         }
@@ -239,7 +247,7 @@ fn iterate(
             if let Inner::Newton(set) = inner
                 && sol.residual > set.tolerance
             {
-                let polished = inner_solve(step, &s_bound, &sol.lambda, &sol.t, inner).map_err(fail(l))?;
+                let polished = inner_solve(step, factors, &s_bound, &sol.lambda, &sol.t, inner).map_err(fail(l))?;
                 report.inner_iterations += polished.iterations;
                 report.inner_residual = polished.residual;
                 sol = polished;

@@ -31,7 +31,9 @@ pub struct NodeData {
     pub bound: Option<f64>,
 }
 
-/// The frozen-S contact problem of one step, condensed on the contact DOFs.
+/// The frozen-S contact problem of one step, condensed on the contact DOFs. Data only: the
+/// Newton solves' factor cache, whose state a solve changes for the next one, is passed beside it
+/// (`&mut delassus::DelassusFactors`).
 pub struct StepData<'a> {
     /// Delassus operator W = H A_k⁻¹ Hᵀ, components interleaved (ν_1, τ_1, ν_2, τ_2, …)
     pub delassus: &'a delassus::Delassus,
@@ -45,8 +47,6 @@ pub struct StepData<'a> {
     pub friction: bool,
     /// components per contact node (ν, τ_1, …): the space dimension d
     pub dim: usize,
-    /// the Newton matrices' factorizations, reused while the matrix is unchanged
-    pub factors: &'a delassus::DelassusFactors,
     /// W⁻¹ for Newton directions in velocity form (a dense, well-conditioned W), or None
     pub inverse: Option<&'a delassus::InverseDelassus>,
 }

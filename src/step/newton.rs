@@ -30,7 +30,7 @@
 
 use faer::Mat;
 
-use super::delassus::SlipFrames;
+use super::delassus::{DelassusFactors, InverseDelassus, SlipFrames};
 use super::{ContactSolution, NodeStatus, StepData};
 use crate::defaults::{ARMIJO, LINE_SEARCH_HALVINGS, MAX_ITERATIONS, NEWTON_TOLERANCE};
 use crate::failure::{NewtonFailure, NewtonStatus};
@@ -225,15 +225,17 @@ fn sets(step: &StepData, s: &SlipBound, p: &Params, y: &[f64], lambda: &[f64], t
 
 /// Solve the frozen-S step problem by semismooth Newton with a backtracking line search on
 /// ‖F‖₂. `s` is the frozen friction bound per node (ignored when frictionless); `lambda0`,
-/// `t0` warm-start the multipliers.
+/// `t0` warm-start the multipliers; `factors` is the factor cache of the force form (reused,
+/// replaced and counted: the next solve's path depends on it).
 pub fn solve(
     step: &StepData,
+    factors: &mut DelassusFactors,
     s: &[f64],
     lambda0: &[f64],
     t0: &[f64],
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
-    solve_with(step, &SlipBound::Frozen(s), lambda0, t0, set)
+    solve_with(step, factors, &SlipBound::Frozen(s), lambda0, t0, set)
 }
 
 /// (N.4) Semismooth Newton on the unfrozen Alart–Curnier system: the friction bound
@@ -242,13 +244,14 @@ pub fn solve(
 /// (S' = p̂ μ'(|v̄|) sgn v̄); no fixed point. Globalized by the line search on ‖F‖₂.
 pub fn solve_unfrozen(
     step: &StepData,
+    factors: &mut DelassusFactors,
     mu: &FrictionCoefficient,
     p_hat: &[f64],
     lambda0: &[f64],
     t0: &[f64],
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
-    solve_with(step, &SlipBound::Law { mu, p_hat }, lambda0, t0, set)
+    solve_with(step, factors, &SlipBound::Law { mu, p_hat }, lambda0, t0, set)
 }
 
 /// (Co.3) Semismooth Newton on the coupled Alart–Curnier system of Coulomb's law with the
@@ -258,12 +261,13 @@ pub fn solve_unfrozen(
 /// no fixed point. Globalized by the line search on ‖F‖₂.
 pub fn solve_coulomb(
     step: &StepData,
+    factors: &mut DelassusFactors,
     mu: &FrictionCoefficient,
     lambda0: &[f64],
     t0: &[f64],
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
-    solve_with(step, &SlipBound::Coulomb { mu }, lambda0, t0, set)
+    solve_with(step, factors, &SlipBound::Coulomb { mu }, lambda0, t0, set)
 }
 
 /// An iterate of the Newton solve: contact velocities, multipliers, friction forces, and the
@@ -279,6 +283,7 @@ struct Iterate {
 /// unfrozen problem of N.4): stop test, Newton direction on the reduced system, line search.
 pub fn solve_with(
     step: &StepData,
+    factors: &mut DelassusFactors,
     bound: &SlipBound,
     lambda0: &[f64],
     t0: &[f64],
@@ -302,7 +307,7 @@ pub fn solve_with(
             break;
         }
         prev_ok = ok;
-        let Some((dy, dm)) = direction(step, s, &p, &x, &cur_sets, set.reduced) else {
+        let Some((dy, dm)) = direction(step, factors, s, &p, &x, &cur_sets, set.reduced) else {
             return Err(NewtonFailure {
                 status: NewtonStatus::SingularJacobian,
                 iterations: it,
@@ -463,6 +468,7 @@ impl DiskSlip {
 /// None when the reduced matrix is singular.
 fn direction(
     step: &StepData,
+    factors: &mut DelassusFactors,
     s: &SlipBound,
     p: &Params,
     x: &Iterate,
@@ -525,7 +531,7 @@ fn direction(
     };
     let coupled = coupling.iter().any(|c| *c != [0.0; 2]) || slips.iter().any(|d| d.ds_dn != 0.0);
     if let (true, false, Some(inverse)) = (reduced, coupled, step.inverse)
-        && let Some(d) = velocity_direction(step, inverse, f, &prescribed, &g, &slips, &dy, &dm, forcing)
+        && let Some(d) = velocity_direction(step, factors, inverse, f, &prescribed, &g, &slips, &dy, &dm, forcing)
     {
         return Some(d);
     }
@@ -543,7 +549,7 @@ fn direction(
         }
         let mut f_local = f[..m].to_vec();
         frames.to_local(&mut f_local);
-        let sol = reduced_direction(step, &frames, &f_local, &prescribed, &g, &dy, &dm, forcing)?;
+        let sol = reduced_direction(step, factors, &frames, &f_local, &prescribed, &g, &dy, &dm, forcing)?;
         for l in 0..m {
             if prescribed[l] {
                 dm[l] = sol[l];
@@ -615,7 +621,8 @@ fn direction(
 #[allow(clippy::too_many_arguments)]
 fn velocity_direction(
     step: &StepData,
-    inverse: &super::delassus::InverseDelassus,
+    factors: &mut DelassusFactors,
+    inverse: &InverseDelassus,
     f: &[f64],
     prescribed: &[bool],
     g: &[f64],
@@ -663,7 +670,7 @@ fn velocity_direction(
         crate::defaults::VELOCITY_FORM_MAX_ITERATIONS,
         &mut x,
     )?;
-    step.factors.record_velocity_solve(iterations);
+    factors.record_velocity_solve(iterations);
     for &l in &free {
         dy[l] = x[l];
     }
@@ -700,14 +707,15 @@ fn velocity_direction(
 ///   (W'_UU + D) z_U = −F_U − Δy_P − (W' r_k)_U,   U = P ∪ F_g,   D = diag(0 on P, 1/(ω g) on F_g),
 /// and the remaining free rows give Δy_l = −F_l − (W' (z + r_k))_l. W'_UU + D is a principal
 /// submatrix of the (rotated) Delassus operator plus a nonnegative diagonal: Cholesky, not LU,
-/// kept and reused by `step.factors` (exactly while U, D and the frames hold; as the
+/// kept and reused by `factors` (exactly while U, D and the frames hold; as the
 /// preconditioner of conjugate gradients while U holds). Returns the unknown of each component
 /// (Δm on P, Δy elsewhere), None when W'_UU + D is not numerically positive definite.
-/// (Eight arguments: each is a different object of the linearized (N.3); bundling them would
-/// only rename them.)
+/// (Nine arguments: the step's data, the factor cache, and seven different objects of the
+/// linearized system; bundling them would only rename them.)
 #[allow(clippy::too_many_arguments)]
 fn reduced_direction(
     step: &StepData,
+    factors: &mut DelassusFactors,
     frames: &SlipFrames,
     f: &[f64],
     prescribed: &[bool],
@@ -727,7 +735,7 @@ fn reduced_direction(
     w.add_times_in(frames, &r_k, 1.0, &mut w_rk);
     let mut b: Vec<f64> = unknown.iter().map(|&j| -f[j] - w_rk[j] - if prescribed[j] { dy[j] } else { 0.0 }).collect();
     if !unknown.is_empty() {
-        step.factors.solve_to(w, frames, &unknown, &diag, forcing, &mut b)?;
+        factors.solve_to(w, frames, &unknown, &diag, forcing, &mut b)?;
     }
     let mut z = vec![0.0; m];
     for (&l, &zl) in unknown.iter().zip(&b) {

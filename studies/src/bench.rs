@@ -520,6 +520,8 @@ fn agreement(p: &Problem) -> Result<Agreement> {
     let c = p.contact.as_ref().ok_or_else(|| Error::Output("bench race: the scene has no contact".into()))?;
     let mut a = Agreement::default();
     let mut steps = sim.steps();
+    // the comparison's own factor cache: re-solving a step leaves the run's path alone
+    let mut factors = dyncontact::step::delassus::DelassusFactors::default();
     while steps.simulation().state.n < p.steps {
         {
             let sim = steps.simulation();
@@ -527,10 +529,12 @@ fn agreement(p: &Problem) -> Result<Agreement> {
             let (data, p_hat) = sim
                 .step_data(c.restrict(&v_free))
                 .ok_or_else(|| Error::Output("bench race: no contact data".into()))?;
-            let (f1, _, _) =
-                sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).map_err(inner_failure)?;
-            let (un, _, _) =
-                sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).map_err(inner_failure)?;
+            let (f1, _, _) = sim
+                .solve_frozen_sequence(&data, &mut factors, &p_hat, &Inner::Newton(set), None)
+                .map_err(inner_failure)?;
+            let (un, _, _) = sim
+                .solve_frozen_sequence(&data, &mut factors, &p_hat, &Inner::NewtonUnfrozen(set), None)
+                .map_err(inner_failure)?;
             let vs = data.velocity_scale(&f1.y).max(1e-300);
             let (ra, rb) = (data.forces(&f1.y, &f1.lambda, &f1.t), data.forces(&un.y, &un.lambda, &un.t));
             let fs = dyncontact::linalg::norm_inf(&ra).max(1e-300);

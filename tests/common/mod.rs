@@ -75,16 +75,24 @@ pub fn mean_velocity_x(sim: &Simulation) -> f64 {
 }
 
 /// Run `p` for `steps` steps and, before each, hand `look` the simulation, the step's
-/// condensed contact problem and the friction bound S of its converged (F.1) (Newton inner
-/// solver with `set`): the per-step comparisons of two solvers from the same state.
+/// condensed contact problem, the factor cache the (F.1) solve warmed (a cache of this loop's
+/// own, so the run's path is not changed) and the friction bound S of its converged (F.1) (Newton
+/// inner solver with `set`): the per-step comparisons of two solvers from the same state.
 pub fn each_frozen_step(
     p: &Problem,
     steps: usize,
     set: dyncontact::step::newton::NewtonSettings,
-    mut look: impl FnMut(&Simulation, &dyncontact::step::StepData, &[f64], &[f64]),
+    mut look: impl FnMut(
+        &Simulation,
+        &dyncontact::step::StepData,
+        &mut dyncontact::step::delassus::DelassusFactors,
+        &[f64],
+        &[f64],
+    ),
 ) {
     let mut sim = Simulation::new(p).unwrap_or_else(|e| panic!("setup: {e}"));
     let c = p.contact.as_ref().expect("a scene with contact");
+    let mut factors = dyncontact::step::delassus::DelassusFactors::default();
     for rec in sim
         .steps()
         .before_each(|sim| {
@@ -92,8 +100,8 @@ pub fn each_frozen_step(
             let y_free = c.restrict(&w);
             let (data, p_hat) = sim.step_data(y_free.clone()).expect("data");
             let inner = dyncontact::step::fixed_point::Inner::Newton(set);
-            let (_, s, _) = sim.solve_frozen_sequence(&data, &p_hat, &inner, None).expect("F.1");
-            look(sim, &data, &s, &y_free);
+            let (_, s, _) = sim.solve_frozen_sequence(&data, &mut factors, &p_hat, &inner, None).expect("F.1");
+            look(sim, &data, &mut factors, &s, &y_free);
         })
         .take(steps.min(p.steps))
     {

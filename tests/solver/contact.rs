@@ -10,6 +10,7 @@ use dyncontact::problem::Problem;
 use dyncontact::scene::{Bound, FixedPointAcceleration, FrictionLaw, NumOrStr};
 use dyncontact::simulation::{Settings, Simulation};
 use dyncontact::step::conic::ConicSettings;
+use dyncontact::step::delassus::DelassusFactors;
 use dyncontact::step::fixed_point::Inner;
 use dyncontact::step::newton::{self, NewtonSettings};
 use dyncontact::step::{StepData, conic};
@@ -72,8 +73,8 @@ fn twins_on(p: &Problem, steps: usize) -> (f64, f64) {
     let conic_set = ConicSettings { tolerance: 1e-11, max_rounds: 100, verbose: false };
     let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);
     // the S of the converged fixed point, then one frozen solve by each twin
-    common::each_frozen_step(p, steps, newton_set, |sim, data, s, _| {
-        let a = newton::solve(data, s, &sim.state.lambda, &sim.state.t_fric, &newton_set).expect("newton");
+    common::each_frozen_step(p, steps, newton_set, |sim, data, factors, s, _| {
+        let a = newton::solve(data, factors, s, &sim.state.lambda, &sim.state.t_fric, &newton_set).expect("newton");
         let b = conic::solve(data, s, &conic_set).expect("conic");
         let vs = data.velocity_scale(&a.y).max(1e-300);
         let ra = data.forces(&a.y, &a.lambda, &a.t);
@@ -161,6 +162,7 @@ fn n2_n3_alart_curnier_parameters_do_not_change_the_solution() {
     let p = problem(s);
     let mut sim = Simulation::new(&p).expect("setup");
     let mut worst = 0.0f64;
+    let mut factors = DelassusFactors::default();
     for rec in sim
         .steps()
         .before_each(|sim| {
@@ -168,11 +170,13 @@ fn n2_n3_alart_curnier_parameters_do_not_change_the_solution() {
             let c = p.contact.as_ref().expect("contact");
             let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
             let base = NewtonSettings { tolerance: 1e-12, max_iterations: 100, ..NewtonSettings::default() };
-            let (_, sb, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(base), None).expect("F.1");
-            let a = newton::solve(&data, &sb, &sim.state.lambda, &sim.state.t_fric, &base).expect("base");
+            let (_, sb, _) =
+                sim.solve_frozen_sequence(&data, &mut factors, &p_hat, &Inner::Newton(base), None).expect("F.1");
+            let a = newton::solve(&data, &mut factors, &sb, &sim.state.lambda, &sim.state.t_fric, &base).expect("base");
             for scale in [10.0, 0.1] {
                 let set = NewtonSettings { scale_normal: scale, scale_tangent: scale, ..base };
-                let b = newton::solve(&data, &sb, &sim.state.lambda, &sim.state.t_fric, &set).expect("rescaled");
+                let b = newton::solve(&data, &mut factors, &sb, &sim.state.lambda, &sim.state.t_fric, &set)
+                    .expect("rescaled");
                 let vs = data.velocity_scale(&a.y).max(1e-300);
                 worst = worst.max(rel(&a.y, &b.y, vs));
                 let (ra, rb) = (data.forces(&a.y, &a.lambda, &a.t), data.forces(&b.y, &b.lambda, &b.t));
@@ -284,6 +288,7 @@ fn f1_step_functional_decreases_under_ck() {
     let wmat = sim.delassus.as_ref().expect("W").to_dense();
     let winv = wmat.partial_piv_lu().inverse();
     let (mut checked, mut worst) = (0usize, 0.0f64);
+    let mut factors = DelassusFactors::default();
     for rec in sim
         .steps()
         .before_each(|sim| {
@@ -292,7 +297,7 @@ fn f1_step_functional_decreases_under_ck() {
             let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
             let mut trace = Vec::new();
             let inner = Inner::Newton(NewtonSettings { tolerance: 1e-12, ..NewtonSettings::default() });
-            sim.solve_frozen_sequence(&data, &p_hat, &inner, Some(&mut trace)).expect("F.1");
+            sim.solve_frozen_sequence(&data, &mut factors, &p_hat, &inner, Some(&mut trace)).expect("F.1");
             let phis: Vec<f64> = trace.iter().map(|y| step_functional(&data, &winv, &mu, &p_hat, y)).collect();
             for w in phis.windows(2) {
                 let allowance = 1e-10 * w[0].abs().max(w[1].abs());
@@ -347,13 +352,12 @@ fn reduced_vs_full(p: &Problem, steps: usize, tolerance: f64) -> (f64, f64, f64)
     let reduced = NewtonSettings { tolerance, ..NewtonSettings::default() };
     let full = NewtonSettings { reduced: false, ..reduced };
     let (mut worst_v, mut worst_f, mut warm_cold) = (0.0f64, 0.0f64, 0.0f64);
-    common::each_frozen_step(p, steps, reduced, |sim, data, s, y_free| {
-        let a = newton::solve(data, s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced");
-        let b = newton::solve(data, s, &sim.state.lambda, &sim.state.t_fric, &full).expect("full");
-        let fresh = dyncontact::step::delassus::DelassusFactors::default();
-        let (mut cold, _) = sim.step_data(y_free.to_vec()).expect("data");
-        cold.factors = &fresh;
-        let a_cold = newton::solve(&cold, s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced, cold");
+    common::each_frozen_step(p, steps, reduced, |sim, data, warm, s, _| {
+        let a = newton::solve(data, warm, s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced");
+        let b = newton::solve(data, warm, s, &sim.state.lambda, &sim.state.t_fric, &full).expect("full");
+        let mut cold = DelassusFactors::default();
+        let a_cold =
+            newton::solve(data, &mut cold, s, &sim.state.lambda, &sim.state.t_fric, &reduced).expect("reduced, cold");
         let vs = data.velocity_scale(&a.y).max(1e-300);
         warm_cold = warm_cold
             .max(rel(&a_cold.y, &a.y, vs))
@@ -444,15 +448,17 @@ fn f1_anderson_reaches_the_plain_fixed_point() {
     let plain = dyncontact::step::fixed_point::FixedPointSettings { anderson: false, ..sim.settings.fixed_point };
     let accelerated = dyncontact::step::fixed_point::FixedPointSettings { anderson: true, ..sim.settings.fixed_point };
     let (mut worst, mut solves) = (0.0f64, [0usize; 2]);
+    let mut factors = DelassusFactors::default();
     for rec in sim.steps().before_each(|sim| {
         let (w, _) = sim.free_velocity();
         let c = p.contact.as_ref().expect("contact");
         let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
         let normal = dyncontact::step::fixed_point::NormalPart::Predictor(&p_hat);
         let vn = c.restrict(&sim.state.v);
-        let run = |fp| {
+        let mut run = |fp| {
             dyncontact::step::fixed_point::solve(
                 &data,
+                &mut factors,
                 c.friction.as_ref(),
                 &normal,
                 &vn,

@@ -1,5 +1,5 @@
 //! The two forms of the contact solve — the dense Delassus operator W = H A_k⁻¹ Hᵀ and the
-//! sparse one probed and truncated at 1e-12 of its diagonal (src/step/delassus.rs) — give the
+//! sparse one probed and truncated at 1e-12 of its diagonal (src/step/delassus/sparse.rs) — give the
 //! same answers, and `contact_solve = "auto"` picks the form the sizes call for.
 //!
 //! Why the answers can agree to ~1e-10: the sparse operator drops entries below 1e-12 of the
@@ -50,13 +50,13 @@ fn per_step(p: &Problem, steps: usize) -> (f64, f64) {
     assert_eq!(w_sparse.form(), "sparse");
     let set = NewtonSettings { tolerance: 1e-12, ..NewtonSettings::default() };
     let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);
-    let sparse_factors = DelassusFactors::default();
-    common::each_frozen_step(p, steps, set, |sim, dense, s, y_free| {
-        let a = newton::solve(dense, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("dense");
+    let mut sparse_factors = DelassusFactors::default();
+    common::each_frozen_step(p, steps, set, |sim, dense, dense_factors, s, y_free| {
+        let a = newton::solve(dense, dense_factors, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("dense");
         let (mut sparse, _) = sim.step_data(y_free.to_vec()).expect("data");
         sparse.delassus = &w_sparse;
-        sparse.factors = &sparse_factors;
-        let b = newton::solve(&sparse, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("sparse");
+        let b =
+            newton::solve(&sparse, &mut sparse_factors, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("sparse");
         let (ra, rb) = (dense.forces(&a.y, &a.lambda, &a.t), sparse.forces(&b.y, &b.lambda, &b.t));
         if linalg::norm_inf(&ra) > 0.0 {
             worst_v = worst_v.max(rel(&a.y, &b.y));

@@ -39,15 +39,19 @@ fn compare(p: &Problem, tol: f64) -> Agreement {
         newton_f1: 0,
         newton_unfrozen: 0,
     };
+    // the comparison's own factor cache: re-solving a step leaves the run's path alone
+    let mut factors = dyncontact::step::delassus::DelassusFactors::default();
     for rec in sim
         .steps()
         .before_each(|sim| {
             let (w, _) = sim.free_velocity();
             let c = p.contact.as_ref().expect("contact");
             let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
-            let (f1, _, r1) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).expect("F.1");
-            let (un, _, r2) =
-                sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).expect("unfrozen");
+            let (f1, _, r1) =
+                sim.solve_frozen_sequence(&data, &mut factors, &p_hat, &Inner::Newton(set), None).expect("F.1");
+            let (un, _, r2) = sim
+                .solve_frozen_sequence(&data, &mut factors, &p_hat, &Inner::NewtonUnfrozen(set), None)
+                .expect("unfrozen");
             a.newton_f1 += r1.inner_iterations;
             a.newton_unfrozen += r2.inner_iterations;
             a.fallbacks += usize::from(r2.fallback.is_some());

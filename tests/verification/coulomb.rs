@@ -248,13 +248,17 @@ fn co3_coupled_newton_agrees_with_the_fixed_point() {
         let mut sim = Simulation::new(&p).expect("setup");
         let (mut worst, mut fallbacks, mut it_f1, mut it_c) = (0.0f64, 0, 0, 0);
         let mut steps = sim.steps();
+        // the comparison's own factor cache: re-solving a step leaves the run's path alone
+        let mut factors = dyncontact::step::delassus::DelassusFactors::default();
         loop {
             let sim = steps.simulation();
             let (v_free, _) = sim.free_velocity();
             let (data, p_hat) = sim.step_data(c.restrict(&v_free)).expect("contact data");
-            let (f1, _, r1) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).expect("F.1");
-            let (co, _, r2) =
-                sim.solve_frozen_sequence(&data, &p_hat, &Inner::NewtonUnfrozen(set), None).expect("coupled");
+            let (f1, _, r1) =
+                sim.solve_frozen_sequence(&data, &mut factors, &p_hat, &Inner::Newton(set), None).expect("F.1");
+            let (co, _, r2) = sim
+                .solve_frozen_sequence(&data, &mut factors, &p_hat, &Inner::NewtonUnfrozen(set), None)
+                .expect("coupled");
             (it_f1, it_c) = (it_f1 + r1.inner_iterations, it_c + r2.inner_iterations);
             fallbacks += usize::from(r2.fallback.is_some());
             let vs = data.velocity_scale(&f1.y).max(1e-300);

@@ -289,10 +289,10 @@ proptest! {
         let nodes: Vec<NodeData> = (0..n).map(|i| NodeData {
             omega: 0.1, d_n: d_n[i].min(g), d_aff: d_n[i].min(g) + 0.5 * k * 0.3, v_aff: [0.5 * v_t[i], 0.0], bound: bound.then_some(g),
         }).collect();
-        let factors = dyncontact::step::delassus::DelassusFactors::default();
-        let data = StepData { delassus: &w, y_free: y_free.clone(), nodes, a_d: 0.5 * k, a_v: 0.5, force_rule: NormalForceRule::DiscreteGradient, law: &law, friction: true, dim: 2, factors: &factors, inverse: None };
+        let mut factors = dyncontact::step::delassus::DelassusFactors::default();
+        let data = StepData { delassus: &w, y_free: y_free.clone(), nodes, a_d: 0.5 * k, a_v: 0.5, force_rule: NormalForceRule::DiscreteGradient, law: &law, friction: true, dim: 2, inverse: None };
         let set = NewtonSettings { tolerance: 1e-12, max_iterations: 100, ..NewtonSettings::default() };
-        let sol = newton::solve(&data, &s, &vec![0.0; n], &vec![0.0; n], &set);
+        let sol = newton::solve(&data, &mut factors, &s, &vec![0.0; n], &vec![0.0; n], &set);
         prop_assert!(sol.is_ok(), "Newton failed: {:?}", sol.err());
         let sol = sol.expect("checked");
         let smax = s.iter().fold(1e-300f64, |m, v| m.max(*v));

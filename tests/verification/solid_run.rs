@@ -445,12 +445,15 @@ fn s6_3d_twins_newton_and_conic_agree() {
         let (mut slips, mut actives, mut directions) = (0usize, 0usize, Vec::new());
         let mut sim = Simulation::new(&p).expect("setup");
         let c = p.contact.as_ref().expect("contact");
+        // the twins' own factor cache: re-solving a step leaves the run's path alone
+        let mut factors = dyncontact::step::delassus::DelassusFactors::default();
         for _ in 0..steps.min(p.steps) {
             let (w, _) = sim.free_velocity();
             let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
             let inner = dyncontact::step::fixed_point::Inner::Newton(newton_set);
-            let (_, sb, _) = sim.solve_frozen_sequence(&data, &p_hat, &inner, None).expect("F.1");
-            let a = newton::solve(&data, &sb, &sim.state.lambda, &sim.state.t_fric, &newton_set).expect("newton");
+            let (_, sb, _) = sim.solve_frozen_sequence(&data, &mut factors, &p_hat, &inner, None).expect("F.1");
+            let a = newton::solve(&data, &mut factors, &sb, &sim.state.lambda, &sim.state.t_fric, &newton_set)
+                .expect("newton");
             let b = conic::solve(&data, &sb, &conic_set).expect("conic");
             let (ra, rb) = (data.forces(&a.y, &a.lambda, &a.t), data.forces(&b.y, &b.lambda, &b.t));
             if linalg::norm_inf(&ra) > 0.0 {

@@ -13,6 +13,7 @@ use dyncontact::problem::Problem;
 use dyncontact::scene::Scene;
 use dyncontact::simulation::Simulation;
 use dyncontact::simulation::State;
+use dyncontact::step::delassus::DelassusFactors;
 use dyncontact::step::fixed_point::Inner;
 use dyncontact::step::newton::{self, NewtonSettings};
 
@@ -76,9 +77,13 @@ fn contact_solve(c: &mut Criterion) {
     let (w, _) = sim.free_velocity();
     let (data, p_hat) = sim.step_data(contact.restrict(&w)).expect("step data");
     let set = NewtonSettings::default();
-    let (_, s, _) = sim.solve_frozen_sequence(&data, &p_hat, &Inner::Newton(set), None).expect("F.1");
+    let mut factors = DelassusFactors::default();
+    let (_, s, _) = sim.solve_frozen_sequence(&data, &mut factors, &p_hat, &Inner::Newton(set), None).expect("F.1");
     c.bench_function(&format!("newton::solve {} contact nodes", data.n()), |b| {
-        b.iter(|| newton::solve(black_box(&data), &s, &sim.state.lambda, &sim.state.t_fric, &set).expect("newton"))
+        b.iter(|| {
+            newton::solve(black_box(&data), &mut factors, &s, &sim.state.lambda, &sim.state.t_fric, &set)
+                .expect("newton")
+        })
     });
 }
 

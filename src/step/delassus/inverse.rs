@@ -1,0 +1,216 @@
+//! W⁻¹ for the Newton directions in velocity form: the operator (W⁻¹)_FF + Ĝ_F on the free
+//! components and its node-block preconditioner.
+
+use faer::dyn_stack::{MemStack, StackReq};
+use faer::linalg::solvers::DenseSolveCore;
+use faer::matrix_free::{LinOp, Precond};
+use faer::{Mat, MatMut, MatRef, Par, Side};
+
+use super::Delassus;
+use super::cg::conjugate_gradients;
+
+/// W⁻¹ of a dense Delassus operator, for Newton directions in velocity form (see
+/// `newton::velocity_direction`): with the prescribed components' velocities known, the
+/// linearized step is the symmetric system [(W⁻¹)_FF + ω Ĝ_F] Δy_F = b on the free components F,
+/// positive definite whenever the step problem is convex (the frozen bound of F.1 always; the
+/// unfrozen one of N.4 under (C.k)), solved by conjugate gradients preconditioned with its node
+/// blocks — matrix–vector products only, no factorization per Newton iteration, and no slip
+/// frames (a slipping node's 2 × 2 block is just added). Kept when W is dense, has at least
+/// [`GEMV_FROM`](crate::defaults::GEMV_FROM) components, has a Cholesky factor (to invert it)
+/// and is well conditioned for conjugate gradients: a trial solve at setup reaches 1e-10 within
+/// [`VELOCITY_FORM_TRIAL`](crate::defaults::VELOCITY_FORM_TRIAL) iterations.
+pub struct InverseDelassus {
+    /// W⁻¹ (dense, m × m)
+    pub winv: Mat<f64>,
+    /// components per node
+    pub dim: usize,
+    /// iterations of the trial solve at setup
+    pub trial_iterations: usize,
+}
+
+impl InverseDelassus {
+    /// W⁻¹ of a dense W when the velocity form suits it (see the type's doc), else None.
+    pub fn new(w: &Delassus, dim: usize) -> Option<InverseDelassus> {
+        let Delassus::Dense(w) = w else { return None };
+        let m = w.nrows();
+        if m < crate::defaults::GEMV_FROM {
+            return None;
+        }
+        let winv = w.llt(Side::Lower).ok()?.inverse();
+        let mut inv = InverseDelassus { winv, dim, trial_iterations: 0 };
+        // the trial: every component free, no stiffness, a pseudo-random right-hand side
+        let b: Vec<f64> = (0..m).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
+        let free: Vec<usize> = (0..m).collect();
+        let blocks = vec![None; m / dim];
+        let mut x = vec![0.0; m];
+        inv.trial_iterations =
+            inv.solve(&free, &vec![0.0; m], &blocks, &b, 1e-10, crate::defaults::VELOCITY_FORM_TRIAL, &mut x)?;
+        Some(inv)
+    }
+
+    /// out = W⁻¹ x (all components).
+    pub fn apply(&self, x: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; x.len()];
+        let rhs = faer::MatRef::from_column_major_slice(x, x.len(), 1);
+        let dst = faer::MatMut::from_column_major_slice_mut(&mut out, x.len(), 1);
+        faer::linalg::matmul::matmul(dst, faer::Accum::Replace, self.winv.as_ref(), rhs, 1.0, Par::Seq);
+        out
+    }
+
+    /// Solve [(W⁻¹)_FF + Ĝ_F] x_F = b_F by conjugate gradients preconditioned with the node
+    /// blocks, to the relative residual `tolerance` within `max_iterations`. F: the free
+    /// components (`free_list`; x and b are full-length, zero off F); Ĝ: `diag` per component
+    /// plus, per node, an optional 2 × 2 block on its tangential pair (3-D slip; it replaces the
+    /// diagonal there). The iterations, or None when the matrix showed a non-positive curvature
+    /// (not positive definite: N.4 beyond (C.k)) or the tolerance was not reached.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve(
+        &self,
+        free_list: &[usize],
+        diag: &[f64],
+        blocks: &[Option<[[f64; 2]; 2]>],
+        b: &[f64],
+        tolerance: f64,
+        max_iterations: usize,
+        x: &mut [f64],
+    ) -> Option<usize> {
+        let m = b.len();
+        let mut is_free = vec![false; m];
+        for &l in free_list {
+            is_free[l] = true;
+        }
+        let op = VelocityMatrix { inverse: self, is_free: &is_free, free_list, diag, blocks };
+        let prec = NodeBlocks::new(self, &is_free, diag, blocks)?;
+        x.iter_mut().for_each(|v| *v = 0.0);
+        conjugate_gradients(&op, &prec, b, x, tolerance, max_iterations)
+    }
+}
+
+impl std::fmt::Debug for InverseDelassus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "InverseDelassus({} × {}, {} per node)", self.winv.nrows(), self.winv.ncols(), self.dim)
+    }
+}
+
+/// (W⁻¹)_FF + Ĝ_F as an operator on all m components (zero off F).
+#[derive(Debug)]
+struct VelocityMatrix<'a> {
+    inverse: &'a InverseDelassus,
+    is_free: &'a [bool],
+    free_list: &'a [usize],
+    diag: &'a [f64],
+    blocks: &'a [Option<[[f64; 2]; 2]>],
+}
+
+impl LinOp<f64> for VelocityMatrix<'_> {
+    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
+        StackReq::EMPTY
+    }
+    fn nrows(&self) -> usize {
+        self.is_free.len()
+    }
+    fn ncols(&self) -> usize {
+        self.is_free.len()
+    }
+    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _stack: &mut MemStack) {
+        let (m, d) = (self.is_free.len(), self.inverse.dim);
+        for c in 0..rhs.ncols() {
+            let v: Vec<f64> = (0..m).map(|l| if self.is_free[l] { rhs[(l, c)] } else { 0.0 }).collect();
+            let mut o = self.inverse.apply(&v);
+            for l in 0..m {
+                if !self.is_free[l] {
+                    o[l] = 0.0;
+                }
+            }
+            for &l in self.free_list {
+                o[l] += self.diag[l] * v[l];
+            }
+            for (i, blk) in self.blocks.iter().enumerate() {
+                if let Some(g) = blk {
+                    let (a, b) = (d * i + 1, d * i + 2);
+                    if self.is_free[a] && self.is_free[b] {
+                        o[a] += g[0][0] * v[a] + g[0][1] * v[b];
+                        o[b] += g[1][0] * v[a] + g[1][1] * v[b];
+                    }
+                }
+            }
+            for (l, ol) in o.into_iter().enumerate() {
+                out[(l, c)] = ol;
+            }
+        }
+    }
+    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
+        self.apply(out, rhs, par, stack)
+    }
+}
+
+/// The node-block preconditioner of the velocity form: per node, the inverse of its free
+/// components' block of (W⁻¹)_FF + Ĝ_F (1 × 1 to 3 × 3).
+#[derive(Debug)]
+struct NodeBlocks {
+    m: usize,
+    blocks: Vec<(Vec<usize>, nalgebra::DMatrix<f64>)>,
+}
+
+impl NodeBlocks {
+    /// None when a node's block is not positive definite.
+    fn new(
+        inverse: &InverseDelassus,
+        is_free: &[bool],
+        diag: &[f64],
+        blocks: &[Option<[[f64; 2]; 2]>],
+    ) -> Option<NodeBlocks> {
+        let (m, d) = (is_free.len(), inverse.dim);
+        let mut out = Vec::new();
+        for i in 0..m / d {
+            let comps: Vec<usize> = (d * i..d * i + d).filter(|&l| is_free[l]).collect();
+            if comps.is_empty() {
+                continue;
+            }
+            let mut blk = nalgebra::DMatrix::<f64>::from_fn(comps.len(), comps.len(), |p, q| {
+                inverse.winv[(comps[p], comps[q])] + if p == q { diag[comps[p]] } else { 0.0 }
+            });
+            if let Some(g) = blocks[i] {
+                for (p, &lp) in comps.iter().enumerate() {
+                    for (q, &lq) in comps.iter().enumerate() {
+                        if lp > d * i && lq > d * i {
+                            // the block replaces the diagonal on the tangential pair
+                            blk[(p, q)] += g[lp - d * i - 1][lq - d * i - 1] - if p == q { diag[lp] } else { 0.0 };
+                        }
+                    }
+                }
+            }
+            out.push((comps, blk.cholesky()?.inverse()));
+        }
+        Some(NodeBlocks { m, blocks: out })
+    }
+}
+
+impl LinOp<f64> for NodeBlocks {
+    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
+        StackReq::EMPTY
+    }
+    fn nrows(&self) -> usize {
+        self.m
+    }
+    fn ncols(&self) -> usize {
+        self.m
+    }
+    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _stack: &mut MemStack) {
+        for c in 0..rhs.ncols() {
+            for l in 0..self.m {
+                out[(l, c)] = 0.0;
+            }
+            for (comps, inv) in &self.blocks {
+                for (p, &lp) in comps.iter().enumerate() {
+                    out[(lp, c)] = comps.iter().enumerate().map(|(q, &lq)| inv[(p, q)] * rhs[(lq, c)]).sum();
+                }
+            }
+        }
+    }
+    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
+        self.apply(out, rhs, par, stack)
+    }
+}
+
+impl Precond<f64> for NodeBlocks {}
