@@ -1,6 +1,8 @@
 //! Running a sweep's points on this machine: `jobs` worker threads take the points in order,
-//! each point one `run` into its folder (the same library call as `dyncontact run`, numerics
-//! sequential inside each), a progress bar over points. A point already completed with the same
+//! each point one `run` into its folder (the same library call as `dyncontact run`), a progress
+//! bar over points. The parallelism is across points: the caller keeps each point's numerics
+//! sequential by setting faer's global parallelism to `Par::Seq` once, at its start, as
+//! `dyncontact`'s `main` does (a library sets no process-wide state). A point already completed with the same
 //! scene and inputs is skipped, so an interrupted sweep resumes; a point that fails is recorded
 //! with its reason (its summary.json says `failed` and why) and the others go on.
 //!
@@ -46,7 +48,8 @@ pub enum Outcome {
 }
 
 /// Run every point of `plan` that is not `done` (from [`Plan::write`]) into its folder below
-/// `dir`. Returns each point's outcome, in the plan's order.
+/// `dir`. Returns each point's outcome, in the plan's order. Each point's numerics use faer's
+/// global parallelism as the caller set it (`Par::Seq` keeps `jobs` points on `jobs` cores).
 pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) -> Result<Vec<Outcome>> {
     let n = plan.points.len();
     let outcomes: Vec<Mutex<Outcome>> = (0..n)
@@ -107,8 +110,6 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
     }
     let next = AtomicUsize::new(0);
     let stopped = || opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
-    // each point's numerics run sequentially: the parallelism is across points
-    faer::set_global_parallelism(faer::Par::Seq);
     std::thread::scope(|scope| {
         for _ in 0..at_once {
             scope.spawn(|| {
