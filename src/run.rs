@@ -336,7 +336,7 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
                     e
                 }
             };
-            summary.failure_kind = Some(e.kind().to_string());
+            summary.failure_kind = Some(e.kind());
             if let Some(b) = &bar {
                 b.abandon_with_message(if summary.status == RunStatus::Interrupted { "interrupted" } else { "failed" });
             }

@@ -188,7 +188,7 @@ impl Writer {
     /// Wait for the frame in flight and return its result.
     pub fn wait(&mut self) -> Result<()> {
         match self.pending.take() {
-            Some(h) => h.join().unwrap_or_else(|_| Err(Error::Output("the frame writer thread panicked".into()))),
+            Some(h) => h.join().unwrap_or_else(|_| Err(Error::Internal("the frame writer thread panicked".into()))),
             None => Ok(()),
         }
     }

@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use crate::failure::RunStatus;
+use crate::failure::{FailureKind, RunStatus};
 use crate::fem::assemble::nodal_masses;
 use crate::model::contact::ContactModel;
 use crate::model::kinds::{self, Bound, BoundAt, ContactSolve, FixedPointAcceleration, FrictionBound};
@@ -308,8 +308,9 @@ pub struct Summary {
     /// its mesh file (crate::fingerprint::inputs)
     pub inputs_fingerprint: String,
     pub failure: Option<String>,
-    /// the kind of the failure (`Error::kind`: non_finite, solver, input, interrupted, output)
-    pub failure_kind: Option<String>,
+    /// the kind of the failure (`Error::kind`: non_finite, solver, linear_algebra, input,
+    /// interrupted, folder, output, internal)
+    pub failure_kind: Option<FailureKind>,
     pub model: ModelInfo,
     pub steps_completed: usize,
     pub final_time: f64,

@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use super::Plan;
-use crate::error::{Error, Result};
+use crate::error::{Error, FailureKind, Result};
 use crate::problem::Problem;
 use crate::run::{RunOptions, run, write_failed_start};
 use crate::scene::Scene;
@@ -127,11 +127,10 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
                         run_point(&pd, &p.scene_text, opts.interrupt.clone())
                     }))
                     .unwrap_or_else(|_| {
-                        let reason =
-                            "the run panicked (a defect of dyncontact: please report it with this point's scene.toml)"
-                                .to_string();
-                        let _ = write_failed_start(&pd, &p.id, &Error::Output(reason.clone()));
-                        Outcome::Failed(reason)
+                        let reason = "the run panicked (report it with this point's scene.toml)".to_string();
+                        let e = Error::Internal(reason);
+                        let _ = write_failed_start(&pd, &p.id, &e);
+                        Outcome::Failed(e.to_string())
                     });
                     if let Some(b) = &bar {
                         b.inc(1);
@@ -158,8 +157,8 @@ pub fn marker(pd: &Path) -> std::path::PathBuf {
 }
 
 /// Whether a failure of this kind is a point's final outcome (running it again would repeat it).
-fn is_final(kind: &str) -> bool {
-    matches!(kind, "solver" | "non_finite" | "linear_algebra" | "input")
+fn is_final(kind: FailureKind) -> bool {
+    matches!(kind, FailureKind::Solver | FailureKind::NonFinite | FailureKind::LinearAlgebra | FailureKind::Input)
 }
 
 /// `dyncontact sweep point points/<id>`: run one point of a sweep folder from its scene.toml, as
@@ -192,7 +191,7 @@ fn run_point(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> Outco
 }
 
 /// [`run_point`] without the marker: the outcome and, for a failure, its kind.
-fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> (Outcome, Option<&'static str>) {
+fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> (Outcome, Option<FailureKind>) {
     // the point's folder is the sweep's: cleared under its lock (another process running this
     // point keeps it), then run (which locks it again)
     let cleared = crate::output::folder::lock_run(pd).and_then(|lock| {
@@ -223,7 +222,7 @@ fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> 
     };
     match run(&problem, &opts) {
         Ok(_) => (Outcome::Completed, None),
-        Err(Error::Interrupted { .. }) => (Outcome::Interrupted, Some("interrupted")),
+        Err(Error::Interrupted { .. }) => (Outcome::Interrupted, Some(FailureKind::Interrupted)),
         Err(e) => (Outcome::Failed(e.to_string()), Some(e.kind())),
     }
 }
