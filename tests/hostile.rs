@@ -753,3 +753,39 @@ fn failure_kinds_keep_their_names_and_a_defect_exits_70() {
     assert_eq!(exit::INTERNAL, 70);
     assert_eq!(Error::Study("the penalty study runs on 2-D scenes".into()).exit_code(), exit::INPUT);
 }
+
+/// A run that could not start writes its summary.json from the one `Summary` type: it reads back
+/// as a `Summary` (failed, its kind, no step, no run details) with exactly the keys it always had.
+#[test]
+fn a_failed_starts_summary_reads_as_a_summary() {
+    use dyncontact::error::FailureKind;
+    use dyncontact::failure::RunStatus;
+    let out = tmp("failed_start_summary");
+    let e = dyncontact::scene::Scene::from_toml("time = [", "broken.toml").expect_err("not TOML");
+    dyncontact::run::write_failed_start(&out, "broken", &e).expect("written");
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+    let s: dyncontact::output::Summary = serde_json::from_str(&text).expect("a Summary");
+    assert_eq!((s.status, s.failure_kind, s.steps_completed), (RunStatus::Failed, Some(FailureKind::Input), 0));
+    assert_eq!((s.scene.as_str(), s.failure), ("broken", Some(e.to_string())));
+    assert!(s.run.is_none(), "a run that did not start has no run details");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let mut keys: Vec<&str> = v.as_object().expect("an object").keys().map(String::as_str).collect();
+    keys.sort_unstable();
+    assert_eq!(keys, ["failure", "failure_kind", "scene", "status", "steps_completed", "version"]);
+    assert_eq!((v["status"].as_str(), v["failure_kind"].as_str()), (Some("failed"), Some("input")));
+}
+
+/// A run's summary.json reads back as a `Summary` and writes the same JSON again: every key and
+/// every value survives the type.
+#[test]
+fn a_runs_summary_round_trips_through_the_type() {
+    let out = tmp("summary_round_trip");
+    let o = run_into(&out, &SMALL);
+    assert!(o.status.success(), "{}", err(&o));
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+    let s: dyncontact::output::Summary = serde_json::from_str(&text).expect("a Summary");
+    assert_eq!(s.status, dyncontact::failure::RunStatus::Completed);
+    assert!(s.run.as_ref().is_some_and(|d| !d.run_id.is_empty()), "a run that started has its details");
+    let again: serde_json::Value = serde_json::from_str(&s.to_json().expect("json")).expect("json");
+    assert_eq!(again, summary(&out));
+}

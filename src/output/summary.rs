@@ -1,8 +1,11 @@
 //! summary.json: what the scene switched on, sizes, timings, iteration counts, the largest
 //! (E.1) residual, warnings and the final status.
 
-use serde::Serialize;
+use std::path::Path;
 
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
 use crate::failure::{FailureKind, RunStatus};
 use crate::fem::assemble::nodal_masses;
 use crate::model::contact::ContactModel;
@@ -13,7 +16,7 @@ use crate::problem::Problem;
 use crate::scheme::ContactKinematics;
 
 /// The model a scene switches on — printed by `dyncontact check`, stored in summary.json.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct ModelInfo {
     pub plane: String,
     pub material: String,
@@ -275,7 +278,7 @@ impl ModelInfo {
 }
 
 /// Wall-clock split of a run in seconds.
-#[derive(Debug, Clone, Copy, Default, Serialize)]
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
 pub struct Timing {
     pub setup_s: f64,
     pub assembly_s: f64,
@@ -292,27 +295,76 @@ pub struct Timing {
     pub total_s: f64,
 }
 
-/// summary.json.
-#[derive(Debug, Clone, Serialize)]
+/// summary.json: how a run ended and, for a run that started, what it did. Every summary.json
+/// is this type: a run writes it when it takes its folder (`running`) and whenever it ends, and a
+/// run that could not start writes [`Summary::failed_start`]. The keys are a public contract
+/// (README, "Outputs"): the fields of [`RunDetails`] sit beside these, absent when the run never
+/// started.
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Summary {
     /// the dyncontact that wrote the folder
     pub version: String,
     pub scene: String,
-    pub description: String,
     /// running (from the start) | completed | failed | interrupted
     pub status: RunStatus,
+    pub failure: Option<String>,
+    /// the kind of the failure (`Error::kind`: non_finite, solver, linear_algebra, input,
+    /// interrupted, folder, output, internal)
+    pub failure_kind: Option<FailureKind>,
+    pub steps_completed: usize,
+    /// what a run that started records (absent from the summary of a run that could not start)
+    #[serde(flatten)]
+    pub run: Option<RunDetails>,
+}
+
+impl Summary {
+    /// The summary of a run that could not start (its scene, mesh or operators were refused):
+    /// `failed` with the reason and its kind, no step done.
+    pub fn failed_start(scene: &str, e: &Error) -> Summary {
+        Summary {
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            scene: scene.to_string(),
+            status: RunStatus::Failed,
+            failure: Some(e.to_string()),
+            failure_kind: Some(e.kind()),
+            steps_completed: 0,
+            run: None,
+        }
+    }
+
+    /// The details of a run that started: every summary a run keeps has them (empty ones are
+    /// put in a summary that had none).
+    pub fn details(&mut self) -> &mut RunDetails {
+        self.run.get_or_insert_default()
+    }
+
+    /// The wall-clock split of the run (all zero for a run that did not start).
+    pub fn timing(&self) -> Timing {
+        self.run.as_ref().map(|d| d.timing).unwrap_or_default()
+    }
+
+    /// summary.json's text (pretty-printed JSON).
+    pub fn to_json(&self) -> Result<String> {
+        serde_json::to_string_pretty(self).map_err(|e| Error::Output(format!("summary.json: {e}")))
+    }
+
+    /// The summary in the folder `dir`, if it has a summary.json that reads as one.
+    pub fn read(dir: &Path) -> Option<Summary> {
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).ok()?).ok()
+    }
+}
+
+/// What a run that started records in summary.json, beside [`Summary`]'s keys.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct RunDetails {
+    pub description: String,
     /// this run's identity: a fresh run makes a new one, a resumed run keeps it, and its
     /// checkpoint carries it (resume refuses a checkpoint of another run)
     pub run_id: String,
     /// the fingerprint of everything the run read: the scene as validated and the bytes of
     /// its mesh file (crate::fingerprint::inputs)
     pub inputs_fingerprint: String,
-    pub failure: Option<String>,
-    /// the kind of the failure (`Error::kind`: non_finite, solver, linear_algebra, input,
-    /// interrupted, folder, output, internal)
-    pub failure_kind: Option<FailureKind>,
     pub model: ModelInfo,
-    pub steps_completed: usize,
     pub final_time: f64,
     pub wall_time_s: f64,
     /// the process's peak resident memory (Linux VmHWM) at the end of the run, in MB; in a
