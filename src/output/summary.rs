@@ -7,13 +7,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::failure::{FailureKind, RunStatus};
-use crate::fem::assemble::nodal_masses;
 use crate::model::contact::ContactModel;
 use crate::model::kinds::{self, Bound, BoundAt, ContactSolve, FixedPointAcceleration, FrictionBound};
 use crate::model::laws::FrictionCoefficient;
 use crate::model::{ContactParams, Enforcement};
-use crate::problem::Problem;
-use crate::scheme::ContactKinematics;
+use crate::problem::{ConvexityLimit, Problem};
 
 /// The model a scene switches on — printed by `dyncontact check`, stored in summary.json.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
@@ -169,38 +167,39 @@ impl ModelInfo {
                 (FrictionBound::Capped, Some(g)) => format!("μ(‖v̄‖) p(min(r_+, {g})) (capped), {at}"),
                 _ => format!("μ(‖v̄‖) p(r) (uncapped), {at}"),
             };
-            self.convexity_limit(p, c);
+            self.convexity_limit(p);
         }
     }
 
-    /// (C.k) for the scene: the step limit, the limiting node, or why there is none.
-    fn convexity_limit(&mut self, p: &Problem, c: &ContactModel) {
-        let masses = nodal_masses(&p.mesh, &p.material, p.model.solver.mass, &p.dofs, &c.nodes).unwrap_or_default();
-        let a_v = ContactKinematics::of(p.model.time.scheme, p.k).a_v;
-        if let Some((k, i)) = c.convex_step_limit(&masses, a_v).filter(|_| !masses.is_empty()) {
-            self.ck_step_limit = Some(k);
-            self.ck_limiting_node = Some(c.nodes[i]);
-            self.ck_limiting_name = p.mesh.node_name(c.nodes[i]);
-            self.ck_note = if k == 0.0 {
-                "the modified mass puts zero mass on the contact nodes: the inertia no longer convexifies the \
-                 friction term, so (C.k) admits no step; F.1 still applies"
-                    .into()
-            } else {
-                String::new()
-            };
-        } else if c.friction_bound == FrictionBound::Total {
-            self.ck_note =
+    /// (C.k) for the scene, as the problem states it: the step limit and the limiting node, or
+    /// why there is none.
+    fn convexity_limit(&mut self, p: &Problem) {
+        self.ck_note = match p.convexity_limit() {
+            ConvexityLimit::NoFriction => return,
+            ConvexityLimit::Step { k, node } => {
+                self.ck_step_limit = Some(k);
+                self.ck_limiting_node = Some(node);
+                self.ck_limiting_name = p.mesh.node_name(node);
+                if k == 0.0 {
+                    "the modified mass puts zero mass on the contact nodes: the inertia no longer convexifies the \
+                     friction term, so (C.k) admits no step; F.1 still applies"
+                        .into()
+                } else {
+                    String::new()
+                }
+            }
+            ConvexityLimit::TotalBound => {
                 "the total bound follows the contact force, which no constant bounds: (C.k) gives no limit; F.1 \
                             iterates on S"
-                    .into();
-        } else if !c.p_tau.sup().is_finite() && c.friction.as_ref().is_some_and(|m| m.lipschitz() > 0.0) {
-            self.ck_note =
+                    .into()
+            }
+            ConvexityLimit::Unbounded => {
                 "p_τ is unbounded (g = inf or uncapped): no step size makes the step problem convex for every \
                             state; F.1 still applies (a majorization–minimization for velocity-weakening μ)"
-                    .into();
-        } else {
-            self.ck_note = "μ is constant or p_τ ≡ 0: every step problem is convex".into();
-        }
+                    .into()
+            }
+            ConvexityLimit::Convex => "μ is constant or p_τ ≡ 0: every step problem is convex".into(),
+        };
     }
 
     /// Human-readable lines for `dyncontact check`.
