@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-pub use crate::failure::SolverFailure;
+pub use crate::failure::{FailureKind, LinearAlgebraFailure, SolverFailure};
 
 /// Why a run or a validation stopped.
 #[derive(Debug, thiserror::Error)]
@@ -24,17 +24,32 @@ pub enum Error {
     #[error("{path}: {message}")]
     Expression { path: String, message: String },
 
-    /// A sparse factorization failed (the step matrix is not positive definite).
+    /// A sparse assembly or factorization failed (the step matrix is not positive definite),
+    /// with faer's error.
     #[error("linear algebra: {0}")]
-    LinearAlgebra(String),
+    LinearAlgebra(LinearAlgebraFailure),
 
     /// The solver did not converge on a step; carries the step, the time and the residuals.
     #[error("{0}")]
     Solver(Box<SolverFailure>),
 
-    /// An output could not be produced (chart, JSON).
+    /// An output could not be produced (a chart, a JSON or TOML file).
     #[error("output: {0}")]
     Output(String),
+
+    /// A checkpoint that does not fit the problem it is restored into (its sizes, or a step
+    /// beyond the scene's end): the folder's files do not belong together.
+    #[error("checkpoint: {0}")]
+    Checkpoint(String),
+
+    /// A study cannot be made from what it was given: a scene it does not apply to, a sweep
+    /// without the point it compares with, a point that did not complete.
+    #[error("study: {0}")]
+    Study(String),
+
+    /// A defect of dyncontact: a run or a writer thread panicked. The message says where.
+    #[error("internal error (a defect of dyncontact: please report it): {0}")]
+    Internal(String),
 
     /// The run was stopped (SIGINT or a step limit) after a completed step.
     #[error(
@@ -87,6 +102,8 @@ pub mod exit {
     pub const FOLDER: u8 = 4;
     /// the command line itself is wrong (an unknown flag, a missing argument)
     pub const USAGE: u8 = 64;
+    /// a defect of dyncontact (a thread panicked; EX_SOFTWARE of sysexits.h): please report it
+    pub const INTERNAL: u8 = 70;
     /// stopped by SIGINT (Ctrl-C) after a completed step; a checkpoint of that step is written
     pub const INTERRUPTED: u8 = 130;
     /// stopped by SIGTERM, as by SIGINT
@@ -120,32 +137,35 @@ impl Error {
     /// its signal asks (the caller knows which signal it was).
     pub fn exit_code(&self) -> u8 {
         match self.kind() {
-            "non_finite" | "solver" | "linear_algebra" => exit::SOLVER,
-            "input" => exit::INPUT,
-            "interrupted" => exit::INTERRUPTED,
-            "folder" => exit::FOLDER,
-            _ => exit::OUTPUT,
+            FailureKind::NonFinite | FailureKind::Solver | FailureKind::LinearAlgebra => exit::SOLVER,
+            FailureKind::Input => exit::INPUT,
+            FailureKind::Interrupted => exit::INTERRUPTED,
+            FailureKind::Folder => exit::FOLDER,
+            FailureKind::Output => exit::OUTPUT,
+            FailureKind::Internal => exit::INTERNAL,
         }
     }
 
     /// What kind of stop this is, for summary.json's `failure_kind` (the sweep's collectors
-    /// classify runs by it): `non_finite` (a NaN or infinity in the state), `solver` (a solver
-    /// could not continue), `linear_algebra` (a factorization failed), `input` (the scene or
-    /// the mesh, an input file), `interrupted`, `folder` (the run folder is not the run's, is
-    /// in use, or its files disagree) or `output` (an output could not be written).
-    pub fn kind(&self) -> &'static str {
+    /// classify runs by it): a checkpoint that does not fit is a folder whose files disagree, a
+    /// study's unmet precondition is bad input.
+    pub fn kind(&self) -> FailureKind {
         match self {
-            Error::Solver(f) if matches!(f.cause, crate::failure::StepFailureCause::NonFinite { .. }) => "non_finite",
-            Error::Solver(_) => "solver",
-            Error::LinearAlgebra(_) => "linear_algebra",
+            Error::Solver(f) if matches!(f.cause, crate::failure::StepFailureCause::NonFinite { .. }) => {
+                FailureKind::NonFinite
+            }
+            Error::Solver(_) => FailureKind::Solver,
+            Error::LinearAlgebra(_) => FailureKind::LinearAlgebra,
             Error::Scene { .. }
             | Error::SceneSyntax { .. }
             | Error::Mesh { .. }
             | Error::Expression { .. }
-            | Error::Read { .. } => "input",
-            Error::Interrupted { .. } | Error::SweepInterrupted { .. } => "interrupted",
-            Error::Folder { .. } => "folder",
-            Error::Output(_) | Error::Io { .. } => "output",
+            | Error::Read { .. }
+            | Error::Study(_) => FailureKind::Input,
+            Error::Interrupted { .. } | Error::SweepInterrupted { .. } => FailureKind::Interrupted,
+            Error::Folder { .. } | Error::Checkpoint(_) => FailureKind::Folder,
+            Error::Output(_) | Error::Io { .. } => FailureKind::Output,
+            Error::Internal(_) => FailureKind::Internal,
         }
     }
 }

@@ -6,7 +6,7 @@
 
 use std::fmt;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Why the Alart–Curnier Newton solve (N.1–N.3, N.4) stopped without a solution.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -108,14 +108,89 @@ pub struct SolverFailure {
     pub cause: StepFailureCause,
 }
 
-/// How a run ended (summary.json `status`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+/// A failure of faer (a sparse assembly or a Cholesky factorization), with faer's own error value.
+#[derive(Debug, Clone)]
+pub enum LinearAlgebraFailure {
+    /// faer refused the triplets of a sparse matrix (an index out of bounds, no memory)
+    Assembly(faer::sparse::CreationError),
+    /// the symbolic Cholesky analysis of `matrix` failed (an index overflow, no memory)
+    SymbolicCholesky { matrix: String, cause: faer::sparse::FaerError },
+    /// the numeric Cholesky factorization of `matrix` failed: it is not positive definite (or no memory)
+    Cholesky { matrix: String, cause: faer::sparse::linalg::LltError },
+}
+
+/// What kind of stop a failure is (summary.json `failure_kind`; the sweep classifies points by it,
+/// the command line chooses its exit code by it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FailureKind {
+    /// a NaN or an infinity in the state
+    NonFinite,
+    /// a solver could not continue
+    Solver,
+    /// a factorization failed
+    LinearAlgebra,
+    /// the scene, the mesh or another input file is wrong
+    Input,
+    /// stopped by a signal or a step limit
+    Interrupted,
+    /// the run folder is not the run's, is in use, or its files disagree
+    Folder,
+    /// an output could not be written
+    Output,
+    /// a defect of dyncontact (a panic in a run or in a writer thread)
+    Internal,
+}
+
+impl FailureKind {
+    /// The name summary.json stores (`non_finite`, `solver`, …).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FailureKind::NonFinite => "non_finite",
+            FailureKind::Solver => "solver",
+            FailureKind::LinearAlgebra => "linear_algebra",
+            FailureKind::Input => "input",
+            FailureKind::Interrupted => "interrupted",
+            FailureKind::Folder => "folder",
+            FailureKind::Output => "output",
+            FailureKind::Internal => "internal",
+        }
+    }
+}
+
+impl fmt::Display for FailureKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// How a run ended (summary.json `status`; sweep.csv's `status` of a point that ran).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum RunStatus {
+    /// written when the run takes its folder; left by a run killed outright
     Running,
     Completed,
     Failed,
     Interrupted,
+}
+
+impl RunStatus {
+    /// The word summary.json and sweep.csv write (`running`, `completed`, `failed`, `interrupted`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            RunStatus::Running => "running",
+            RunStatus::Completed => "completed",
+            RunStatus::Failed => "failed",
+            RunStatus::Interrupted => "interrupted",
+        }
+    }
+}
+
+impl fmt::Display for RunStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
 }
 
 /// Whether (F.1) met its tolerance on a step.
@@ -202,6 +277,22 @@ impl fmt::Display for StepFailureCause {
                 f,
                 "the energy balance (E.1) fails by {relative:.3e} of the energy scale (solver.energy_residual_limit = {limit:e}): \
                  the step's equations are not solved to the solvers' tolerance"
+            ),
+        }
+    }
+}
+
+impl fmt::Display for LinearAlgebraFailure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LinearAlgebraFailure::Assembly(e) => write!(f, "assembly failed: {e:?}"),
+            LinearAlgebraFailure::SymbolicCholesky { matrix, cause } => {
+                write!(f, "symbolic Cholesky of {matrix} failed: {cause:?}")
+            }
+            LinearAlgebraFailure::Cholesky { matrix, cause } => write!(
+                f,
+                "Cholesky factorization of {matrix} failed ({cause:?}): the matrix is not positive definite \
+                 (check density > 0, the material constants and that the body is held or has mass)"
             ),
         }
     }

@@ -7,6 +7,7 @@ use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Side};
 
 use crate::error::{Error, Result};
+use crate::failure::LinearAlgebraFailure;
 
 /// Compressed sparse column matrix of f64.
 pub type SpMat = SparseColMat<usize, f64>;
@@ -14,7 +15,7 @@ pub type SpMat = SparseColMat<usize, f64>;
 /// Build an n × m matrix from (row, col, value) triplets; duplicates are summed.
 pub fn from_triplets(n: usize, m: usize, trip: &[(usize, usize, f64)]) -> Result<SpMat> {
     let t: Vec<Triplet<usize, usize, f64>> = trip.iter().map(|&(i, j, v)| Triplet::new(i, j, v)).collect();
-    SparseColMat::try_new_from_triplets(n, m, &t).map_err(|e| Error::LinearAlgebra(format!("assembly failed: {e:?}")))
+    SparseColMat::try_new_from_triplets(n, m, &t).map_err(|e| Error::LinearAlgebra(LinearAlgebraFailure::Assembly(e)))
 }
 
 /// All stored entries (row, col, value).
@@ -139,13 +140,11 @@ pub struct Cholesky {
 impl Cholesky {
     /// Factor `a` (only its lower triangle is read).
     pub fn new(a: &SpMat, what: &str) -> Result<Cholesky> {
-        let sym = SymbolicLlt::try_new(a.symbolic(), Side::Lower)
-            .map_err(|e| Error::LinearAlgebra(format!("symbolic Cholesky of {what} failed: {e:?}")))?;
-        let llt = Llt::try_new_with_symbolic(sym, a.as_ref(), Side::Lower).map_err(|e| {
-            Error::LinearAlgebra(format!(
-                "Cholesky factorization of {what} failed ({e:?}): the matrix is not positive definite \
-                 (check density > 0, the material constants and that the body is held or has mass)"
-            ))
+        let sym = SymbolicLlt::try_new(a.symbolic(), Side::Lower).map_err(|cause| {
+            Error::LinearAlgebra(LinearAlgebraFailure::SymbolicCholesky { matrix: what.to_string(), cause })
+        })?;
+        let llt = Llt::try_new_with_symbolic(sym, a.as_ref(), Side::Lower).map_err(|cause| {
+            Error::LinearAlgebra(LinearAlgebraFailure::Cholesky { matrix: what.to_string(), cause })
         })?;
         // faer's Llt does not expose its symbolic part; a second symbolic analysis (cheap next to
         // the numeric one) gives the factor's size for the cost rules of the time loop

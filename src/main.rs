@@ -10,11 +10,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Parser, Subcommand};
 use dyncontact::error::exit;
+use dyncontact::failure::RunStatus;
 use dyncontact::output::ModelInfo;
 use dyncontact::overrides::Override;
 use dyncontact::problem::Problem;
 use dyncontact::run::{RunOptions, run};
 use dyncontact::scene::Scene;
+use dyncontact::sweep::collect::PointStatus;
 use dyncontact::{Error, resources, study};
 
 #[derive(Parser)]
@@ -285,18 +287,20 @@ fn cmd_run(
         stop_after,
         interrupt: Some(Arc::clone(stop)),
     };
-    let summary = run(&problem, &opts)?;
+    let mut summary = run(&problem, &opts)?;
+    let (scene, steps) = (summary.scene.clone(), summary.steps_completed);
+    let d = summary.details();
     say!(
         "{}: {} steps in {:.2} s, max |(E.1) residual| = {:.3e} ({:.3e} relative), Newton iterations {}, fixed-point iterations {}",
-        summary.scene,
-        summary.steps_completed,
-        summary.wall_time_s,
-        summary.max_abs_energy_residual,
-        summary.max_relative_energy_residual,
-        summary.newton_iterations_total,
-        summary.fixed_point_iterations_total
+        scene,
+        steps,
+        d.wall_time_s,
+        d.max_abs_energy_residual,
+        d.max_relative_energy_residual,
+        d.newton_iterations_total,
+        d.fixed_point_iterations_total
     );
-    for w in &summary.warnings {
+    for w in &d.warnings {
         esay!("warning: {w}");
     }
     say!("outputs in {}", out.display());
@@ -398,7 +402,10 @@ fn cmd_sweep(
     }
     say!("written {}", dir.join("sweep.csv").display());
     if interrupt.load(Ordering::SeqCst) {
-        let finished = rows.iter().filter(|r| r.status == "completed" || r.status == "failed").count();
+        let finished = rows
+            .iter()
+            .filter(|r| matches!(r.status, PointStatus::Run(RunStatus::Completed | RunStatus::Failed)))
+            .count();
         return Err(Error::SweepInterrupted { finished, total: rows.len() });
     }
     refuse_corrupt(&dir, &rows)
@@ -416,8 +423,11 @@ fn cmd_collect(dir: &Path) -> Result<(), Error> {
 
 /// Err (a folder error) naming the corrupt points, if any.
 fn refuse_corrupt(dir: &Path, rows: &[dyncontact::sweep::collect::Row]) -> Result<(), Error> {
-    let corrupt: Vec<String> =
-        rows.iter().filter(|r| r.status == "corrupt").map(|r| format!("{}: {}", r.point, r.reason)).collect();
+    let corrupt: Vec<String> = rows
+        .iter()
+        .filter(|r| r.status == PointStatus::Corrupt)
+        .map(|r| format!("{}: {}", r.point, r.reason))
+        .collect();
     if corrupt.is_empty() {
         return Ok(());
     }
@@ -433,16 +443,16 @@ fn refuse_corrupt(dir: &Path, rows: &[dyncontact::sweep::collect::Row]) -> Resul
 
 /// The counts of a collected sweep by status.
 fn report_rows(rows: &[dyncontact::sweep::collect::Row]) {
-    let count = |s: &str| rows.iter().filter(|r| r.status == s).count();
+    let count = |s: PointStatus| rows.iter().filter(|r| r.status == s).count();
     say!(
         "{} points: {} completed, {} failed, {} interrupted, {} running, {} missing, {} corrupt",
         rows.len(),
-        count("completed"),
-        count("failed"),
-        count("interrupted"),
-        count("running"),
-        count("missing"),
-        count("corrupt")
+        count(PointStatus::Run(RunStatus::Completed)),
+        count(PointStatus::Run(RunStatus::Failed)),
+        count(PointStatus::Run(RunStatus::Interrupted)),
+        count(PointStatus::Run(RunStatus::Running)),
+        count(PointStatus::Missing),
+        count(PointStatus::Corrupt)
     );
 }
 

@@ -7,6 +7,7 @@
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::fem::assemble::nodal_masses;
 use crate::fem::{Dofs, LoadVector};
 use crate::mesh::solid::SolidMesh;
 use crate::mesh::{self, Geometry, Mesh};
@@ -17,6 +18,7 @@ use crate::model::laws::{FrictionBoundLaw, NormalLaw};
 use crate::model::material::Material;
 use crate::model::{ContactParams, Domain, Enforcement, Model};
 use crate::scene::Scene;
+use crate::scheme::ContactKinematics;
 
 /// The discrete problem of one scene.
 pub struct Problem {
@@ -73,6 +75,47 @@ impl Problem {
     pub fn time(&self, n: usize) -> f64 {
         n as f64 * self.k
     }
+
+    /// (C.k) for this problem: the largest step for which the unfrozen step problem is convex,
+    /// k ≤ m_i/(a_v ω_i p̄_τ L_μ) over the contact nodes ([`ContactModel::convex_step_limit`] with
+    /// the nodal masses of the scene's mass matrix and the scheme's slip-rate factor a_v), or why
+    /// no step bounds it.
+    pub fn convexity_limit(&self) -> ConvexityLimit {
+        let Some(c) = self.contact.as_ref().filter(|c| c.friction.is_some()) else {
+            return ConvexityLimit::NoFriction;
+        };
+        let masses =
+            nodal_masses(&self.mesh, &self.material, self.model.solver.mass, &self.dofs, &c.nodes).unwrap_or_default();
+        let a_v = ContactKinematics::of(self.model.time.scheme, self.k).a_v;
+        let limit = if masses.is_empty() { None } else { c.convex_step_limit(&masses, a_v) };
+        if let Some((k, i)) = limit {
+            ConvexityLimit::Step { k, node: c.nodes[i] }
+        } else if c.friction_bound == FrictionBound::Total {
+            ConvexityLimit::TotalBound
+        } else if !c.p_tau.sup().is_finite() && c.friction.as_ref().is_some_and(|m| m.lipschitz() > 0.0) {
+            ConvexityLimit::Unbounded
+        } else {
+            ConvexityLimit::Convex
+        }
+    }
+}
+
+/// (C.k) for a problem: the step size up to which the unfrozen step problem is convex, or why no
+/// step size bounds it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ConvexityLimit {
+    /// no contact or no friction: every step problem is convex
+    NoFriction,
+    /// convex for steps up to `k`, limited at mesh node `node`; k = 0 when the mass matrix puts
+    /// no mass on a contact node (the modified mass): then no step is admissible
+    Step { k: f64, node: usize },
+    /// the total bound follows the contact force, which no constant bounds: no limit
+    TotalBound,
+    /// p_τ is unbounded (g = inf or uncapped) and μ varies: no step size makes every state's
+    /// step problem convex
+    Unbounded,
+    /// μ is constant or p_τ ≡ 0: every step problem is convex
+    Convex,
 }
 
 /// A Gmsh mesh decides the dimension: a scene whose vectors are all zero (or absent) takes the

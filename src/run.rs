@@ -20,7 +20,7 @@ use std::time::Instant;
 use crate::checkpoint::{Checkpoint, Counters};
 use crate::error::{Error, Result};
 use crate::failure::RunStatus;
-use crate::output::summary::Timing;
+use crate::output::summary::{RunDetails, Timing};
 use crate::output::{ModelInfo, Summary, Writer, folder, write_atomic};
 use crate::problem::Problem;
 use crate::simulation::{Settings, Simulation, StepRecord};
@@ -56,20 +56,11 @@ pub fn write_failed_start(out: &Path, scene: &str, e: &Error) -> Result<()> {
     if !out.is_dir() || !matches!(folder::check_fresh(out), Ok(false)) {
         return Ok(());
     }
-    let json = serde_json::json!({
-        "version": env!("CARGO_PKG_VERSION"),
-        "scene": scene,
-        "status": "failed",
-        "failure": e.to_string(),
-        "failure_kind": e.kind(),
-        "steps_completed": 0,
-    });
-    let text = serde_json::to_string_pretty(&json).map_err(|e| Error::Output(format!("summary.json: {e}")))?;
-    write_atomic(&out.join("summary.json"), text.as_bytes())
+    write_summary(out, &Summary::failed_start(scene, e))
 }
 
 /// The run's counters in the form a checkpoint stores.
-fn counters(s: &Summary, first_cap: Option<usize>) -> Counters {
+fn counters(s: &RunDetails, first_cap: Option<usize>) -> Counters {
     Counters {
         newton_iterations_total: s.newton_iterations_total,
         fixed_point_iterations_total: s.fixed_point_iterations_total,
@@ -84,7 +75,7 @@ fn counters(s: &Summary, first_cap: Option<usize>) -> Counters {
 }
 
 /// The summary's counters continued from a checkpoint.
-fn restore_counters(summary: &mut Summary, c: &Counters) {
+fn restore_counters(summary: &mut RunDetails, c: &Counters) {
     summary.newton_iterations_total = c.newton_iterations_total;
     summary.fixed_point_iterations_total = c.fixed_point_iterations_total;
     summary.fixed_point_iterations_max = c.fixed_point_iterations_max;
@@ -97,6 +88,8 @@ fn restore_counters(summary: &mut Summary, c: &Counters) {
 
 /// Add one step's iterations, timings and (E.1) residual to the summary.
 fn tally(summary: &mut Summary, first_cap: &mut Option<usize>, rec: &StepRecord) {
+    summary.steps_completed = rec.step;
+    let summary = summary.details();
     let r = &rec.report;
     summary.newton_iterations_total += r.inner_iterations;
     summary.fixed_point_iterations_total += r.fixed_point_iterations;
@@ -112,7 +105,6 @@ fn tally(summary: &mut Summary, first_cap: &mut Option<usize>, rec: &StepRecord)
     if rec.energy_scale > 0.0 {
         summary.max_relative_energy_residual = summary.max_relative_energy_residual.max(res / rec.energy_scale);
     }
-    summary.steps_completed = rec.step;
     summary.final_time = rec.t;
     summary.timing.free_solve_s += rec.timing.free_solve;
     summary.timing.contact_solve_s += rec.timing.contact_solve;
@@ -131,18 +123,12 @@ fn new_run_id(out: &Path) -> String {
 fn new_summary(problem: &Problem, sim: &Simulation, start: Instant, run_id: String) -> Summary {
     let info = ModelInfo::of(problem);
     let t = sim.setup_timing;
-    Summary {
-        version: env!("CARGO_PKG_VERSION").to_string(),
-        scene: problem.model.name.clone(),
+    let details = RunDetails {
         description: problem.model.description.clone(),
-        status: RunStatus::Running,
         run_id,
         inputs_fingerprint: problem.inputs_fingerprint.clone(),
-        failure: None,
-        failure_kind: None,
         warnings: info.warnings(),
         model: info,
-        steps_completed: 0,
         final_time: 0.0,
         wall_time_s: 0.0,
         peak_memory_mb: None,
@@ -169,6 +155,15 @@ fn new_summary(problem: &Problem, sim: &Simulation, start: Instant, run_id: Stri
         max_abs_energy_residual: 0.0,
         max_relative_energy_residual: 0.0,
         energy_guard_exceeded_steps: 0,
+    };
+    Summary {
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        scene: problem.model.name.clone(),
+        status: RunStatus::Running,
+        failure: None,
+        failure_kind: None,
+        steps_completed: 0,
+        run: Some(details),
     }
 }
 
@@ -184,7 +179,10 @@ fn start_fresh(
     write_summary(&opts.out, summary)?;
     folder::clear(&opts.out)?;
     if replaced {
-        summary.warnings.push(format!("{} held an earlier run's outputs: they were replaced", opts.out.display()));
+        summary
+            .details()
+            .warnings
+            .push(format!("{} held an earlier run's outputs: they were replaced", opts.out.display()));
     }
     let mut w = Writer::create(&opts.out, problem)?;
     w.record(&sim.initial_record(), problem, &sim.state, problem.steps == 0)?;
@@ -210,11 +208,12 @@ fn start_resumed(
             "the checkpoint's contact factorization does not fit this scene",
         )
     })?;
-    restore_counters(summary, &cp.counters);
     summary.steps_completed = cp.step;
-    summary.final_time = problem.time(cp.step);
+    let details = summary.details();
+    restore_counters(details, &cp.counters);
+    details.final_time = problem.time(cp.step);
     *first_cap = cp.counters.first_cap;
-    summary.warnings.push(format!("resumed from the checkpoint of step {}", cp.step));
+    details.warnings.push(format!("resumed from the checkpoint of step {}", cp.step));
     write_summary(&opts.out, summary)?;
     Writer::reopen(&opts.out, problem, cp.step)
 }
@@ -224,23 +223,20 @@ fn start_resumed(
 /// resumed is refused at once.
 fn resumable(out: &Path, problem: &Problem) -> Result<Checkpoint> {
     let cp = Checkpoint::read(out)?;
-    let sp = out.join("summary.json");
     let refuse = |m: String| Error::folder(out, m);
-    let summary: serde_json::Value = std::fs::read_to_string(&sp)
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok())
+    let summary = Summary::read(out)
         .ok_or_else(|| refuse("summary.json is missing or unreadable: the folder's run cannot be identified, so its checkpoint is not resumed".into()))?;
-    let run_id = summary.get("run_id").and_then(|v| v.as_str()).unwrap_or("");
+    let run_id = summary.run.as_ref().map_or("", |d| d.run_id.as_str());
     if run_id != cp.run_id {
         return Err(refuse(format!(
             "checkpoint.json belongs to another run (run {}) than summary.json (run {:?}): the files were not written by one run",
             cp.run_id, run_id
         )));
     }
-    if summary.get("status").and_then(|v| v.as_str()) == Some("completed") {
+    if summary.status == RunStatus::Completed {
         return Err(refuse(format!(
             "the run is completed ({} steps): there is nothing to resume",
-            summary["steps_completed"]
+            summary.steps_completed
         )));
     }
     if cp.inputs != problem.inputs_fingerprint {
@@ -267,8 +263,7 @@ fn progress_bar(opts: &RunOptions, steps: usize, at: usize) -> Option<indicatif:
 
 /// summary.json, atomically (through a temporary file and a rename).
 fn write_summary(out: &Path, summary: &Summary) -> Result<()> {
-    let json = serde_json::to_string_pretty(summary).map_err(|e| Error::Output(format!("summary.json: {e}")))?;
-    write_atomic(&out.join("summary.json"), json.as_bytes())
+    write_atomic(&out.join("summary.json"), summary.to_json()?.as_bytes())
 }
 
 /// How the loop ended when it did not complete.
@@ -305,15 +300,16 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
     };
     let bar = progress_bar(opts, problem.steps, sim.state.n);
     let ended = steps_loop(problem, &mut sim, opts, &mut writer, &mut summary, &mut first_cap, bar.as_ref());
-    summary.wall_time_s = start.elapsed().as_secs_f64();
-    summary.timing.total_s = summary.wall_time_s;
-    summary.peak_memory_mb = crate::resources::peak_memory().map(|b| b / 1e6);
+    let details = summary.details();
+    details.wall_time_s = start.elapsed().as_secs_f64();
+    details.timing.total_s = details.wall_time_s;
+    details.peak_memory_mb = crate::resources::peak_memory().map(|b| b / 1e6);
     match ended {
         Ok(()) => {
             if let Some(b) = &bar {
                 b.finish();
             }
-            finish_warnings(problem, &mut summary, first_cap);
+            finish_warnings(problem, summary.details(), first_cap);
             summary.status = RunStatus::Completed;
             writer.finish(&summary, problem, &sim.state)?;
             Ok(summary)
@@ -334,9 +330,9 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
                     e
                 }
             };
-            summary.failure_kind = Some(e.kind().to_string());
+            summary.failure_kind = Some(e.kind());
             if let Some(b) = &bar {
-                b.abandon_with_message(if summary.status == RunStatus::Interrupted { "interrupted" } else { "failed" });
+                b.abandon_with_message(summary.status.as_str());
             }
             // the summary says how the run ended whenever it can be written at all (a full disk)
             let written = if summary.status == RunStatus::Interrupted {
@@ -368,7 +364,7 @@ fn steps_loop(
     let interrupted = || opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
     let stop_now = |n: usize| opts.stop_after.is_some_and(|s| n >= s) || interrupted();
     let checkpoint = |sim: &Simulation,
-                      summary: &Summary,
+                      summary: &RunDetails,
                       first_cap: Option<usize>,
                       writer: &mut Writer|
      -> Result<()> {
@@ -380,7 +376,7 @@ fn steps_loop(
     };
     // a signal during the setup stops the run before its first step
     if interrupted() && sim.state.n < problem.steps {
-        checkpoint(sim, summary, *first_cap, writer).map_err(Stop::Failed)?;
+        checkpoint(sim, summary.details(), *first_cap, writer).map_err(Stop::Failed)?;
         return Err(Stop::Interrupted { step: sim.state.n, time: problem.time(sim.state.n) });
     }
     let mut steps = sim.steps();
@@ -388,9 +384,10 @@ fn steps_loop(
         let rec = rec.map_err(Stop::Failed)?;
         tally(summary, first_cap, &rec);
         let counts = steps.simulation().delassus_factors.all_counts();
-        (summary.contact_factorizations, summary.contact_factor_reuses) = (counts.factorizations, counts.reuses);
-        (summary.contact_pcg_solves, summary.contact_pcg_iterations) = (counts.pcg_solves, counts.pcg_iterations);
-        (summary.contact_velocity_solves, summary.contact_velocity_iterations) =
+        let details = summary.details();
+        (details.contact_factorizations, details.contact_factor_reuses) = (counts.factorizations, counts.reuses);
+        (details.contact_pcg_solves, details.contact_pcg_iterations) = (counts.pcg_solves, counts.pcg_iterations);
+        (details.contact_velocity_solves, details.contact_velocity_iterations) =
             (counts.velocity_solves, counts.velocity_iterations);
         let state = &steps.simulation().state;
         let t_out = Instant::now();
@@ -398,9 +395,9 @@ fn steps_loop(
         let stopping = !last && stop_now(state.n);
         writer.record(&rec, problem, state, last).map_err(Stop::Failed)?;
         if opts.checkpoint_every.is_some_and(|c| c > 0 && state.n.is_multiple_of(c)) || stopping {
-            checkpoint(steps.simulation(), summary, *first_cap, writer).map_err(Stop::Failed)?;
+            checkpoint(steps.simulation(), summary.details(), *first_cap, writer).map_err(Stop::Failed)?;
         }
-        summary.timing.output_s += t_out.elapsed().as_secs_f64();
+        summary.details().timing.output_s += t_out.elapsed().as_secs_f64();
         if let Some(b) = bar {
             b.inc(1);
         }
@@ -412,7 +409,7 @@ fn steps_loop(
 }
 
 /// The warnings a completed run adds: (F.1) cap hits, (E.1) guard hits.
-fn finish_warnings(problem: &Problem, summary: &mut Summary, first_cap: Option<usize>) {
+fn finish_warnings(problem: &Problem, summary: &mut RunDetails, first_cap: Option<usize>) {
     if summary.fixed_point_cap_hits > 0 {
         summary.warnings.push(format!(
             "the fixed point (F.1) hit max_fixed_point_iterations = {} on {} steps (first at step {}); those steps use the last \

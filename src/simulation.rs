@@ -748,11 +748,11 @@ impl<'p> Simulation<'p> {
             || s.lambda.len() != cur.lambda.len()
             || s.t_fric.len() != cur.t_fric.len()
         {
-            return Err(Error::Output("the checkpoint does not match this problem's sizes".into()));
+            return Err(Error::Checkpoint("it does not match this problem's sizes".into()));
         }
         if s.n > self.problem.steps {
-            return Err(Error::Output(format!(
-                "the checkpoint is at step {}, beyond the scene's {} steps",
+            return Err(Error::Checkpoint(format!(
+                "it is at step {}, beyond the scene's {} steps",
                 s.n, self.problem.steps
             )));
         }

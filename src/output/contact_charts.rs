@@ -11,7 +11,7 @@ use super::ChartRow;
 use super::plots::{self, Options, Series, SeriesLabelPosition};
 use crate::mesh::Mesh;
 use crate::model::contact::ContactModel;
-use crate::scene::Bound;
+use crate::model::kinds::Bound;
 use crate::simulation::NodeRecord;
 use crate::step::NodeStatus;
 

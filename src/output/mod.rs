@@ -189,7 +189,7 @@ impl Writer {
     /// Wait for the frame in flight and return its result.
     pub fn wait(&mut self) -> Result<()> {
         match self.pending.take() {
-            Some(h) => h.join().unwrap_or_else(|_| Err(Error::Output("the frame writer thread panicked".into()))),
+            Some(h) => h.join().unwrap_or_else(|_| Err(Error::Internal("the frame writer thread panicked".into()))),
             None => Ok(()),
         }
     }
@@ -281,8 +281,7 @@ impl Writer {
     /// Write only the summary (used when a run fails), after the frame in flight.
     pub fn write_summary(&mut self, summary: &Summary) -> Result<()> {
         let waited = self.wait();
-        let json = serde_json::to_string_pretty(summary).map_err(|e| Error::Output(format!("summary.json: {e}")))?;
-        write_atomic(&self.dir.join("summary.json"), json.as_bytes())?;
+        write_atomic(&self.dir.join("summary.json"), summary.to_json()?.as_bytes())?;
         waited
     }
 
@@ -290,7 +289,7 @@ impl Writer {
     /// disk has no room for a second copy): overwrite it where it is. Best effort: a run whose
     /// summary cannot be written at all still returns its error.
     pub fn write_summary_in_place(&mut self, summary: &Summary) {
-        if let Ok(json) = serde_json::to_string_pretty(summary) {
+        if let Ok(json) = summary.to_json() {
             let _ = std::fs::write(self.dir.join("summary.json"), json.as_bytes());
         }
     }

@@ -169,11 +169,12 @@ fn cut_csv(path: &Path, step: usize) -> Result<Vec<Vec<String>>> {
     Ok(rows)
 }
 
-fn column(header: &str, name: &str) -> Result<usize> {
+/// The index of column `name` of the header of `path` (history.csv).
+fn column(path: &Path, header: &str, name: &str) -> Result<usize> {
     header
         .split(',')
         .position(|c| c == name)
-        .ok_or_else(|| Error::Output(format!("history.csv has no column {name}: not a run folder of this version")))
+        .ok_or_else(|| Error::folder(path, format!("it has no column {name}: not a run folder of this version")))
 }
 
 impl Writer {
@@ -183,7 +184,7 @@ impl Writer {
         let header =
             std::fs::read_to_string(&hp).map_err(|e| Error::io(&hp, e))?.lines().next().unwrap_or("").to_string();
         let rows = cut_csv(&hp, step)?;
-        let chart_rows = chart_rows(&header, &rows)?;
+        let chart_rows = chart_rows(&hp, &header, &rows)?;
         let cp = dir.join("contact.csv");
         let contact_frames = contact_frames(&cut_csv(&cp, step)?, problem.mesh.dim());
         let frames = kept_frames(dir, problem, step);
@@ -206,9 +207,9 @@ fn num(r: &[String], c: usize) -> f64 {
     r.get(c).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN)
 }
 
-/// The chart data of history.csv rows, found by column name.
-fn chart_rows(header: &str, rows: &[Vec<String>]) -> Result<Vec<ChartRow>> {
-    let col = |n: &str| column(header, n);
+/// The chart data of the rows of history.csv (`path`), found by column name.
+fn chart_rows(path: &Path, header: &str, rows: &[Vec<String>]) -> Result<Vec<ChartRow>> {
+    let col = |n: &str| column(path, header, n);
     let (ct, ck, ce, cc, cw, cv, cf, cx, cr, cn, ctg) = (
         col("t")?,
         col("kinetic")?,

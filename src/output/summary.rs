@@ -1,19 +1,20 @@
 //! summary.json: what the scene switched on, sizes, timings, iteration counts, the largest
 //! (E.1) residual, warnings and the final status.
 
-use serde::Serialize;
+use std::path::Path;
 
-use crate::failure::RunStatus;
-use crate::fem::assemble::nodal_masses;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::failure::{FailureKind, RunStatus};
 use crate::model::contact::ContactModel;
 use crate::model::kinds::{self, Bound, BoundAt, ContactSolve, FixedPointAcceleration, FrictionBound};
 use crate::model::laws::FrictionCoefficient;
 use crate::model::{ContactParams, Enforcement};
-use crate::problem::Problem;
-use crate::scheme::ContactKinematics;
+use crate::problem::{ConvexityLimit, Problem};
 
 /// The model a scene switches on — printed by `dyncontact check`, stored in summary.json.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct ModelInfo {
     pub plane: String,
     pub material: String,
@@ -166,38 +167,39 @@ impl ModelInfo {
                 (FrictionBound::Capped, Some(g)) => format!("μ(‖v̄‖) p(min(r_+, {g})) (capped), {at}"),
                 _ => format!("μ(‖v̄‖) p(r) (uncapped), {at}"),
             };
-            self.convexity_limit(p, c);
+            self.convexity_limit(p);
         }
     }
 
-    /// (C.k) for the scene: the step limit, the limiting node, or why there is none.
-    fn convexity_limit(&mut self, p: &Problem, c: &ContactModel) {
-        let masses = nodal_masses(&p.mesh, &p.material, p.model.solver.mass, &p.dofs, &c.nodes).unwrap_or_default();
-        let a_v = ContactKinematics::of(p.model.time.scheme, p.k).a_v;
-        if let Some((k, i)) = c.convex_step_limit(&masses, a_v).filter(|_| !masses.is_empty()) {
-            self.ck_step_limit = Some(k);
-            self.ck_limiting_node = Some(c.nodes[i]);
-            self.ck_limiting_name = p.mesh.node_name(c.nodes[i]);
-            self.ck_note = if k == 0.0 {
-                "the modified mass puts zero mass on the contact nodes: the inertia no longer convexifies the \
-                 friction term, so (C.k) admits no step; F.1 still applies"
-                    .into()
-            } else {
-                String::new()
-            };
-        } else if c.friction_bound == FrictionBound::Total {
-            self.ck_note =
+    /// (C.k) for the scene, as the problem states it: the step limit and the limiting node, or
+    /// why there is none.
+    fn convexity_limit(&mut self, p: &Problem) {
+        self.ck_note = match p.convexity_limit() {
+            ConvexityLimit::NoFriction => return,
+            ConvexityLimit::Step { k, node } => {
+                self.ck_step_limit = Some(k);
+                self.ck_limiting_node = Some(node);
+                self.ck_limiting_name = p.mesh.node_name(node);
+                if k == 0.0 {
+                    "the modified mass puts zero mass on the contact nodes: the inertia no longer convexifies the \
+                     friction term, so (C.k) admits no step; F.1 still applies"
+                        .into()
+                } else {
+                    String::new()
+                }
+            }
+            ConvexityLimit::TotalBound => {
                 "the total bound follows the contact force, which no constant bounds: (C.k) gives no limit; F.1 \
                             iterates on S"
-                    .into();
-        } else if !c.p_tau.sup().is_finite() && c.friction.as_ref().is_some_and(|m| m.lipschitz() > 0.0) {
-            self.ck_note =
+                    .into()
+            }
+            ConvexityLimit::Unbounded => {
                 "p_τ is unbounded (g = inf or uncapped): no step size makes the step problem convex for every \
                             state; F.1 still applies (a majorization–minimization for velocity-weakening μ)"
-                    .into();
-        } else {
-            self.ck_note = "μ is constant or p_τ ≡ 0: every step problem is convex".into();
-        }
+                    .into()
+            }
+            ConvexityLimit::Convex => "μ is constant or p_τ ≡ 0: every step problem is convex".into(),
+        };
     }
 
     /// Human-readable lines for `dyncontact check`.
@@ -275,7 +277,7 @@ impl ModelInfo {
 }
 
 /// Wall-clock split of a run in seconds.
-#[derive(Debug, Clone, Copy, Default, Serialize)]
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
 pub struct Timing {
     pub setup_s: f64,
     pub assembly_s: f64,
@@ -292,26 +294,76 @@ pub struct Timing {
     pub total_s: f64,
 }
 
-/// summary.json.
-#[derive(Debug, Clone, Serialize)]
+/// summary.json: how a run ended and, for a run that started, what it did. Every summary.json
+/// is this type: a run writes it when it takes its folder (`running`) and whenever it ends, and a
+/// run that could not start writes [`Summary::failed_start`]. The keys are a public contract
+/// (README, "Outputs"): the fields of [`RunDetails`] sit beside these, absent when the run never
+/// started.
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Summary {
     /// the dyncontact that wrote the folder
     pub version: String,
     pub scene: String,
-    pub description: String,
     /// running (from the start) | completed | failed | interrupted
     pub status: RunStatus,
+    pub failure: Option<String>,
+    /// the kind of the failure (`Error::kind`: non_finite, solver, linear_algebra, input,
+    /// interrupted, folder, output, internal)
+    pub failure_kind: Option<FailureKind>,
+    pub steps_completed: usize,
+    /// what a run that started records (absent from the summary of a run that could not start)
+    #[serde(flatten)]
+    pub run: Option<RunDetails>,
+}
+
+impl Summary {
+    /// The summary of a run that could not start (its scene, mesh or operators were refused):
+    /// `failed` with the reason and its kind, no step done.
+    pub fn failed_start(scene: &str, e: &Error) -> Summary {
+        Summary {
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            scene: scene.to_string(),
+            status: RunStatus::Failed,
+            failure: Some(e.to_string()),
+            failure_kind: Some(e.kind()),
+            steps_completed: 0,
+            run: None,
+        }
+    }
+
+    /// The details of a run that started: every summary a run keeps has them (empty ones are
+    /// put in a summary that had none).
+    pub fn details(&mut self) -> &mut RunDetails {
+        self.run.get_or_insert_default()
+    }
+
+    /// The wall-clock split of the run (all zero for a run that did not start).
+    pub fn timing(&self) -> Timing {
+        self.run.as_ref().map(|d| d.timing).unwrap_or_default()
+    }
+
+    /// summary.json's text (pretty-printed JSON).
+    pub fn to_json(&self) -> Result<String> {
+        serde_json::to_string_pretty(self).map_err(|e| Error::Output(format!("summary.json: {e}")))
+    }
+
+    /// The summary in the folder `dir`, if it has a summary.json that reads as one.
+    pub fn read(dir: &Path) -> Option<Summary> {
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).ok()?).ok()
+    }
+}
+
+/// What a run that started records in summary.json, beside [`Summary`]'s keys.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct RunDetails {
+    pub description: String,
     /// this run's identity: a fresh run makes a new one, a resumed run keeps it, and its
     /// checkpoint carries it (resume refuses a checkpoint of another run)
     pub run_id: String,
     /// the fingerprint of everything the run read: the scene as validated and the bytes of
     /// its mesh file (crate::fingerprint::inputs)
     pub inputs_fingerprint: String,
-    pub failure: Option<String>,
-    /// the kind of the failure (`Error::kind`: non_finite, solver, input, interrupted, output)
-    pub failure_kind: Option<String>,
     pub model: ModelInfo,
-    pub steps_completed: usize,
     pub final_time: f64,
     pub wall_time_s: f64,
     /// the process's peak resident memory (Linux VmHWM) at the end of the run, in MB; in a

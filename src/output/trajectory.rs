@@ -68,8 +68,9 @@ pub struct TrajectoryRecord {
 /// Read every complete record of `path` (a half-written last record is dropped).
 pub fn read(path: &Path) -> Result<Vec<TrajectoryRecord>> {
     let mut bytes = Vec::new();
-    File::open(path).and_then(|mut f| f.read_to_end(&mut bytes)).map_err(|e| Error::io(path, e))?;
-    let bad = || Error::Output(format!("{}: not a dyncontact trajectory file", path.display()));
+    File::open(path).and_then(|mut f| f.read_to_end(&mut bytes)).map_err(|e| Error::read(path, e))?;
+    let bad =
+        || Error::read(path, std::io::Error::new(std::io::ErrorKind::InvalidData, "not a dyncontact trajectory file"));
     if bytes.len() < 16 || &bytes[..8] != MAGIC {
         return Err(bad());
     }

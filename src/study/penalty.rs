@@ -11,6 +11,7 @@
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::failure::RunStatus;
 use crate::fem::assemble::{assemble_full, restrict};
 use crate::linalg::{self, SpMat};
 use crate::model::kinds::{Bound, MassKind};
@@ -57,7 +58,7 @@ fn norm_matrices(p: &Problem) -> Result<(SpMat, SpMat)> {
     unit.theta = 0.0;
     unit.zeta = 0.0;
     unit.rho = 1.0;
-    let mesh = p.mesh.plane().ok_or_else(|| Error::Output("the penalty study runs on 2-D scenes".into()))?;
+    let mesh = p.mesh.plane().ok_or_else(|| Error::Study("the penalty study runs on 2-D scenes".into()))?;
     let (m, k, _) = assemble_full(mesh, &unit, MassKind::Consistent)?;
     Ok((restrict(&k, &p.dofs)?, restrict(&m, &p.dofs)?))
 }
@@ -134,15 +135,14 @@ pub fn penalty_study(
 pub fn collect(plan: &Plan, dir: &Path) -> Result<PenaltyStudy> {
     let axis = &plan.axes[0];
     let point = |label: &str| plan.points.iter().find(|p| axis.labels[p.choice[0]] == label);
-    let exact_point =
-        point(EXACT).ok_or_else(|| Error::Output(format!("{}: the sweep has no point {EXACT:?}", dir.display())))?;
+    let exact_point = point(EXACT).ok_or_else(|| Error::folder(dir, format!("the sweep has no point {EXACT:?}")))?;
     let exact_dir = Plan::point_dir(dir, &exact_point.id);
     let failed = |pd: &Path, id: &str| -> Result<()> {
-        match crate::sweep::collect::point_status(pd).as_deref() {
-            Some("completed") => Ok(()),
-            other => Err(Error::Output(format!(
+        match crate::sweep::collect::point_status(pd) {
+            Some(RunStatus::Completed) => Ok(()),
+            other => Err(Error::Study(format!(
                 "point {id} of the penalty study ended {:?}: see {}",
-                other.unwrap_or("without a summary"),
+                other.map_or("without a summary", RunStatus::as_str),
                 pd.join("summary.json").display()
             ))),
         }
@@ -165,7 +165,7 @@ pub fn collect(plan: &Plan, dir: &Path) -> Result<PenaltyStudy> {
         let label = &axis.labels[p.choice[0]];
         let eps: f64 = label
             .parse()
-            .map_err(|_| Error::Output(format!("point {}: the ε label {label:?} is not a number", p.id)))?;
+            .map_err(|_| Error::Study(format!("point {}: the ε label {label:?} is not a number", p.id)))?;
         let pd = Plan::point_dir(dir, &p.id);
         failed(&pd, &p.id)?;
         let run = trajectory::read(&pd.join("trajectory.f64"))?;

@@ -17,8 +17,12 @@ use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
+use serde::Deserialize;
+
 use super::{Plan, Point};
 use crate::error::{Error, Result};
+use crate::failure::RunStatus;
+use crate::output::Summary;
 use crate::output::csv::csv_field;
 use crate::output::plots::{Options, Panel, Series, stacked_chart};
 use crate::output::write_atomic;
@@ -46,13 +50,47 @@ pub const FIGURES: [&str; 18] = [
     "final_time",
 ];
 
+/// A point's `status` in sweep.csv: how its run ended (its summary.json's status), or why no
+/// run of it can be read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PointStatus {
+    /// the point's summary.json says how its run ended
+    Run(RunStatus),
+    /// not run yet: no summary.json
+    Missing,
+    /// its files do not agree (the row's reason says why): none of its figures is reported
+    Corrupt,
+}
+
+impl PointStatus {
+    /// The word sweep.csv writes: the run's status, `missing` or `corrupt`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            PointStatus::Run(s) => s.as_str(),
+            PointStatus::Missing => "missing",
+            PointStatus::Corrupt => "corrupt",
+        }
+    }
+
+    /// Whether the point's run completed.
+    pub fn is_completed(self) -> bool {
+        self == PointStatus::Run(RunStatus::Completed)
+    }
+}
+
+impl std::fmt::Display for PointStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 /// One row of sweep.csv.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {
     pub point: String,
     /// the label of each axis' value
     pub axes: Vec<String>,
-    pub status: String,
+    pub status: PointStatus,
     pub wall_time_s: Option<f64>,
     /// the figures of [`FIGURES`], as written (empty: not available)
     pub figures: Vec<String>,
@@ -67,18 +105,18 @@ impl Row {
     }
 }
 
-/// The `status` of a point folder's summary.json (None: there is none).
-pub fn point_status(pd: &Path) -> Option<String> {
-    let v = read_json(&pd.join("summary.json"))?;
-    v.get("status").and_then(|s| s.as_str()).map(str::to_string)
+/// The `status` of a point folder's summary.json, as the word it stores (None: there is no
+/// summary that reads as one).
+pub fn point_status(pd: &Path) -> Option<RunStatus> {
+    Summary::read(pd).map(|s| s.status)
 }
 
 /// Whether the point folder holds a completed run of exactly `scene_text` and the files it
 /// reads now (its summary's inputs fingerprint is that of the scene and its mesh as they are).
 pub fn completed_with(pd: &Path, scene_text: &str) -> bool {
-    let Some(v) = read_json(&pd.join("summary.json")) else { return false };
-    let recorded = v.get("inputs_fingerprint").and_then(|s| s.as_str());
-    v.get("status").and_then(|s| s.as_str()) == Some("completed")
+    let Some(summary) = Summary::read(pd) else { return false };
+    let recorded = summary.run.as_ref().map(|d| d.inputs_fingerprint.as_str());
+    summary.status == RunStatus::Completed
         && recorded.is_some()
         && recorded == current_inputs(pd, scene_text).as_deref()
 }
@@ -89,11 +127,19 @@ fn current_inputs(pd: &Path, scene_text: &str) -> Option<String> {
     crate::fingerprint::inputs(&model, pd).ok()
 }
 
-/// The statuses summary.json may hold.
-const STATUSES: [&str; 4] = ["running", "completed", "failed", "interrupted"];
-
-fn read_json(p: &Path) -> Option<serde_json::Value> {
-    serde_json::from_str(&std::fs::read_to_string(p).ok()?).ok()
+/// Why the JSON `v` of a summary.json is not a [`Summary`] (`e`: serde's reason): no status, an
+/// unknown status, no steps_completed, or another key missing or of the wrong form.
+fn not_a_summary(v: &serde_json::Value, e: &serde_json::Error) -> String {
+    let Some(status) = v.get("status").and_then(|v| v.as_str()) else {
+        return "summary.json has no status".into();
+    };
+    if serde_json::from_value::<RunStatus>(status.into()).is_err() {
+        return format!("summary.json has the unknown status {status:?}");
+    }
+    if v.get("steps_completed").and_then(|v| v.as_u64()).is_none() {
+        return "summary.json has no steps_completed".into();
+    }
+    format!("summary.json is not a summary of this version ({e})")
 }
 
 /// Read every point of the sweep in `dir` (its sweep.json and point folders).
@@ -106,43 +152,46 @@ pub fn rows(dir: &Path) -> Result<(Plan, Vec<Row>)> {
 /// One point's row.
 fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
     let axes: Vec<String> = plan.axes.iter().zip(&p.choice).map(|(a, &c)| a.labels[c].clone()).collect();
-    let bare = |status: &str, reason: String| Row {
+    let bare = |status: PointStatus, reason: String| Row {
         point: p.id.clone(),
         axes: axes.clone(),
-        status: status.into(),
+        status,
         wall_time_s: None,
         figures: vec![String::new(); FIGURES.len()],
         reason,
     };
     let sp = pd.join("summary.json");
     if !sp.exists() {
-        return Ok(bare("missing", String::new()));
+        return Ok(bare(PointStatus::Missing, String::new()));
     }
-    let summary = match std::fs::read_to_string(&sp)
+    let value = match std::fs::read_to_string(&sp)
         .map_err(|e| e.to_string())
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).map_err(|e| e.to_string()))
     {
         Ok(v) => v,
-        Err(e) => return Ok(bare("corrupt", format!("summary.json is not readable JSON ({e})"))),
+        Err(e) => return Ok(bare(PointStatus::Corrupt, format!("summary.json is not readable JSON ({e})"))),
+    };
+    let summary = match Summary::deserialize(&value) {
+        Ok(s) => s,
+        Err(e) => return Ok(bare(PointStatus::Corrupt, not_a_summary(&value, &e))),
     };
     if let Err(reason) = check_point(&summary, pd) {
-        return Ok(bare("corrupt", reason));
+        return Ok(bare(PointStatus::Corrupt, reason));
     }
-    let text = |k: &str| summary.get(k).and_then(|v| v.as_str()).unwrap_or_default().to_string();
-    let number = |k: &str| summary.get(k).and_then(|v| v.as_f64());
     let mut figures: HashMap<&str, String> = HashMap::new();
-    // from summary.json
-    for (fig, key) in [
-        ("max_abs_energy_residual", "max_abs_energy_residual"),
-        ("max_relative_energy_residual", "max_relative_energy_residual"),
-        ("newton_iterations", "newton_iterations_total"),
-        ("fixed_point_iterations", "fixed_point_iterations_total"),
-        ("fixed_point_cap_hits", "fixed_point_cap_hits"),
-        ("steps_completed", "steps_completed"),
-        ("final_time", "final_time"),
-    ] {
-        if let Some(v) = summary.get(key).filter(|v| v.is_number()) {
-            figures.insert(fig, v.to_string());
+    // from summary.json, each number as JSON writes it
+    let json = |x: serde_json::Value| x.to_string();
+    figures.insert("steps_completed", json(summary.steps_completed.into()));
+    if let Some(d) = &summary.run {
+        for (fig, v) in [
+            ("max_abs_energy_residual", json(d.max_abs_energy_residual.into())),
+            ("max_relative_energy_residual", json(d.max_relative_energy_residual.into())),
+            ("newton_iterations", json(d.newton_iterations_total.into())),
+            ("fixed_point_iterations", json(d.fixed_point_iterations_total.into())),
+            ("fixed_point_cap_hits", json(d.fixed_point_cap_hits.into())),
+            ("final_time", json(d.final_time.into())),
+        ] {
+            figures.insert(fig, v);
         }
     }
     // from history.csv: the last row and the maxima
@@ -171,19 +220,18 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
             }
         }
     }
-    let status = text("status");
     // an interrupted point runs again from its start: its message (with a resume path that
     // names this folder) is not its reason
-    let reason = if status == "interrupted" {
+    let reason = if summary.status == RunStatus::Interrupted {
         "interrupted: runs again when the sweep runs again".to_string()
     } else {
-        text("failure")
+        summary.failure.clone().unwrap_or_default()
     };
     Ok(Row {
         point: p.id.clone(),
         axes,
-        status,
-        wall_time_s: number("wall_time_s"),
+        status: PointStatus::Run(summary.status),
+        wall_time_s: summary.run.as_ref().map(|d| d.wall_time_s),
         figures: FIGURES.iter().map(|f| figures.remove(f).unwrap_or_default()).collect(),
         reason,
     })
@@ -192,17 +240,12 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
 /// A point's files agree: a known status; history.csv, where the run wrote one, with
 /// steps_completed + 1 whole rows of finite numbers, steps in order; a completed run with its
 /// history and with the inputs it ran with. Err: why not.
-fn check_point(summary: &serde_json::Value, pd: &Path) -> std::result::Result<(), String> {
-    let status = summary.get("status").and_then(|v| v.as_str()).ok_or("summary.json has no status")?;
-    if !STATUSES.contains(&status) {
-        return Err(format!("summary.json has the unknown status {status:?}"));
-    }
-    let steps =
-        summary.get("steps_completed").and_then(|v| v.as_u64()).ok_or("summary.json has no steps_completed")? as usize;
+fn check_point(summary: &Summary, pd: &Path) -> std::result::Result<(), String> {
+    let (status, steps) = (summary.status, summary.steps_completed);
     let hp = pd.join("history.csv");
     if !hp.exists() {
         // a run that could not start writes no history; any run that started does
-        return if status == "failed" && steps == 0 {
+        return if status == RunStatus::Failed && steps == 0 {
             Ok(())
         } else {
             Err(format!("history.csv is missing for a {status} run of {steps} steps"))
@@ -230,7 +273,7 @@ fn check_point(summary: &serde_json::Value, pd: &Path) -> std::result::Result<()
         rows += 1;
     }
     // a running (or killed) run may be one row ahead of its last summary
-    if rows != steps + 1 && !(status == "running" && rows > steps) {
+    if rows != steps + 1 && !(status == RunStatus::Running && rows > steps) {
         return Err(format!(
             "history.csv has {rows} rows of steps where summary.json reports {steps} steps (so {} rows)",
             steps + 1
@@ -238,8 +281,8 @@ fn check_point(summary: &serde_json::Value, pd: &Path) -> std::result::Result<()
     }
     let scene_text =
         std::fs::read_to_string(pd.join("scene.toml")).map_err(|e| format!("scene.toml cannot be read ({e})"))?;
-    if status == "completed"
-        && summary.get("inputs_fingerprint").and_then(|v| v.as_str()) != current_inputs(pd, &scene_text).as_deref()
+    if status == RunStatus::Completed
+        && summary.run.as_ref().map(|d| d.inputs_fingerprint.as_str()) != current_inputs(pd, &scene_text).as_deref()
     {
         return Err(
             "its inputs changed since it ran (the scene, or a file it reads such as its mesh): run the sweep again"
@@ -365,7 +408,7 @@ fn chart(plan: &Plan, rows: &[Row], a: usize) -> Result<String> {
             let mut pts: Vec<(f64, f64)> = rows
                 .iter()
                 .zip(&plan.points)
-                .filter(|(r, p)| r.status == "completed" && group_key(plan, p, a) == *key)
+                .filter(|(r, p)| r.status.is_completed() && group_key(plan, p, a) == *key)
                 .filter_map(|(r, p)| Some((numbers[p.choice[a]], r.figure(fig)?)))
                 .collect();
             pts.sort_by(|x, y| x.0.total_cmp(&y.0));

@@ -1,6 +1,8 @@
 //! Running a sweep's points on this machine: `jobs` worker threads take the points in order,
-//! each point one `run` into its folder (the same library call as `dyncontact run`, numerics
-//! sequential inside each), a progress bar over points. A point already completed with the same
+//! each point one `run` into its folder (the same library call as `dyncontact run`), a progress
+//! bar over points. The parallelism is across points: the caller keeps each point's numerics
+//! sequential by setting faer's global parallelism to `Par::Seq` once, at its start, as
+//! `dyncontact`'s `main` does (a library sets no process-wide state). A point already completed with the same
 //! scene and inputs is skipped, so an interrupted sweep resumes; a point that fails is recorded
 //! with its reason (its summary.json says `failed` and why) and the others go on.
 //!
@@ -15,7 +17,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use super::Plan;
-use crate::error::{Error, Result};
+use crate::error::{Error, FailureKind, Result};
 use crate::problem::Problem;
 use crate::run::{RunOptions, run, write_failed_start};
 use crate::scene::Scene;
@@ -46,7 +48,8 @@ pub enum Outcome {
 }
 
 /// Run every point of `plan` that is not `done` (from [`Plan::write`]) into its folder below
-/// `dir`. Returns each point's outcome, in the plan's order.
+/// `dir`. Returns each point's outcome, in the plan's order. Each point's numerics use faer's
+/// global parallelism as the caller set it (`Par::Seq` keeps `jobs` points on `jobs` cores).
 pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) -> Result<Vec<Outcome>> {
     let n = plan.points.len();
     let outcomes: Vec<Mutex<Outcome>> = (0..n)
@@ -107,8 +110,6 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
     }
     let next = AtomicUsize::new(0);
     let stopped = || opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
-    // each point's numerics run sequentially: the parallelism is across points
-    faer::set_global_parallelism(faer::Par::Seq);
     std::thread::scope(|scope| {
         for _ in 0..at_once {
             scope.spawn(|| {
@@ -126,11 +127,10 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
                         run_point(&pd, &p.scene_text, opts.interrupt.clone())
                     }))
                     .unwrap_or_else(|_| {
-                        let reason =
-                            "the run panicked (a defect of dyncontact: please report it with this point's scene.toml)"
-                                .to_string();
-                        let _ = write_failed_start(&pd, &p.id, &Error::Output(reason.clone()));
-                        Outcome::Failed(reason)
+                        let reason = "the run panicked (report it with this point's scene.toml)".to_string();
+                        let e = Error::Internal(reason);
+                        let _ = write_failed_start(&pd, &p.id, &e);
+                        Outcome::Failed(e.to_string())
                     });
                     if let Some(b) = &bar {
                         b.inc(1);
@@ -157,8 +157,8 @@ pub fn marker(pd: &Path) -> std::path::PathBuf {
 }
 
 /// Whether a failure of this kind is a point's final outcome (running it again would repeat it).
-fn is_final(kind: &str) -> bool {
-    matches!(kind, "solver" | "non_finite" | "linear_algebra" | "input")
+fn is_final(kind: FailureKind) -> bool {
+    matches!(kind, FailureKind::Solver | FailureKind::NonFinite | FailureKind::LinearAlgebra | FailureKind::Input)
 }
 
 /// `dyncontact sweep point points/<id>`: run one point of a sweep folder from its scene.toml, as
@@ -191,7 +191,7 @@ fn run_point(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> Outco
 }
 
 /// [`run_point`] without the marker: the outcome and, for a failure, its kind.
-fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> (Outcome, Option<&'static str>) {
+fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> (Outcome, Option<FailureKind>) {
     // the point's folder is the sweep's: cleared under its lock (another process running this
     // point keeps it), then run (which locks it again)
     let cleared = crate::output::folder::lock_run(pd).and_then(|lock| {
@@ -222,7 +222,7 @@ fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> 
     };
     match run(&problem, &opts) {
         Ok(_) => (Outcome::Completed, None),
-        Err(Error::Interrupted { .. }) => (Outcome::Interrupted, Some("interrupted")),
+        Err(Error::Interrupted { .. }) => (Outcome::Interrupted, Some(FailureKind::Interrupted)),
         Err(e) => (Outcome::Failed(e.to_string()), Some(e.kind())),
     }
 }

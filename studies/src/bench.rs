@@ -500,14 +500,14 @@ fn race_cases(race: &RacePlan) -> Result<Vec<RaceCase>> {
 }
 
 fn inner_failure(e: ContactFailure) -> Error {
-    Error::Output(format!("bench race: {}", dyncontact::failure::StepFailureCause::Contact(e)))
+    Error::Study(format!("bench race: {}", dyncontact::failure::StepFailureCause::Contact(e)))
 }
 
 /// The Newton settings of a simulation whose inner solver is `newton`.
 fn newton_settings(sim: &Simulation) -> Result<NewtonSettings> {
     match sim.settings.inner {
         Inner::Newton(s) | Inner::NewtonUnfrozen(s) => Ok(s),
-        Inner::Conic(_) => Err(Error::Output("bench race: the comparison needs a Newton inner solver".into())),
+        Inner::Conic(_) => Err(Error::Study("bench race: the comparison needs a Newton inner solver".into())),
     }
 }
 
@@ -517,7 +517,7 @@ fn newton_settings(sim: &Simulation) -> Result<NewtonSettings> {
 fn agreement(p: &Problem) -> Result<Agreement> {
     let mut sim = Simulation::new(p)?;
     let set = newton_settings(&sim)?;
-    let c = p.contact.as_ref().ok_or_else(|| Error::Output("bench race: the scene has no contact".into()))?;
+    let c = p.contact.as_ref().ok_or_else(|| Error::Study("bench race: the scene has no contact".into()))?;
     let mut a = Agreement::default();
     let mut steps = sim.steps();
     // the comparison's own factor cache: re-solving a step leaves the run's path alone
@@ -526,9 +526,8 @@ fn agreement(p: &Problem) -> Result<Agreement> {
         {
             let sim = steps.simulation();
             let (v_free, _) = sim.free_velocity();
-            let (data, p_hat) = sim
-                .step_data(c.restrict(&v_free))
-                .ok_or_else(|| Error::Output("bench race: no contact data".into()))?;
+            let (data, p_hat) =
+                sim.step_data(c.restrict(&v_free)).ok_or_else(|| Error::Study("bench race: no contact data".into()))?;
             let (f1, _, _) = sim
                 .solve_frozen_sequence(&data, &mut factors, &p_hat, &Inner::Newton(set), None)
                 .map_err(inner_failure)?;

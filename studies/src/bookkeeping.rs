@@ -74,7 +74,7 @@ pub fn run_part(plan: &BookkeepingPlan, out: &Path) -> Result<Vec<BookkeepingRow
     (0..plan.repeats)
         .map(|_| {
             let s = run(&p, &opts)?;
-            Ok(BookkeepingRow { unknowns: p.dofs.n_free, steps: s.steps_completed, timing: s.timing })
+            Ok(BookkeepingRow { unknowns: p.dofs.n_free, steps: s.steps_completed, timing: s.timing() })
         })
         .collect()
 }

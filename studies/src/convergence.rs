@@ -70,7 +70,7 @@ pub(super) fn probe_dofs(p: &Problem) -> Result<Vec<[Option<usize>; 2]>> {
                 .map(|i| p.mesh.point(i))
                 .position(|y| (y[0] - x[0]).abs() <= tol && (y[1] - x[1]).abs() <= tol && y[2] == 0.0);
             let node = node.ok_or_else(|| {
-                Error::Output(format!("bench: the probe point ({}, {}) is not a mesh node", x[0], x[1]))
+                Error::Study(format!("bench: the probe point ({}, {}) is not a mesh node", x[0], x[1]))
             })?;
             Ok([p.dofs.map[2 * node], p.dofs.map[2 * node + 1]])
         })
@@ -134,14 +134,14 @@ pub(super) fn steps_in(span: f64, k: f64) -> Result<usize> {
     let n = r.round() as usize;
     (n >= 1 && (r - n as f64).abs() <= 1e-9 * r)
         .then_some(n)
-        .ok_or_else(|| Error::Output(format!("bench: {span} is not a whole number of steps k = {k}")))
+        .ok_or_else(|| Error::Study(format!("bench: {span} is not a whole number of steps k = {k}")))
 }
 
 /// How many reference steps make one step of `run`, checking the reference covers the run.
 pub(super) fn step_ratio(run: &Trajectory, reference: &Trajectory) -> Result<usize> {
     let n = steps_in(run.k, reference.k)?;
     (run.forces.len() * n <= reference.forces.len()).then_some(n).ok_or_else(|| {
-        Error::Output(format!("bench: the reference (k = {}) is shorter than the run (k = {})", reference.k, run.k))
+        Error::Study(format!("bench: the reference (k = {}) is shorter than the run (k = {})", reference.k, run.k))
     })
 }
 

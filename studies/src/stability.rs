@@ -27,7 +27,9 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use dyncontact::energy::EnergyTerms;
 use dyncontact::error::{Error, Result};
+use dyncontact::failure::{FailureKind, RunStatus};
 use dyncontact::model::kinds::{self, EnforcementKind, FixedPointAcceleration, InnerSolver, MassKind, SchemeKind};
+use dyncontact::output::Summary;
 use dyncontact::output::summary::ModelInfo;
 use dyncontact::output::write_atomic;
 use dyncontact::problem::Problem;
@@ -428,11 +430,16 @@ pub fn stored(e: &EnergyTerms) -> f64 {
 /// the kind of the error that stopped it (summary.json's `failure_kind`, [`Error::kind`] in
 /// process), so a run measured in process and one read from its folder are classified by the
 /// same rule.
-pub fn classify(failure_kind: Option<&str>, non_finite: bool, m: &Measured, energy_conserving: bool) -> RunClass {
+pub fn classify(
+    failure_kind: Option<FailureKind>,
+    non_finite: bool,
+    m: &Measured,
+    energy_conserving: bool,
+) -> RunClass {
     match failure_kind {
         _ if non_finite => RunClass::NonFinite,
-        Some("non_finite") => RunClass::NonFinite,
-        Some("solver") => RunClass::NewtonFailed,
+        Some(FailureKind::NonFinite) => RunClass::NonFinite,
+        Some(FailureKind::Solver) => RunClass::NewtonFailed,
         Some(_) => RunClass::ClearError,
         None if m.max_gain > GAIN_TOLERANCE => RunClass::EnergyGrew,
         None if m.fp_capped_steps > 0 => RunClass::FixedPointCapped,
@@ -676,11 +683,13 @@ pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
             let case_label = &plan.axes[0].labels[p.choice[0]];
             let variant_label = &plan.axes[1].labels[p.choice[1]];
             let (Some((sw, value)), Some(v)) = (parse_case(case_label), variant(variant_label)) else {
-                return Err(Error::Output(format!(
-                    "{}: point {} has the case {case_label:?} / variant {variant_label:?}, which the map does not know",
-                    dir.display(),
-                    p.id
-                )));
+                return Err(Error::folder(
+                    &dir,
+                    format!(
+                        "point {} has the case {case_label:?} / variant {variant_label:?}, which the map does not know",
+                        p.id
+                    ),
+                ));
             };
             let m = measure_point(&Plan::point_dir(&dir, &p.id), v.energy_conserving())?;
             found.push(RunResult { case: MapRun { sweep: sw, value, variant: v }, m });
@@ -727,7 +736,7 @@ pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
         match pos {
             Some(i) => rows.push(found.swap_remove(i)),
             None => {
-                return Err(Error::Output(format!(
+                return Err(Error::Study(format!(
                     "the map's sweeps have no run of {} = {} / {}",
                     c.sweep.key(),
                     c.value,
@@ -758,7 +767,7 @@ fn refused(scene: Result<Scene>) -> Measured {
     let mut m = Measured::empty(planned.0, planned.1);
     let e = match scene.and_then(|s| s.validate().map(|_| ())) {
         Err(e) => e,
-        Ok(()) => Error::Output("expected to be refused, but the scene is valid".into()),
+        Ok(()) => Error::Study("expected to be refused, but the scene is valid".into()),
     };
     m.class = RunClass::ClearError;
     m.note = e.to_string();
@@ -772,14 +781,11 @@ fn refused(scene: Result<Scene>) -> Measured {
 /// failure (kind and message) of summary.json; a row with a non-finite energy term ends the
 /// run there, as a non-finite value reaching the caller.
 pub fn measure_point(pd: &Path, energy_conserving: bool) -> Result<Measured> {
-    let sp = pd.join("summary.json");
-    let summary: serde_json::Value = std::fs::read_to_string(&sp)
-        .map_err(|e| Error::io(&sp, e))
-        .and_then(|t| serde_json::from_str(&t).map_err(|e| Error::Output(format!("{}: {e}", sp.display()))))?;
-    let model = summary.get("model");
-    let num = |v: Option<&serde_json::Value>| v.and_then(serde_json::Value::as_f64);
-    let (steps, k) = match model {
-        Some(m) => (num(m.get("steps")).unwrap_or(0.0) as usize, num(m.get("step")).unwrap_or(f64::NAN)),
+    let summary = Summary::read(pd).ok_or_else(|| {
+        Error::folder(pd.join("summary.json"), "missing or not a summary of this version: the point cannot be measured")
+    })?;
+    let (steps, k) = match &summary.run {
+        Some(d) => (d.model.steps, d.model.step),
         None => {
             // a run that could not start: its scene says what it would have run
             let s = Scene::from_file(&pd.join("scene.toml"))?;
@@ -787,13 +793,15 @@ pub fn measure_point(pd: &Path, energy_conserving: bool) -> Result<Measured> {
         }
     };
     let mut m = Measured::empty(steps, k);
-    m.ck_limit = model.and_then(|m| num(m.get("ck_step_limit")));
-    m.fallbacks = summary.get("unfrozen_fallbacks").and_then(serde_json::Value::as_u64).unwrap_or(0) as usize;
-    m.wall_time_s = num(summary.get("wall_time_s")).unwrap_or(0.0);
+    if let Some(d) = &summary.run {
+        m.ck_limit = d.model.ck_step_limit;
+        m.fallbacks = d.unfrozen_fallbacks;
+        m.wall_time_s = d.wall_time_s;
+    }
     let mut non_finite = false;
     if let Some(h) = dyncontact::sweep::collect::History::read(&pd.join("history.csv")) {
         let col = |name: &str| {
-            h.numbers(name).ok_or_else(|| Error::Output(format!("{}: history.csv has no column {name}", pd.display())))
+            h.numbers(name).ok_or_else(|| Error::folder(pd.join("history.csv"), format!("no column {name}")))
         };
         let terms: Vec<Vec<f64>> = [
             "kinetic",
@@ -836,17 +844,16 @@ pub fn measure_point(pd: &Path, energy_conserving: bool) -> Result<Measured> {
             tally.finish(&mut m);
         }
     }
-    let failed = summary.get("status").and_then(|s| s.as_str()) == Some("failed");
-    let kind = summary.get("failure_kind").and_then(|s| s.as_str()).unwrap_or_default();
+    let failed = summary.status == RunStatus::Failed;
     if non_finite {
         m.note = format!("a non-finite energy term reached the caller at step {}", m.steps_completed + 1);
     } else if failed {
-        m.note = summary.get("failure").and_then(|s| s.as_str()).unwrap_or_default().to_string();
+        m.note = summary.failure.clone().unwrap_or_default();
     }
     if !m.max_gain.is_finite() {
         m.max_gain = 0.0;
     }
-    m.class = classify(failed.then_some(kind), non_finite, &m, energy_conserving);
+    m.class = classify(if failed { summary.failure_kind } else { None }, non_finite, &m, energy_conserving);
     Ok(m)
 }
 

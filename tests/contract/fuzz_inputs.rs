@@ -1320,7 +1320,7 @@ fn error_kind(e: &Error) -> String {
             }
         }
         Error::Mesh { message, .. } => format!("Mesh {}", gist(message, 5)),
-        Error::LinearAlgebra(m) => format!("LinearAlgebra {}", gist(m, 4)),
+        Error::LinearAlgebra(f) => format!("LinearAlgebra {}", gist(&f.to_string(), 4)),
         Error::Solver(f) => format!("Solver {}", gist(&f.cause.to_string(), 5)),
         Error::Output(m) => format!("Output {}", gist(m, 4)),
         Error::Io { source, .. } => format!("Io {}", source.kind()),

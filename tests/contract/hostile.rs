@@ -687,3 +687,105 @@ fn minor_messages_say_what_is_wrong() {
     assert!(err(&o).contains("output.every") && err(&o).contains("TiB"), "{}", err(&o));
     assert!(!dir.join("huge").exists(), "a refused run made its folder");
 }
+
+/// A checkpoint that does not fit the problem it is restored into is a folder whose files do not
+/// belong together (failure_kind `folder`, exit 4), not an output fault.
+#[test]
+fn a_checkpoint_that_does_not_fit_is_a_folder_fault() {
+    use dyncontact::error::{Error, FailureKind, exit};
+    let scene = dyncontact::scene::Scene::from_file(&fixture("sliding_block")).expect("scene");
+    let p = dyncontact::problem::Problem::from_scene(&scene, &fixture("sliding_block").with_file_name(""))
+        .expect("problem");
+    let mut sim = dyncontact::simulation::Simulation::new(&p).expect("setup");
+    let mut wrong = sim.state.clone();
+    wrong.u.push(0.0);
+    let e = sim.restore(wrong).expect_err("a state of other sizes is refused");
+    assert!(matches!(e, Error::Checkpoint(_)), "{e:?}");
+    assert_eq!((e.kind(), e.exit_code()), (FailureKind::Folder, exit::FOLDER), "{e}");
+    let mut late = sim.state.clone();
+    late.n = p.steps + 1;
+    let e = sim.restore(late).expect_err("a step beyond the scene's end is refused");
+    assert!(e.to_string().contains("beyond the scene's"), "{e}");
+}
+
+/// A failed factorization keeps faer's error as a value (not only its text), says it in the
+/// message it always gave, and exits 2 with failure_kind `linear_algebra`.
+#[test]
+fn a_failed_factorization_keeps_faers_error() {
+    use dyncontact::error::{Error, FailureKind, LinearAlgebraFailure, exit};
+    use faer::linalg::cholesky::llt::factor::LltError as Pivot;
+    use faer::sparse::linalg::LltError;
+    let a = dyncontact::linalg::from_triplets(1, 1, &[(0, 0, -1.0)]).expect("a 1 × 1 matrix");
+    let e = dyncontact::linalg::Cholesky::new(&a, "M").err().expect("−1 is not positive definite");
+    let Error::LinearAlgebra(LinearAlgebraFailure::Cholesky { matrix, cause }) = &e else { panic!("{e:?}") };
+    assert_eq!(matrix, "M");
+    assert!(matches!(cause, LltError::Numeric(Pivot::NonPositivePivot { .. })), "{cause:?}");
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "linear algebra: Cholesky factorization of M failed ({cause:?}): the matrix is not positive definite \
+             (check density > 0, the material constants and that the body is held or has mass)"
+        )
+    );
+    assert_eq!((e.kind(), e.exit_code()), (FailureKind::LinearAlgebra, exit::SOLVER));
+}
+
+/// Each failure kind is stored under the name the README lists, and a defect of dyncontact (a
+/// panic) is its own kind with its own exit code (70), not an output fault.
+#[test]
+fn failure_kinds_keep_their_names_and_a_defect_exits_70() {
+    use dyncontact::error::{Error, FailureKind, exit};
+    for (kind, name) in [
+        (FailureKind::NonFinite, "non_finite"),
+        (FailureKind::Solver, "solver"),
+        (FailureKind::LinearAlgebra, "linear_algebra"),
+        (FailureKind::Input, "input"),
+        (FailureKind::Interrupted, "interrupted"),
+        (FailureKind::Folder, "folder"),
+        (FailureKind::Output, "output"),
+        (FailureKind::Internal, "internal"),
+    ] {
+        assert_eq!(serde_json::to_value(kind).expect("json"), serde_json::json!(name));
+        assert_eq!(serde_json::from_value::<FailureKind>(serde_json::json!(name)).expect("back"), kind);
+    }
+    let e = Error::Internal("the frame writer thread panicked".into());
+    assert_eq!((e.kind(), e.exit_code()), (FailureKind::Internal, exit::INTERNAL));
+    assert_eq!(exit::INTERNAL, 70);
+    assert_eq!(Error::Study("the penalty study runs on 2-D scenes".into()).exit_code(), exit::INPUT);
+}
+
+/// A run that could not start writes its summary.json from the one `Summary` type: it reads back
+/// as a `Summary` (failed, its kind, no step, no run details) with exactly the keys it always had.
+#[test]
+fn a_failed_starts_summary_reads_as_a_summary() {
+    use dyncontact::error::FailureKind;
+    use dyncontact::failure::RunStatus;
+    let out = tmp("failed_start_summary");
+    let e = dyncontact::scene::Scene::from_toml("time = [", "broken.toml").expect_err("not TOML");
+    dyncontact::run::write_failed_start(&out, "broken", &e).expect("written");
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+    let s: dyncontact::output::Summary = serde_json::from_str(&text).expect("a Summary");
+    assert_eq!((s.status, s.failure_kind, s.steps_completed), (RunStatus::Failed, Some(FailureKind::Input), 0));
+    assert_eq!((s.scene.as_str(), s.failure), ("broken", Some(e.to_string())));
+    assert!(s.run.is_none(), "a run that did not start has no run details");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let mut keys: Vec<&str> = v.as_object().expect("an object").keys().map(String::as_str).collect();
+    keys.sort_unstable();
+    assert_eq!(keys, ["failure", "failure_kind", "scene", "status", "steps_completed", "version"]);
+    assert_eq!((v["status"].as_str(), v["failure_kind"].as_str()), (Some("failed"), Some("input")));
+}
+
+/// A run's summary.json reads back as a `Summary` and writes the same JSON again: every key and
+/// every value survives the type.
+#[test]
+fn a_runs_summary_round_trips_through_the_type() {
+    let out = tmp("summary_round_trip");
+    let o = run_into(&out, &SMALL);
+    assert!(o.status.success(), "{}", err(&o));
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+    let s: dyncontact::output::Summary = serde_json::from_str(&text).expect("a Summary");
+    assert_eq!(s.status, dyncontact::failure::RunStatus::Completed);
+    assert!(s.run.as_ref().is_some_and(|d| !d.run_id.is_empty()), "a run that started has its details");
+    let again: serde_json::Value = serde_json::from_str(&s.to_json().expect("json")).expect("json");
+    assert_eq!(again, summary(&out));
+}

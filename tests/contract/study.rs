@@ -33,6 +33,8 @@ fn e0_penalty_study_penetration_and_error_fall_with_eps() {
     let eps = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
     let work = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("penalty_sweep");
     let _ = std::fs::remove_dir_all(&work);
+    // each point's numerics sequential, as `dyncontact`'s main sets them (the sweep runner sets no global state)
+    faer::set_global_parallelism(faer::Par::Seq);
     let st = penalty_study(&base("academic"), &coarse, Some(&eps), &work, 2).expect("study");
     for r in &st.rows {
         println!("ε = {:.0e}: e_V {:.4e}, e_H {:.4e}, δ {:.4e}, {:.2} s", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s);

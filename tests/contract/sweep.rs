@@ -118,6 +118,8 @@ fn six_points() -> PathBuf {
 }
 
 fn run_sweep(plan: &Plan, dir: &Path, jobs: usize) -> Vec<Outcome> {
+    // each point's numerics sequential, as `dyncontact`'s main sets them (the runner sets no global state)
+    faer::set_global_parallelism(faer::Par::Seq);
     let done = plan.write(dir).expect("the folder");
     run_points(plan, dir, &done, &RunnerOptions { jobs, progress: false, interrupt: None }).expect("run")
 }

@@ -488,3 +488,25 @@ fn f1_anderson_reaches_the_plain_fixed_point() {
     assert!(worst <= 1e-6, "{worst:.3e}");
     assert!(solves[1] < solves[0], "the extrapolation should save solves: {solves:?}");
 }
+
+/// (C.k) The problem states its convexity limit and the summary reports that number: the academic
+/// scene is limited at a contact node, the modified mass admits no step (k = 0), and the total
+/// bound gives no limit.
+#[test]
+fn ck_limit_is_the_problems_and_the_summary_reports_it() {
+    use dyncontact::problem::ConvexityLimit;
+    use dyncontact::scene::{FrictionBound, MassKind};
+    let p = problem(fixture("academic"));
+    let ConvexityLimit::Step { k, node } = p.convexity_limit() else { panic!("{:?}", p.convexity_limit()) };
+    let info = dyncontact::output::ModelInfo::of(&p);
+    // exact: the summary carries the problem's number, not a recomputation
+    assert_eq!((info.ck_step_limit, info.ck_limiting_node), (Some(k), Some(node)));
+    // `check` prints the limit as 3.4722e-4: half a unit of its last digit
+    assert!((k - 3.4722e-4).abs() <= 5e-9, "{k}");
+    let mut modified = fixture("academic");
+    modified.solver.mass = MassKind::Modified;
+    assert!(matches!(problem(modified).convexity_limit(), ConvexityLimit::Step { k: 0.0, .. }));
+    let mut total = fixture("academic");
+    total.contact.as_mut().expect("contact").friction_bound = FrictionBound::Total;
+    assert_eq!(problem(total).convexity_limit(), ConvexityLimit::TotalBound);
+}

@@ -22,7 +22,7 @@ pub struct SparseDelassus {
 }
 
 /// Facts of the sparse form (summary.json `contact_solve`).
-#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
 pub struct SparseStats {
     /// entries below this fraction of the diagonal were dropped
     pub truncation: f64,

@@ -54,6 +54,8 @@ fn lost_fraction(m: &Measured) -> f64 {
 fn quick_sweep_writes_csv_and_svg_with_a_row_per_run() {
     let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("stability_quick");
     let _ = std::fs::remove_dir_all(&out);
+    // each point's numerics sequential, as `dyncontact`'s main sets them (the sweep runner sets no global state)
+    faer::set_global_parallelism(faer::Par::Seq);
     let report = studies::stability::run(&out, &StabilityOptions { quick: true, jobs: 2 }).expect("quick sweep");
     println!("{report}");
     let n = cases(true).len();
@@ -362,6 +364,8 @@ fn newton_iteration_cap_of_one_stops_with_newton_failed() {
 fn sweep_path_gives_the_in_process_numbers() {
     let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("stability_sweep_path");
     let _ = std::fs::remove_dir_all(&out);
+    // each point's numerics sequential, as `dyncontact`'s main sets them (the sweep runner sets no global state)
+    faer::set_global_parallelism(faer::Par::Seq);
     let rows = map_runs(&out, &StabilityOptions { quick: true, jobs: 2 }).expect("the quick map");
     assert_eq!(rows.len(), cases(true).len());
     for r in &rows {
