@@ -198,8 +198,9 @@ fn run_binary(root: &Path, b: &TestBinary) -> Result<BinaryRun, String> {
 }
 
 /// Run every test binary, `jobs` at a time (each binary runs its own tests on its threads too);
-/// a binary's output is printed whole when it ends.
-fn run_tests(root: &Path, bins: &[TestBinary], jobs: usize) -> Result<Outcomes, String> {
+/// a binary's output is printed whole when it ends. Returns every test's outcome and, when a
+/// binary failed, what failed (verify goes on to report the trace and the other checks too).
+fn run_tests(root: &Path, bins: &[TestBinary], jobs: usize) -> Result<(Outcomes, Option<String>), String> {
     let next = Mutex::new(0usize);
     let runs: Mutex<Vec<Option<Result<BinaryRun, String>>>> = Mutex::new((0..bins.len()).map(|_| None).collect());
     let print = Mutex::new(());
@@ -241,12 +242,12 @@ fn run_tests(root: &Path, bins: &[TestBinary], jobs: usize) -> Result<Outcomes, 
             failed_bins.push(b.src.clone());
         }
     }
-    if !failed_bins.is_empty() {
+    let failure = (!failed_bins.is_empty()).then(|| {
         let failed: Vec<String> =
             outcomes.iter().filter(|(_, p)| !**p).map(|((f, n), _)| format!("{f}::{n}")).collect();
-        return Err(format!("tests failed in {}: {}", failed_bins.join(", "), failed.join(", ")));
-    }
-    Ok(outcomes)
+        format!("tests failed in {}: {}", failed_bins.join(", "), failed.join(", "))
+    });
+    Ok((outcomes, failure))
 }
 
 /// Look up a test reference `file.rs::name`: a test binary's own file (its root), a module file
@@ -577,7 +578,7 @@ fn report(target: &Path, trace: &TraceResult, outcomes: &Outcomes, crosscheck: &
 /// `cargo fmt --all --check`: the code is as rustfmt.toml formats it.
 fn formatted(root: &Path) -> Result<(), String> {
     let out = Command::new(env!("CARGO"))
-        .args(["fmt", "--all", "--check"])
+        .args(["fmt", "--all", "--check", "--", "--color", "never"])
         .current_dir(root)
         .output()
         .map_err(|e| format!("cannot run cargo fmt: {e}"))?;
@@ -640,7 +641,8 @@ fn verify(root: &Path, target: &Path, skip_crosscheck: bool) -> Result<(), Strin
         let _ = std::fs::remove_file(target.join("verify").join("measurements.jsonl"));
         let jobs = std::thread::available_parallelism().map_or(2, usize::from);
         let t = Instant::now();
-        let outcomes = run_tests(root, &build.tests, jobs)?;
+        let (outcomes, tests_failed) = run_tests(root, &build.tests, jobs)?;
+        failures.extend(tests_failed);
         let passed = outcomes.values().filter(|p| **p).count();
         println!(
             "\n== {passed} tests passed in {} binaries ({:.1} s, {jobs} at a time)",
