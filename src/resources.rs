@@ -20,7 +20,7 @@
 //! element matrix) while faer converts them, and the solve, which holds the operators, the
 //! factor and the contact matrices. Calibrated against the peak resident memory (VmHWM) of
 //! eleven runs, 2-D and 3-D, 12 MB to 1 GB: estimate ÷ measured peak 0.91–1.17 (the assembly
-//! phase was the larger in all of them; `tests/resources.rs` checks three scenes within ±30%).
+//! phase was the larger in all of them; `tests/contract/resources.rs` checks three scenes within ±30%).
 
 use std::path::Path;
 

@@ -916,7 +916,7 @@ mod tests {
         assert!(e.contains("not allowed here"), "{e}");
     }
 
-    /// Found by tests/fuzz_inputs.rs: a multi-byte character after an operator panicked (a str
+    /// Found by tests/contract/fuzz_inputs.rs: a multi-byte character after an operator panicked (a str
     /// slice inside the character), deep nesting overflowed the stack, and a newline written
     /// as `\n` in the TOML string made a message of two lines.
     #[test]

@@ -31,7 +31,7 @@ pub fn export_operators(p: &Problem, dir: &Path) -> Result<()> {
     let Some(mesh) = p.mesh.plane() else {
         return Err(Error::scene(
             "domain",
-            "export-operators writes 2-D meshes only (the 3-D operators are cross-checked by tests/crosscheck.rs)",
+            "export-operators writes 2-D meshes only (the 3-D operators are cross-checked by tests/verification/crosscheck.rs)",
         ));
     };
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;

@@ -74,7 +74,7 @@ newton_iterations_per_step,fixed_point_iterations_per_step,unfrozen_steps,fallba
 max_force_difference,differing_steps,status";
 
 /// Two methods differ on a step when their contact velocities or forces differ by more than
-/// this, relative to the step's velocity and force scales (tests/unfrozen.rs).
+/// this, relative to the step's velocity and force scales (tests/solver/unfrozen.rs).
 const AGREEMENT_TOLERANCE: f64 = 1e-6;
 
 /// What the race runs: the mesh, the horizon, the friction laws (multiples of the scene's
@@ -513,7 +513,7 @@ fn newton_settings(sim: &Simulation) -> Result<NewtonSettings> {
 
 /// (N.4) against (F.1) step by step from the same state (the F.1 trajectory): the largest
 /// difference of the contact velocities and forces, relative to the step's scales, and the
-/// number of steps where they differ beyond [`AGREEMENT_TOLERANCE`] (tests/unfrozen.rs).
+/// number of steps where they differ beyond [`AGREEMENT_TOLERANCE`] (tests/solver/unfrozen.rs).
 fn agreement(p: &Problem) -> Result<Agreement> {
     let mut sim = Simulation::new(p)?;
     let set = newton_settings(&sim)?;

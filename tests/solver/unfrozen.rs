@@ -1,6 +1,6 @@
 //! (N.4) Newton on the unfrozen friction bound against the paper's method (`newton` inside the
 //! fixed point F.1), step by step from the same state: trajectories of stick–slip under velocity
-//! weakening drift apart from solver-level differences (tests/snapshots.rs measures it), so the
+//! weakening drift apart from solver-level differences (tests/solver/snapshots.rs measures it), so the
 //! "same answer" is judged per step.
 //!
 //! Tolerance: F.1 stops when S or y changes by ≤ tol_fp = 1e-8 (relative) between iterations;

@@ -17,7 +17,7 @@
 //! - the constraint active: e = f = η = 0, δ0 = g, a prescribed λ = 5(1 + x + y + ½ sin 2t) ≥ 0:
 //!   f3 = σν + (p(g) + λ)ν + μ(V) p(g) (cos ωt, sin ωt, 0) (capped bound).
 //!
-//! Friction is velocity strengthening, μ(r) = 0.6 − 0.3 e^{−5r}, as in 2-D (tests/manufactured_contact.rs:
+//! Friction is velocity strengthening, μ(r) = 0.6 − 0.3 e^{−5r}, as in 2-D (tests/verification/manufactured_contact.rs:
 //! under weakening the uniform slip is dynamically unstable on these meshes).
 //! Expected: energy-norm order ≈ 1 in h (P1); midpoint order ≈ 2 in k while the solution stays in
 //! one regime (it does by construction). Asserted within ±0.2 (h) and ±0.3 (k: the friction bound

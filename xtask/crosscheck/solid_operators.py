@@ -8,7 +8,7 @@ steps in x, y, z along the diagonal), with dyncontact's node numbering (k (ny+1)
 assembles M (consistent and row-lumped), K and C with scikit-fem (ElementVector(ElementTetP1()),
 linear_elasticity with the 3-D Lame constants, no plane reduction) and writes them as
 OUT_PREFIX_{consistent,lumped}_M.mtx, OUT_PREFIX_K.mtx, OUT_PREFIX_C.mtx in the interleaved DOF
-order 3*node + component (Matrix Market, shortest round-trip floats). tests/solid.rs compares
+order 3*node + component (Matrix Market, shortest round-trip floats). tests/verification/solid.rs compares
 dyncontact's assembly entry by entry (1e-12 relative: every integrand is a polynomial the
 quadrature integrates exactly, so the two differ by a few ulp). The subdivision is written here
 independently of src/mesh/solid.rs: a different set of tetrahedra changes K. With MESH.msh the

@@ -14,7 +14,7 @@
 //!    `<scene>_f.txt` for Rust tests that run without Python;
 //! 3. `solid_operators.py` assembles M, K, C of a 3-D box of tetrahedra and of the unstructured
 //!    Gmsh mesh fixtures/meshes/holed_block.msh with scikit-fem into
-//!    `fixtures/reference/{box3d,holed_block}_*.mtx` (tests/crosscheck.rs compares dyncontact's);
+//!    `fixtures/reference/{box3d,holed_block}_*.mtx` (tests/verification/crosscheck.rs compares dyncontact's);
 //! 4. short `dyncontact run`s of [`RUN_SCENES`] (2-D and 3-D), whose `series.pvd` and frames
 //!    `check_frames.py` reads with meshio;
 //! 5. the GetFEM dynamic-contact checks (`getfem/*.py`: every GetFEM step converged, a bound at
@@ -95,7 +95,7 @@ pub fn run(root: &Path, target: &Path, bin: &Path, prepared: &Prepared) -> Resul
         record(&mut report, &mut failures, &name, result);
     }
 
-    // the 3-D box: scikit-fem's operators as references for tests/crosscheck.rs (the Rust side
+    // the 3-D box: scikit-fem's operators as references for tests/verification/crosscheck.rs (the Rust side
     // has no scene path for 3-D yet, so the comparison is the Rust test's)
     let t = Instant::now();
     let result =
