@@ -413,7 +413,8 @@ fn finish_warnings(problem: &Problem, summary: &mut RunDetails, first_cap: Optio
     if summary.fixed_point_cap_hits > 0 {
         summary.warnings.push(format!(
             "the fixed point (F.1) hit max_fixed_point_iterations = {} on {} steps (first at step {}); those steps use the last \
-             iterate — raise the cap, use relaxation < 1 or a smaller time.step",
+             iterate — raise the cap or use a smaller time.step (beyond (C.k), relaxation < 1 made it worse on the \
+             stability map)",
             problem.model.solver.max_fixed_point_iterations,
             summary.fixed_point_cap_hits,
             first_cap.unwrap_or(0)

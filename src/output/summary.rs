@@ -268,8 +268,9 @@ impl ModelInfo {
         }
         (self.step > k).then(|| {
             format!(
-                "time.step = {} exceeds the (C.k) limit {k:.4e} ({}): the unfrozen step problem may be nonconvex; \
-                 F.1 may need more iterations or relaxation < 1",
+                "time.step = {} exceeds the (C.k) limit {k:.4e} ({}), a sufficient condition for a convex step \
+                 problem: F.1 may need more convex solves per step (relaxation < 1 does not help); steps that reach \
+                 its cap are counted in summary.json, and a step whose Newton fails stops the run with its residuals",
                 self.step, self.ck_limiting_name
             )
         })
