@@ -64,12 +64,20 @@ fn cli_refuses_oversize_scene_before_building_it() {
     assert!(err.contains("`run` would refuse it"), "{err}");
 }
 
+/// What the allocator adds to a small run's peak at random: the same hertz run (68 MB on a quiet
+/// machine) measured 67–99 MB on a loaded one — most likely a second thread's glibc arena (with
+/// MALLOC_ARENA_MAX=1 the 12 runs stayed within 67–71 MB, against 67–74 MB without it at the
+/// same load). Fixed, so it matters only for small runs: the defect this test guards (an
+/// estimate half the peak, 145.6 against 306 MiB) still fails, by 37 MB.
+const ALLOCATOR_NOISE_MB: f64 = 32.0;
+
 /// (issue 22) The memory estimate is within ±30% of the peak a run measures (summary.json
 /// `peak_memory_mb`, the process's VmHWM) on three scenes: 2-D with contact (128 × 64 cells),
 /// 3-D with friction on the disk (academic3d at 16 × 8 × 6) and the 2-D Hertz contact — it was
 /// about half the peak before it counted the assembly's triplet lists and the process baseline
 /// (145.6 MiB estimated against 306 MiB measured). ±30%: the calibration's own spread is
-/// 0.91–1.17, and the allocator's behaviour varies between machines.
+/// 0.91–1.17, and the allocator's behaviour varies between machines; on top of it a fixed
+/// [`ALLOCATOR_NOISE_MB`].
 #[test]
 fn memory_estimate_is_within_30_percent_of_the_measured_peak() {
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("memory_estimate");
@@ -103,7 +111,7 @@ fn memory_estimate_is_within_30_percent_of_the_measured_peak() {
         let peak = summary["peak_memory_mb"].as_f64().expect("the peak is measured on Linux");
         println!("{name}: estimated {est:.1} MB, measured peak {peak:.1} MB, ratio {:.2}", est / peak);
         assert!(
-            (0.7..=1.3).contains(&(est / peak)),
+            (est - peak).abs() <= 0.3 * peak + ALLOCATOR_NOISE_MB,
             "{name}: estimate {est:.1} MB against a measured peak of {peak:.1} MB"
         );
     }
