@@ -12,9 +12,11 @@ pub enum Error {
     #[error("{path}: {message}")]
     Scene { path: String, message: String },
 
-    /// The scene file is not valid TOML or does not match the schema.
+    /// The scene file is not valid TOML or does not match the schema. `message` is one line
+    /// (summary.json, sweep.csv); `diagram` holds TOML's lines that quote the source with a caret
+    /// under the place (empty when there is none), which the command line prints under it.
     #[error("{file}: {message}")]
-    SceneSyntax { file: String, message: String },
+    SceneSyntax { file: String, message: String, diagram: String },
 
     /// A mesh file or a mesh entity is wrong.
     #[error("mesh {file}: {message}")]

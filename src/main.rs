@@ -42,7 +42,8 @@ enum Command {
         /// write DIR/checkpoint.json every N steps
         #[arg(long, value_name = "N")]
         checkpoint_every: Option<usize>,
-        /// continue the run in DIR from its checkpoint.json (same scene)
+        /// continue the run in DIR from its checkpoint.json: its scene is DIR/scene.toml (the
+        /// effective scene the run wrote); `--set time.end=T` with a later T extends the run
         #[arg(long, value_name = "DIR", conflicts_with = "out")]
         resume: Option<PathBuf>,
         /// stop cleanly after step N, writing a checkpoint (batch control, tests)
@@ -152,21 +153,26 @@ macro_rules! esay {
     }};
 }
 
-/// The scene (the embedded default when `scene` is None) with the `--set` overrides, and the
-/// folder relative paths in it are read from.
-fn load(scene: Option<&Path>, set: &[String]) -> Result<(Scene, PathBuf), Error> {
+/// The scene (the embedded default when `scene` is None) with the `--set` overrides, the
+/// folder relative paths in it are read from, and the effective scene's text (what a run
+/// writes to its folder as scene.toml: see [`dyncontact::scene::parse::effective_text`]).
+fn load(scene: Option<&Path>, set: &[String]) -> Result<(Scene, PathBuf, String), Error> {
     let overrides = set.iter().map(|a| Override::parse(a)).collect::<Result<Vec<_>, Error>>()?;
-    match scene {
-        None => Ok((
-            Scene::from_toml_with(dyncontact::scene::DEFAULT_SCENE, "<embedded academic scene>", &overrides)?,
-            PathBuf::from("."),
-        )),
-        Some(p) => {
-            let s = Scene::from_file_with(p, &overrides)?;
-            let dir = p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
-            Ok((s, dir))
+    let (text, file, dir) = match scene {
+        None => {
+            (dyncontact::scene::DEFAULT_SCENE.to_string(), "<embedded academic scene>".to_string(), PathBuf::from("."))
         }
-    }
+        Some(p) => (
+            std::fs::read_to_string(p).map_err(|e| Error::read(p, e))?,
+            p.display().to_string(),
+            p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")),
+        ),
+    };
+    // read first as written (its errors name the user's lines), then as the run folder keeps it
+    Scene::from_toml_with(&text, &file, &overrides)?;
+    let effective = dyncontact::scene::parse::effective_text(&text, &file, &overrides, &dir)?;
+    let s = Scene::from_toml(&effective, &file)?;
+    Ok((s, dir, effective))
 }
 
 /// SIGINT and SIGTERM as flags: `stop` is set by either (a run or a sweep stops at the end of
@@ -214,7 +220,7 @@ fn main() -> ExitCode {
         Command::Study { study: StudyKind::Penalty { scene, eps, out, jobs } } => {
             cmd_penalty(scene.as_deref(), eps.as_deref(), out.as_deref(), *jobs)
         }
-        Command::ExportOperators { scene, out } => load(Some(scene), &[]).and_then(|(s, dir)| {
+        Command::ExportOperators { scene, out } => load(Some(scene), &[]).and_then(|(s, dir, _)| {
             let problem = Problem::from_scene(&s, &dir)?;
             dyncontact::output::export::export_operators(&problem, out)?;
             say!("operators of {} written to {}", problem.model.name, out.display());
@@ -238,6 +244,12 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             esay!("error: {e}");
+            // TOML's quote of the source, with its caret, as the lines it is
+            if let Error::SceneSyntax { diagram, .. } = &e
+                && !diagram.is_empty()
+            {
+                esay!("{diagram}");
+            }
             let code = e.exit_code();
             ExitCode::from(if code == exit::INTERRUPTED && signals.term.load(Ordering::SeqCst) {
                 exit::TERMINATED
@@ -258,7 +270,10 @@ fn cmd_run(
     stop_after: Option<usize>,
     stop: &Arc<AtomicBool>,
 ) -> Result<(), Error> {
-    let (s, dir) = load(scene, set)?;
+    // `--resume DIR` alone continues the run of DIR/scene.toml, the effective scene that run
+    // wrote (its overrides applied); a folder from before scene.toml was written needs the scene
+    let kept = resume.map(|d| d.join("scene.toml")).filter(|p| scene.is_none() && p.is_file());
+    let (s, dir, effective) = load(scene.or(kept.as_deref()), set)?;
     let out = resume.or(out).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&s.name));
     let prepared = s.validate().and_then(|model| {
         // refuse before anything large is built
@@ -284,6 +299,7 @@ fn cmd_run(
         progress: std::io::stdout().is_terminal(),
         checkpoint_every,
         resume: resume.is_some(),
+        scene_text: Some(effective),
         stop_after,
         interrupt: Some(Arc::clone(stop)),
     };
@@ -315,7 +331,7 @@ fn cmd_penalty(
     out: Option<&Path>,
     jobs: Option<usize>,
 ) -> Result<(), Error> {
-    let (s, _) = load(scene, &[])?;
+    let (s, _, _) = load(scene, &[])?;
     let base = match scene {
         None => dyncontact::sweep::Base {
             text: dyncontact::scene::DEFAULT_SCENE.to_string(),
@@ -443,6 +459,9 @@ fn refuse_corrupt(dir: &Path, rows: &[dyncontact::sweep::collect::Row]) -> Resul
 
 /// The counts of a collected sweep by status.
 fn report_rows(rows: &[dyncontact::sweep::collect::Row]) {
+    if let Some(line) = dyncontact::sweep::collect::warnings_line(rows) {
+        esay!("warning: {line}");
+    }
     let count = |s: PointStatus| rows.iter().filter(|r| r.status == s).count();
     say!(
         "{} points: {} completed, {} failed, {} interrupted, {} running, {} missing, {} corrupt",
@@ -458,7 +477,7 @@ fn report_rows(rows: &[dyncontact::sweep::collect::Row]) {
 
 /// `dyncontact check`: validate, build the problem, and print the model it switches on.
 fn cmd_check(scene: &Path, set: &[String]) -> Result<(), Error> {
-    let (s, dir) = load(Some(scene), set)?;
+    let (s, dir, _) = load(Some(scene), set)?;
     let model = s.validate()?;
     let estimate = resources::estimate(&model, &dir)?;
     if let Err(e) = resources::check_fits(&estimate, resources::available_memory()) {

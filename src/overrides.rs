@@ -8,9 +8,16 @@
 //! (`contact.friction.law`, `domain.cells[1]`, `loads.traction[0].value`); a key that holds a dot
 //! is quoted (`"a.b".c`). Values are TOML (`1e-5`, `[64, 32]`, `"penalty"`, `true`,
 //! `{ theta = 2.0, zeta = 1.5 }`); a value that is not TOML is taken as a string, so
-//! `--set contact.friction.law=constant` works as the contract writes it. A table given for a
-//! key that holds a table is merged into it key by key (`--set 'solver={relaxation=0.5}'` keeps
-//! the scene's other solver keys).
+//! `--set contact.enforcement=penalty` works as the README writes it.
+//!
+//! A table value given whole *replaces* the table at its key: `--set
+//! 'contact.friction={law="constant", coefficient=0.3}'` switches the friction law, the old law's
+//! keys (`static`, `kinetic`, `decay`) gone — a merge could never remove a key, so a law could
+//! never be switched. A dotted key is a leaf override and changes that one key only
+//! (`--set solver.relaxation=0.5` keeps the scene's other solver keys). In a sweep's `[set]` and
+//! `sets` the same holds as written in the sweep file: an inline table (`"contact.friction" = {
+//! law = "constant", coefficient = 0.3 }`) replaces, a dotted key (`solver.relaxation = 0.5`,
+//! which TOML reads as a table too) is a leaf — [`dotted_to_paths`] tells them apart by the source.
 
 use crate::error::{Error, Result};
 
@@ -78,13 +85,8 @@ fn set_at(
     }
     match (last, here) {
         (Segment::Key(k), toml::Value::Table(t)) => {
-            match (t.get_mut(k), value) {
-                // a table into a table: merged key by key (the other keys of the scene's table stay)
-                (Some(toml::Value::Table(old)), toml::Value::Table(new)) => merge(old, new),
-                _ => {
-                    t.insert(k.clone(), value.clone());
-                }
-            }
+            // any value, a table too, replaces what was there (a table given whole is the table)
+            t.insert(k.clone(), value.clone());
             Ok(())
         }
         (Segment::Index(i), toml::Value::Array(a)) => {
@@ -96,18 +98,6 @@ fn set_at(
         }
         (Segment::Key(_), other) => Err(format!("{} is a {}, not a table", shown(&at), other.type_str())),
         (Segment::Index(_), other) => Err(format!("{} is a {}, not an array", shown(&at), other.type_str())),
-    }
-}
-
-/// `new` merged into `old`: tables key by key, anything else replaced.
-fn merge(old: &mut toml::Table, new: &toml::Table) {
-    for (k, v) in new {
-        match (old.get_mut(k), v) {
-            (Some(toml::Value::Table(o)), toml::Value::Table(n)) => merge(o, n),
-            _ => {
-                old.insert(k.clone(), v.clone());
-            }
-        }
     }
 }
 
@@ -216,38 +206,64 @@ fn shown(at: &str) -> String {
     if at.is_empty() { "the scene".into() } else { format!("`{at}`") }
 }
 
-/// The leaf overrides of a table of overrides (a sweep's `[set]`, one value of a `sets` axis):
-/// a key whose value is a table — an unquoted dotted key (`solver.relaxation = 1` in TOML is the
-/// table `solver = { relaxation = 1 }`) or an inline table — becomes one override per leaf, so
-/// each names exactly the keys it sets.
+/// The overrides of a table of overrides (a sweep's `[set]`, one value of a `sets` axis): one
+/// per key, the key a key path (`"contact.penalty" = 1e-5`; a key that is not one is taken as
+/// one quoted key), its value given whole — a table value replaces the scene's table. The sweep
+/// file's dotted keys were made key paths first ([`dotted_to_paths`]), so
+/// `solver.relaxation = 1` sets that one leaf.
 pub fn leaves(table: &toml::Table) -> Result<Vec<Override>> {
-    let mut out = Vec::new();
-    for (k, v) in table {
-        let key =
-            if k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.' || c == '[' || c == ']')
-            {
-                k.clone()
-            } else {
-                format!("\"{k}\"")
-            };
-        push_leaves(&key, v, &mut out)?;
-    }
-    Ok(out)
+    table
+        .iter()
+        .map(|(k, v)| {
+            let key = if parse_path(k).is_ok() { k.clone() } else { format!("\"{k}\"") };
+            Override::new(&key, v.clone())
+        })
+        .collect()
 }
 
-fn push_leaves(key: &str, v: &toml::Value, out: &mut Vec<Override>) -> Result<()> {
-    match v {
-        toml::Value::Table(t) if !t.is_empty() => {
-            for (k, sub) in t {
-                push_leaves(&format!("{key}.{k}"), sub, out)?;
-            }
-            Ok(())
-        }
-        _ => {
-            out.push(Override::new(key, v.clone())?);
-            Ok(())
+/// An override table as written in a sweep file (`source`, its parsed form with spans, and the
+/// file's `text`) with its dotted keys made key paths: `solver.relaxation = 1` — which TOML
+/// reads as the table `solver = { relaxation = 1 }` — becomes the entry
+/// `"solver.relaxation" = 1` (a leaf override), while a table written inline
+/// (`"contact.friction" = { law = "constant", coefficient = 0.3 }`) stays a table, given whole.
+/// TOML's parsed tables do not say how they were written, the source does: an inline table's
+/// value starts with `{`, a dotted key's implicit table with its key.
+pub fn dotted_to_paths(table: &toml::Table, source: &toml::de::DeTable<'_>, text: &str) -> toml::Table {
+    fn bare(k: &str) -> String {
+        if !k.is_empty() && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-') {
+            k.to_string()
+        } else {
+            format!("\"{k}\"")
         }
     }
+    fn walk(
+        table: &toml::Table,
+        source: Option<&toml::de::DeTable<'_>>,
+        text: &str,
+        at: Option<&str>,
+        out: &mut toml::Table,
+    ) {
+        for (k, v) in table {
+            let key = match at {
+                None => k.clone(),
+                Some(a) => format!("{a}.{}", bare(k)),
+            };
+            let written =
+                source.and_then(|s| s.iter().find(|(sk, _)| sk.get_ref().as_ref() == k.as_str()).map(|(_, w)| w));
+            let dotted = written.is_some_and(|w| text.get(w.span()).is_some_and(|s| !s.starts_with('{')));
+            match (v, written.map(|w| w.get_ref())) {
+                (toml::Value::Table(sub), Some(toml::de::DeValue::Table(sub_source))) if dotted => {
+                    walk(sub, Some(sub_source), text, Some(&key), out);
+                }
+                _ => {
+                    out.insert(key, v.clone());
+                }
+            }
+        }
+    }
+    let mut out = toml::Table::new();
+    walk(table, Some(source), text, None, &mut out);
+    out
 }
 
 /// Whether one key path is the other or lies below it (`contact.friction` and

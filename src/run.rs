@@ -35,6 +35,10 @@ pub struct RunOptions {
     pub checkpoint_every: Option<usize>,
     /// continue from DIR/checkpoint.json
     pub resume: bool,
+    /// the effective scene (overrides applied) to keep as DIR/scene.toml, which `--resume DIR`
+    /// reads back; None: the folder's scene.toml is not the run's to write (a sweep's point,
+    /// whose scene.toml the sweep wrote)
+    pub scene_text: Option<String>,
     /// stop cleanly (as if interrupted) after this step — for tests and batch control
     pub stop_after: Option<usize>,
     /// set by a signal handler to stop cleanly at the end of the current step
@@ -184,9 +188,21 @@ fn start_fresh(
             .warnings
             .push(format!("{} held an earlier run's outputs: they were replaced", opts.out.display()));
     }
+    write_scene(opts)?;
     let mut w = Writer::create(&opts.out, problem)?;
     w.record(&sim.initial_record(), problem, &sim.state, problem.steps == 0)?;
     Ok(w)
+}
+
+/// DIR/scene.toml: the run's effective scene (when it has one to write and the file does not
+/// hold it already).
+fn write_scene(opts: &RunOptions) -> Result<()> {
+    let Some(text) = &opts.scene_text else { return Ok(()) };
+    let path = opts.out.join("scene.toml");
+    if std::fs::read_to_string(&path).is_ok_and(|t| t == *text) {
+        return Ok(());
+    }
+    write_atomic(&path, text.as_bytes())
 }
 
 /// A resumed run: the checkpoint (read and checked: checksum, finite values) must belong to the
@@ -215,12 +231,20 @@ fn start_resumed(
     *first_cap = cp.counters.first_cap;
     details.warnings.push(format!("resumed from the checkpoint of step {}", cp.step));
     write_summary(&opts.out, summary)?;
+    write_scene(opts)?;
     Writer::reopen(&opts.out, problem, cp.step)
 }
 
 /// The identity a resumed run keeps: the checkpoint's run, which must be the run whose
 /// summary.json is in the folder. Read before anything is built, so a folder that cannot be
 /// resumed is refused at once.
+///
+/// The inputs must be the checkpoint's (its fingerprint), with one exception: a later
+/// `time.end`, which extends the run (a completed one too, when its last step was
+/// checkpointed). That is proved without trusting the folder's scene.toml: the scene it holds
+/// must have the checkpoint's fingerprint (so it is the scene the checkpoint was computed
+/// from), and that scene with only its `time.end` (and so its number of steps) replaced by the
+/// new one must have the new scene's fingerprint (so nothing else differs).
 fn resumable(out: &Path, problem: &Problem) -> Result<Checkpoint> {
     let cp = Checkpoint::read(out)?;
     let refuse = |m: String| Error::folder(out, m);
@@ -233,19 +257,52 @@ fn resumable(out: &Path, problem: &Problem) -> Result<Checkpoint> {
             cp.run_id, run_id
         )));
     }
-    if summary.status == RunStatus::Completed {
-        return Err(refuse(format!(
-            "the run is completed ({} steps): there is nothing to resume",
-            summary.steps_completed
-        )));
-    }
-    if cp.inputs != problem.inputs_fingerprint {
+    let extends = cp.inputs != problem.inputs_fingerprint && extension_of(out, problem, &cp)?;
+    if cp.inputs != problem.inputs_fingerprint && !extends {
         return Err(refuse(
-            "checkpoint.json was written for other inputs (the scene or a file it reads, such as its mesh, changed since): resume needs the same scene and mesh"
+            "checkpoint.json was written for other inputs (the scene or a file it reads, such as its mesh, changed since): resume needs the same scene and mesh (only a later time.end may differ)"
                 .into(),
         ));
     }
+    if summary.status == RunStatus::Completed && !extends {
+        return Err(refuse(format!(
+            "the run is completed ({} steps): there is nothing to resume (a later time.end extends it: --resume {} --set time.end=T)",
+            summary.steps_completed,
+            out.display()
+        )));
+    }
     Ok(cp)
+}
+
+/// Whether `problem` is the checkpoint's scene with only a later `time.end` (see
+/// [`resumable`]): false when the folder's scene.toml is missing, is not the checkpoint's scene,
+/// or differs from `problem` in anything else; Err when the end is not later than the
+/// checkpoint's step.
+fn extension_of(out: &Path, problem: &Problem, cp: &Checkpoint) -> Result<bool> {
+    let Ok(text) = std::fs::read_to_string(out.join("scene.toml")) else { return Ok(false) };
+    let Ok(mut old) = crate::scene::Scene::from_toml(&text, "scene.toml").and_then(|s| s.validate()) else {
+        return Ok(false);
+    };
+    if crate::fingerprint::inputs(&old, out).ok().as_deref() != Some(cp.inputs.as_str()) {
+        return Ok(false);
+    }
+    old.time.end = problem.model.time.end;
+    old.time.steps = problem.model.time.steps;
+    if crate::fingerprint::inputs(&old, out).ok().as_deref() != Some(problem.inputs_fingerprint.as_str()) {
+        return Ok(false);
+    }
+    if problem.steps <= cp.step {
+        return Err(Error::folder(
+            out,
+            format!(
+                "time.end = {} is not later than the checkpoint's step {} (t = {}): a resumed run goes on from it",
+                problem.model.time.end,
+                cp.step,
+                problem.time(cp.step)
+            ),
+        ));
+    }
+    Ok(true)
 }
 
 fn progress_bar(opts: &RunOptions, steps: usize, at: usize) -> Option<indicatif::ProgressBar> {
@@ -394,7 +451,9 @@ fn steps_loop(
         let last = state.n == problem.steps;
         let stopping = !last && stop_now(state.n);
         writer.record(&rec, problem, state, last).map_err(Stop::Failed)?;
-        if opts.checkpoint_every.is_some_and(|c| c > 0 && state.n.is_multiple_of(c)) || stopping {
+        // the last step too, when checkpoints were asked for: a later time.end can extend the run
+        let asked = opts.checkpoint_every.is_some_and(|c| c > 0 && (state.n.is_multiple_of(c) || last));
+        if asked || stopping {
             checkpoint(steps.simulation(), summary.details(), *first_cap, writer).map_err(Stop::Failed)?;
         }
         summary.details().timing.output_s += t_out.elapsed().as_secs_f64();

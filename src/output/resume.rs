@@ -124,6 +124,11 @@ pub fn check(dir: &Path, problem: &Problem, cp: &Checkpoint) -> Result<()> {
                 steps.push(s);
             }
         }
+        // the frame of the checkpoint's own step, off the output grid, is that of a completed
+        // run's last step (a run extended by a later time.end goes on from it)
+        if steps.last() == Some(&cp.step) && expected.last() != Some(&cp.step) {
+            steps.pop();
+        }
         if steps != expected {
             let missing: Vec<usize> = expected.iter().copied().filter(|s| !steps.contains(s)).take(5).collect();
             let extra: Vec<usize> = steps.iter().copied().filter(|s| !expected.contains(s)).take(5).collect();

@@ -1,40 +1,96 @@
 //! Reading a scene: TOML text (with `--set` overrides applied to its table) → [`Scene`], every
 //! unknown key, missing key or wrong type named by its key path.
+//!
+//! A TOML error is one line (`file: TOML parse error at line 4, column 17: unclosed array …`,
+//! or with the key path first) and keeps TOML's diagram — the source line with a caret under
+//! the place — apart, for the command line to print as lines. With `--set`, a message never
+//! points into the overridden text (which nobody wrote): an error at a key that an override set
+//! says that the value came from `--set`; any other error is reported from the user's file, at
+//! its line.
 
 use super::{DEFAULT_SCENE, Scene};
 use crate::error::{Error, Result};
+use crate::overrides::Override;
+
+/// A TOML error of `file` as an [`Error::SceneSyntax`]: `path` (the key path serde reached,
+/// empty for a syntax error) first, then TOML's headline (`TOML parse error at line L, column
+/// C`) and what is wrong; the quoted source lines go to `diagram`.
+pub fn syntax_error(file: &str, path: &str, e: &toml::de::Error) -> Error {
+    let shown = e.to_string();
+    let mut lines = shown.lines().map(str::trim_end).filter(|l| !l.trim().is_empty());
+    let head = lines.next().unwrap_or("").to_string();
+    let diagram: Vec<&str> = lines.filter(|l| l.contains('|')).collect();
+    let what = one_paragraph(e.message());
+    let inner = if head.starts_with("TOML parse error") && !what.is_empty() {
+        format!("{head}: {what}")
+    } else if what.is_empty() {
+        one_paragraph(&shown)
+    } else {
+        what
+    };
+    let message = if path.is_empty() || path == "." { inner } else { format!("{path}: {inner}") };
+    Error::SceneSyntax { file: file.to_string(), message, diagram: diagram.join("\n") }
+}
 
 /// The scene text with `overrides` applied to its table (TOML again).
-pub fn overridden_text(text: &str, file: &str, overrides: &[crate::overrides::Override]) -> Result<String> {
-    let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| Error::SceneSyntax {
+pub fn overridden_text(text: &str, file: &str, overrides: &[Override]) -> Result<String> {
+    let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| syntax_error(file, "", &e))?;
+    crate::overrides::apply_all(&mut table, overrides)?;
+    toml::to_string(&table).map_err(|e| Error::SceneSyntax {
         file: file.to_string(),
         message: one_paragraph(&e.to_string()),
-    })?;
+        diagram: String::new(),
+    })
+}
+
+/// The effective scene a run writes to its folder as scene.toml (and `--resume DIR` reads
+/// back): the text with its overrides applied and a relative mesh file made absolute (against
+/// `dir`, the scene's folder), so the text reads the same from the run folder. Without
+/// overrides or a relative mesh path the text is the file's own, comments and all.
+pub fn effective_text(text: &str, file: &str, overrides: &[Override], dir: &std::path::Path) -> Result<String> {
+    let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| syntax_error(file, "", &e))?;
+    let relative_mesh = |t: &toml::Table| match t.get("domain").and_then(|d| d.get("file")) {
+        Some(toml::Value::String(f)) => std::path::Path::new(f).is_relative(),
+        _ => false,
+    };
+    if overrides.is_empty() && !relative_mesh(&table) {
+        return Ok(text.to_string());
+    }
     crate::overrides::apply_all(&mut table, overrides)?;
-    toml::to_string(&table)
-        .map_err(|e| Error::SceneSyntax { file: file.to_string(), message: one_paragraph(&e.to_string()) })
+    if relative_mesh(&table)
+        && let Some(toml::Value::Table(d)) = table.get_mut("domain")
+        && let Some(toml::Value::String(f)) = d.get("file")
+    {
+        let abs = dir.join(f);
+        let abs = abs.canonicalize().unwrap_or(abs);
+        d.insert("file".into(), toml::Value::String(abs.display().to_string()));
+    }
+    toml::to_string(&table).map_err(|e| Error::SceneSyntax {
+        file: file.to_string(),
+        message: one_paragraph(&e.to_string()),
+        diagram: String::new(),
+    })
+}
+
+/// Read TOML text as a scene; Err: the key path serde reached (empty for a syntax error) and
+/// TOML's error.
+fn read(text: &str) -> std::result::Result<Scene, (String, toml::de::Error)> {
+    let de = toml::de::Deserializer::parse(text).map_err(|e| (String::new(), e))?;
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let mut path = e.path().to_string();
+        let inner = e.into_inner();
+        // serde reports a missing key at its parent table; name the key itself.
+        if let Some(key) = inner.message().strip_prefix("missing field `").and_then(|r| r.split('`').next()) {
+            path = if path.is_empty() || path == "." { key.to_string() } else { format!("{path}.{key}") };
+        }
+        (path, inner)
+    })
 }
 
 impl Scene {
     /// Parse TOML text. `file` names the source in error messages.
     pub fn from_toml(text: &str, file: &str) -> Result<Scene> {
-        let de = toml::de::Deserializer::parse(text)
-            .map_err(|e| Error::SceneSyntax { file: file.to_string(), message: one_paragraph(&e.to_string()) })?;
-        let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
-            let mut path = e.path().to_string();
-            let inner = e.into_inner();
-            // serde reports a missing key at its parent table; name the key itself.
-            if let Some(key) = inner.message().strip_prefix("missing field `").and_then(|r| r.split('`').next()) {
-                path = if path.is_empty() || path == "." { key.to_string() } else { format!("{path}.{key}") };
-            }
-            let inner = one_paragraph(&inner.to_string());
-            if path.is_empty() || path == "." {
-                Error::SceneSyntax { file: file.to_string(), message: inner }
-            } else {
-                Error::SceneSyntax { file: file.to_string(), message: format!("{path}: {inner}") }
-            }
-        })?;
-        Ok(scene)
+        read(text).map_err(|(path, e)| syntax_error(file, &path, &e))
     }
 
     /// Read and parse a scene file.
@@ -45,17 +101,45 @@ impl Scene {
 
     /// Parse TOML text with `--set` overrides applied to its table first (see
     /// [`crate::overrides`]): the result is read exactly as a file with those values would be,
-    /// so an unknown key or a wrong type gets the same key-path error.
-    pub fn from_toml_with(text: &str, file: &str, overrides: &[crate::overrides::Override]) -> Result<Scene> {
+    /// so an unknown key or a wrong type gets the same key-path error. An error at a key an
+    /// override set says the value came from `--set KEY=VALUE`; any other is the user's file's
+    /// own, reported at its line in that file.
+    pub fn from_toml_with(text: &str, file: &str, overrides: &[Override]) -> Result<Scene> {
         if overrides.is_empty() {
             return Scene::from_toml(text, file);
         }
-        // positions in a message are those of the overridden text, so the source says so
-        Scene::from_toml(&overridden_text(text, file, overrides)?, &format!("{file} with --set"))
+        let overridden = overridden_text(text, file, overrides)?;
+        let (path, e) = match read(&overridden) {
+            Ok(scene) => return Ok(scene),
+            Err(pe) => pe,
+        };
+        let at = crate::overrides::parse_path(&path).unwrap_or_default();
+        if let Some(o) = overrides.iter().rev().find(|o| !at.is_empty() && crate::overrides::overlap(&o.path, &at)) {
+            let message = format!(
+                "{path}: {} (the value came from --set {}={})",
+                one_paragraph(e.message()),
+                o.key,
+                one_paragraph(&o.value.to_string())
+            );
+            return Err(Error::SceneSyntax { file: file.to_string(), message, diagram: String::new() });
+        }
+        // not a value an override set: the file's own error, at its line (when the file alone
+        // shows it; otherwise the message without a diagram of a text nobody wrote)
+        match read(text) {
+            Err((p, own)) => Err(syntax_error(file, &p, &own)),
+            Ok(_) => {
+                let message = if path.is_empty() || path == "." {
+                    one_paragraph(e.message())
+                } else {
+                    format!("{path}: {}", one_paragraph(e.message()))
+                };
+                Err(Error::SceneSyntax { file: format!("{file} with --set"), message, diagram: String::new() })
+            }
+        }
     }
 
     /// Read a scene file with `--set` overrides.
-    pub fn from_file_with(path: &std::path::Path, overrides: &[crate::overrides::Override]) -> Result<Scene> {
+    pub fn from_file_with(path: &std::path::Path, overrides: &[Override]) -> Result<Scene> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
         Scene::from_toml_with(&text, &path.display().to_string(), overrides)
     }

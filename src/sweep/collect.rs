@@ -3,8 +3,10 @@
 //!
 //! sweep.csv has one row per point: `point`, one column per axis (named by its key or name, the
 //! value's label), `status`, `wall_time_s`, the figures of [`FIGURES`] (from the point's
-//! history.csv and summary.json; empty where the run gave none), and `reason` (why it failed,
-//! or why it is corrupt).
+//! history.csv and summary.json; empty where the run gave none), `reason` (why it failed,
+//! or why it is corrupt) and, last, `warnings` (the run's summary.json warnings joined by `; `:
+//! a point that ran beyond (C.k) says so; [`warnings_line`] is the one line printed after a
+//! sweep).
 //!
 //! Every point's files are checked before its figures are read: summary.json readable with a
 //! known status; history.csv with one row per completed step (steps_completed + 1 rows, steps
@@ -95,6 +97,8 @@ pub struct Row {
     /// the figures of [`FIGURES`], as written (empty: not available)
     pub figures: Vec<String>,
     pub reason: String,
+    /// the run's warnings (summary.json `warnings`: (C.k), (F.1) cap hits, (E.1) guard, …)
+    pub warnings: Vec<String>,
 }
 
 impl Row {
@@ -159,6 +163,7 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
         wall_time_s: None,
         figures: vec![String::new(); FIGURES.len()],
         reason,
+        warnings: Vec::new(),
     };
     let sp = pd.join("summary.json");
     if !sp.exists() {
@@ -234,6 +239,7 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
         wall_time_s: summary.run.as_ref().map(|d| d.wall_time_s),
         figures: FIGURES.iter().map(|f| figures.remove(f).unwrap_or_default()).collect(),
         reason,
+        warnings: summary.run.as_ref().map(|d| d.warnings.clone()).unwrap_or_default(),
     })
 }
 
@@ -340,7 +346,7 @@ pub fn csv(plan: &Plan, rows: &[Row]) -> String {
         s.push(',');
         s.push_str(f);
     }
-    s.push_str(",reason\n");
+    s.push_str(",reason,warnings\n");
     for r in rows {
         let _ = write!(s, "{}", r.point);
         for a in &r.axes {
@@ -350,9 +356,37 @@ pub fn csv(plan: &Plan, rows: &[Row]) -> String {
         for f in &r.figures {
             let _ = write!(s, ",{f}");
         }
-        let _ = writeln!(s, ",{}", csv_field(&r.reason));
+        let _ = writeln!(s, ",{},{}", csv_field(&r.reason), csv_field(&r.warnings.join("; ")));
     }
     s
+}
+
+/// One line on the points whose runs warned (None: none did): those that ran beyond the (C.k)
+/// step limit, then those with other warnings, each with its point ids (sweep.csv's `warnings`
+/// column has the words).
+pub fn warnings_line(rows: &[Row]) -> Option<String> {
+    let ids = |pick: &dyn Fn(&Row) -> bool| -> Vec<&str> {
+        rows.iter().filter(|r| pick(r)).map(|r| r.point.as_str()).collect()
+    };
+    let beyond_ck = |r: &Row| r.warnings.iter().any(|w| w.contains("(C.k)"));
+    let ck = ids(&beyond_ck);
+    let other = ids(&|r: &Row| r.warnings.iter().any(|w| !w.contains("(C.k)")));
+    let listed = |v: &[&str]| {
+        let mut s = v.iter().take(10).copied().collect::<Vec<_>>().join(", ");
+        if v.len() > 10 {
+            s.push_str(", …");
+        }
+        s
+    };
+    let n = rows.len();
+    let mut parts = Vec::new();
+    if !ck.is_empty() {
+        parts.push(format!("{} of {n} points ran beyond (C.k): {}", ck.len(), listed(&ck)));
+    }
+    if !other.is_empty() {
+        parts.push(format!("{} of {n} points have other warnings: {}", other.len(), listed(&other)));
+    }
+    (!parts.is_empty()).then(|| format!("{} (sweep.csv: warnings)", parts.join("; ")))
 }
 
 /// Collect the sweep in `dir`: write sweep.csv and plots/<axis>.svg; returns the rows.

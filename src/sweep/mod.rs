@@ -185,6 +185,15 @@ impl Plan {
             }
         }
         check_conflicts(&fixed, &axes, extra)?;
+        // a misspelled figure would chart nothing: refused, with the figures there are
+        for (i, f) in sweep.plot.figures.iter().enumerate() {
+            if !collect::FIGURES.contains(&f.as_str()) {
+                return Err(Error::scene(
+                    format!("plot.figures[{i}]"),
+                    format!("unknown figure {f:?}: the figures are {}", collect::FIGURES.join(", ")),
+                ));
+            }
+        }
         let choices = combinations(&axes, sweep.mode)?;
         let width = choices.len().saturating_sub(1).to_string().len().max(3);
         let mut points = Vec::with_capacity(choices.len());
@@ -442,16 +451,33 @@ pub fn clear_outputs(pd: &Path) -> Result<()> {
 
 /// Parse a sweep file's text; errors name the key path as a scene's do.
 pub fn parse(text: &str, file: &str) -> Result<SweepFile> {
-    let de = toml::de::Deserializer::parse(text).map_err(|e| Error::SceneSyntax {
-        file: file.to_string(),
-        message: crate::scene::one_paragraph(&e.to_string()),
-    })?;
-    serde_path_to_error::deserialize(de).map_err(|e| {
+    let de = toml::de::Deserializer::parse(text).map_err(|e| crate::scene::parse::syntax_error(file, "", &e))?;
+    let mut sweep: SweepFile = serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
-        let inner = crate::scene::one_paragraph(&e.into_inner().to_string());
-        let message = if path.is_empty() || path == "." { inner } else { format!("{path}: {inner}") };
-        Error::SceneSyntax { file: file.to_string(), message }
-    })
+        crate::scene::parse::syntax_error(file, &path, &e.into_inner())
+    })?;
+    // the override tables as written: a dotted key sets one leaf, an inline table is given whole
+    if let Ok(source) = toml::de::DeTable::parse(text) {
+        let source = source.get_ref();
+        fn find<'a, 'i>(t: &'a toml::de::DeTable<'i>, k: &str) -> Option<&'a toml::de::DeValue<'i>> {
+            t.iter().find(|(sk, _)| sk.get_ref().as_ref() == k).map(|(_, v)| v.get_ref())
+        }
+        if let Some(toml::de::DeValue::Table(set)) = find(source, "set") {
+            sweep.set = crate::overrides::dotted_to_paths(&sweep.set, set, text);
+        }
+        if let Some(toml::de::DeValue::Array(axes)) = find(source, "axis") {
+            for (spec, written) in sweep.axes.iter_mut().zip(axes.iter()) {
+                let toml::de::DeValue::Table(written) = written.get_ref() else { continue };
+                let Some(toml::de::DeValue::Array(sets)) = find(written, "sets") else { continue };
+                for (t, w) in spec.sets.iter_mut().zip(sets.iter()) {
+                    if let toml::de::DeValue::Table(w) = w.get_ref() {
+                        *t = crate::overrides::dotted_to_paths(t, w, text);
+                    }
+                }
+            }
+        }
+    }
+    Ok(sweep)
 }
 
 /// An axis as written → its column, labels, numbers and overrides.
@@ -596,10 +622,8 @@ fn describe(axes: &[Axis], choice: &[usize]) -> String {
 /// The point's scene: the base text with its overrides, its name set to `name`, and a relative
 /// mesh file made absolute (the point's scene lives in another folder).
 fn point_text(base: &str, label: &str, base_dir: &Path, ovs: &[Override], name: &str) -> Result<String> {
-    let mut table: toml::Table = base.parse().map_err(|e: toml::de::Error| Error::SceneSyntax {
-        file: label.to_string(),
-        message: crate::scene::one_paragraph(&e.to_string()),
-    })?;
+    let mut table: toml::Table =
+        base.parse().map_err(|e: toml::de::Error| crate::scene::parse::syntax_error(label, "", &e))?;
     crate::overrides::apply_all(&mut table, ovs)?;
     table.insert("name".into(), toml::Value::String(name.to_string()));
     if let Some(toml::Value::Table(d)) = table.get_mut("domain")

@@ -217,6 +217,7 @@ fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> 
         progress: false,
         checkpoint_every: None,
         resume: false,
+        scene_text: None,
         stop_after: None,
         interrupt,
     };

@@ -68,6 +68,7 @@ pub fn run_part(plan: &BookkeepingPlan, out: &Path) -> Result<Vec<BookkeepingRow
         progress: false,
         checkpoint_every: None,
         resume: false,
+        scene_text: None,
         stop_after: None,
         interrupt: None,
     };

@@ -135,3 +135,76 @@ fn less_physics_than_stated_is_a_warning_on_stderr_and_in_the_summary() {
     let warnings = summary["warnings"].as_array().expect("warnings");
     assert!(warnings.iter().any(|w| w.as_str() == Some(expected)), "summary warnings: {warnings:?}");
 }
+
+/// (issue 24, item 7) Every `--set` example and every sweep of the README runs as written: the
+/// `--set …` spans of README.md (those with a concrete value) on `check` of the academic scene,
+/// through the shell as a user types them; the sweep file under "Sweeps" with `--plan-only`
+/// (its base `academic.toml` beside it); the `sets = […]` example that switches friction laws.
+/// Read from README.md itself, so the test follows the README.
+#[test]
+fn the_readme_set_and_sweep_commands_run() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).expect("README.md");
+    // inline code spans (they may wrap a line): `…`
+    let spans: Vec<String> = readme
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .map(|s| s.split_whitespace().collect::<Vec<_>>().join(" "))
+        .filter(|s| !s.contains("```"))
+        .collect();
+    let sets: Vec<&String> = spans.iter().filter(|s| s.starts_with("--set ") && !s.contains("KEY=VALUE")).collect();
+    assert!(sets.len() >= 6, "the README's --set examples: {sets:?}");
+    for s in &sets {
+        let cmd = format!("'{BIN}' check '{}' {s}", scene("academic").display());
+        let o = Command::new("sh").arg("-c").arg(&cmd).output().expect("sh");
+        assert!(o.status.success(), "README example `{s}` fails: {}", String::from_utf8_lossy(&o.stderr));
+    }
+    let dir = tmp("readme_sweeps");
+    std::fs::create_dir_all(&dir).expect("dir");
+    std::fs::copy(scene("academic"), dir.join("academic.toml")).expect("copy");
+    let after = &readme[readme.find("## Sweeps").expect("a Sweeps section")..];
+    let block = after.split("```toml\n").nth(1).and_then(|b| b.split("```").next()).expect("the sweep example");
+    let sets_law =
+        spans.iter().find(|s| s.starts_with("sets = ") && s.contains("law")).expect("the law-switching sets");
+    let law_sweep = format!("name = \"laws\"\n[[axis]]\nname = \"law\"\n{sets_law}\n");
+    for (name, text) in [("readme.toml", block.to_string()), ("laws.toml", law_sweep)] {
+        std::fs::write(dir.join(name), text).expect("write");
+        let o = Command::new(BIN)
+            .arg("sweep")
+            .arg(dir.join(name))
+            .arg("--plan-only")
+            .arg("--out")
+            .arg(dir.join(format!("out-{name}")))
+            .output()
+            .expect("sweep");
+        assert!(o.status.success(), "README sweep {name} fails: {}", String::from_utf8_lossy(&o.stderr));
+    }
+}
+
+/// (issue 24, item 12) A TOML error keeps TOML's diagram as lines (the source line, a caret
+/// under the place), the one-line message above it; a wrong value given by `--set` says it came
+/// from `--set` rather than pointing at a line of a text nobody wrote; with `--set`, an error of
+/// the file itself names its line in the file.
+#[test]
+fn toml_errors_keep_their_diagram_and_name_where_the_value_came_from() {
+    let dir = tmp("toml_errors");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "name = \"x\"\n[domain]\nkind = \"rectangle\"\nsize = [2.0, 1.0\n").expect("write");
+    for extra in [&[][..], &["--set", "time.end=1"][..]] {
+        let o = Command::new(BIN).arg("check").arg(&bad).args(extra).output().expect("check");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{e}");
+        let lines: Vec<&str> = e.lines().collect();
+        assert!(lines[0].contains("line 4, column 17") && lines[0].contains("unclosed array"), "{e}");
+        assert!(lines.iter().any(|l| l.trim_start().starts_with("4 | size = [2.0, 1.0")), "{e}");
+        assert!(lines.iter().any(|l| l.trim_end().ends_with('^') && !l.contains("size")), "{e}");
+    }
+    let o =
+        Command::new(BIN).arg("check").arg(scene("academic")).args(["--set", "time.end=abc"]).output().expect("check");
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("time.end: ") && e.contains("came from --set time.end=\"abc\""), "{e}");
+    assert_eq!(e.lines().count(), 1, "no diagram of the overridden text: {e}");
+}

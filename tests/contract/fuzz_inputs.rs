@@ -1352,7 +1352,7 @@ fn check_clean(stage: &'static str, e: &Error) -> Result<Outcome, String> {
                 return bad("nothing after the key path");
             }
         }
-        Error::SceneSyntax { file, message } => {
+        Error::SceneSyntax { file, message, .. } => {
             if file != "fuzz" {
                 return bad("does not start with the file name");
             }

@@ -789,3 +789,42 @@ fn a_runs_summary_round_trips_through_the_type() {
     let again: serde_json::Value = serde_json::from_str(&s.to_json().expect("json")).expect("json");
     assert_eq!(again, summary(&out));
 }
+
+/// (issue 24, item 9) Resume's own hint works: a run with `--set` overrides stopped after a
+/// step says "continue with --resume DIR", and exactly that — no scene, no `--set` — continues
+/// it from DIR/scene.toml (the effective scene) to the same history as an uninterrupted run.
+#[test]
+fn resume_needs_only_the_run_folder() {
+    let dir = tmp("resume_folder_alone");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    assert_eq!(run_into(&a, &[&["--stop-after", "50"][..], &SMALL[..]].concat()).status.code(), Some(130));
+    let summary = std::fs::read_to_string(a.join("summary.json")).expect("summary");
+    assert!(summary.contains(&format!("continue with --resume {}", a.display())), "{summary}");
+    let o = cli(&["run", "--resume", a.to_str().expect("path")]);
+    assert!(o.status.success(), "{}", err(&o));
+    assert!(run_into(&b, &SMALL).status.success());
+    let h = |d: &Path| std::fs::read(d.join("history.csv")).expect("history");
+    assert_eq!(h(&a), h(&b), "the resumed run's history is the uninterrupted one's");
+}
+
+/// (issue 24, item 9) A later time.end extends a finished run (checkpointed with
+/// --checkpoint-every, so its last step is): the history equals a run to the later end; any
+/// other change is refused (exit 4), the folder unchanged.
+#[test]
+fn a_later_end_extends_a_finished_run() {
+    let dir = tmp("resume_extend");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    assert!(run_into(&a, &[&["--checkpoint-every", "1000"][..], &SMALL[..]].concat()).status.success());
+    let before = snapshot(&a);
+    let o = cli(&["run", "--resume", a.to_str().expect("path"), "--set", "time.step=1e-3"]);
+    assert_eq!(o.status.code(), Some(4), "{}", err(&o));
+    assert!(err(&o).contains("only a later time.end may differ"), "{}", err(&o));
+    assert_eq!(snapshot(&a), before, "a refused extension changed the folder");
+    let o = cli(&["run", "--resume", a.to_str().expect("path"), "--set", "time.end=0.2"]);
+    assert!(o.status.success(), "{}", err(&o));
+    let o = run_into(&b, &["--set", "domain.cells=[8,4]", "--set", "time.end=0.2"]);
+    assert!(o.status.success(), "{}", err(&o));
+    let h = |d: &Path| std::fs::read(d.join("history.csv")).expect("history");
+    assert_eq!(h(&a), h(&b), "the extended run's history is that of a run to the later end");
+    assert!(std::fs::read_to_string(a.join("scene.toml")).expect("scene.toml").contains("end = 0.2"));
+}

@@ -82,8 +82,12 @@ fn set_errors_name_the_key() {
     .expect_err("refused")
     .to_string();
     let by_set = with(&["contact.penaltyy=1e-5"]).expect_err("refused").to_string();
-    let tail = |m: &str| m.rsplit('|').next().unwrap_or_default().trim().to_string();
-    assert_eq!(tail(&in_file), tail(&by_set), "file: {in_file}\n--set: {by_set}");
+    // (the file's names its line there; --set's says where the value came from instead)
+    let what =
+        |m: &str| m.split_once("unknown field").map(|(_, w)| w.split(" (the value").next().unwrap_or(w).to_string());
+    assert!(in_file.contains("contact.penaltyy: ") && by_set.contains("contact.penaltyy: "), "{in_file}\n{by_set}");
+    assert_eq!(what(&in_file), what(&by_set), "file: {in_file}\n--set: {by_set}");
+    assert!(by_set.contains("(the value came from --set contact.penaltyy="), "{by_set}");
     // a value that passes reading but not validation is refused by `validate`, naming the key
     let e = with(&["contact.friction.decay=-3"]).expect("reads").validate().expect_err("refused").to_string();
     assert!(e.starts_with("contact.friction.decay:"), "{e}");
@@ -110,7 +114,7 @@ fn cli_run_and_check_take_set() {
         .expect("spawn");
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("contact.friction.decayy") && err.contains("with --set"), "{err}");
+    assert!(err.contains("contact.friction.decayy") && err.contains("from --set"), "{err}");
 }
 
 fn six_points() -> PathBuf {
@@ -141,7 +145,7 @@ fn six_point_sweep_matches_separate_runs_and_resumes() {
     let csv = std::fs::read_to_string(dir.join("sweep.csv")).expect("sweep.csv");
     let header: Vec<&str> = csv.lines().next().expect("header").split(',').collect();
     assert_eq!(&header[..5], &["point", "contact.penalty", "time.step", "status", "wall_time_s"]);
-    assert!(FIGURES.iter().all(|f| header.contains(f)) && header.last() == Some(&"reason"));
+    assert!(FIGURES.iter().all(|f| header.contains(f)) && header.ends_with(&["reason", "warnings"]), "{header:?}");
     assert_eq!(csv.lines().count(), 7);
     let expected = [
         ("0.001", "0.001"),
@@ -381,4 +385,59 @@ fn cli_sweep_plan_run_and_collect() {
     let o = Command::new(BIN).args(["sweep", "collect"]).arg(&dir).output().expect("spawn");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(std::fs::read_to_string(dir.join("sweep.csv")).expect("sweep.csv"), first);
+}
+
+/// (issue 24, item 7) A table value given whole replaces the table: `--set` switches the
+/// friction law (the old law's keys go), and a `sets` axis of inline tables switches laws from
+/// point to point, while a dotted key in `[set]` stays a leaf.
+#[test]
+fn a_table_given_whole_replaces_and_switches_the_friction_law() {
+    let s = with(&["contact.friction={law=\"constant\", coefficient=0.3}"]).expect("the law switched");
+    s.validate().expect("valid: the exponential law's static, kinetic and decay are gone");
+    assert_eq!(s.contact.as_ref().expect("contact").friction.law, FrictionLaw::Constant);
+    let leaf = with(&["contact.friction.law=constant"]).and_then(|s| s.validate().map(|_| ()));
+    assert!(leaf.is_err(), "a dotted key changes one key: the other keys of the table stay");
+    let dir = tmp("sweep_laws");
+    let f = dir.join("laws.toml");
+    std::fs::write(
+        &f,
+        "name = \"laws\"\n[[axis]]\nname = \"law\"\nsets = [{ \"contact.friction\" = { law = \"constant\", coefficient = 0.3 } }, { contact.friction = { law = \"none\" } }, { \"contact.friction.decay\" = 5.0 }]\nlabels = [\"constant\", \"none\", \"decay\"]\n[set]\nsolver.relaxation = 0.5\n",
+    )
+    .expect("write");
+    let plan = Plan::from_file(&f, &[]).expect("a plan whose points switch laws");
+    let laws: Vec<FrictionLaw> = plan
+        .points
+        .iter()
+        .map(|p| Scene::from_toml(&p.scene_text, "point").expect("scene").contact.expect("contact").friction.law)
+        .collect();
+    assert_eq!(laws, vec![FrictionLaw::Constant, FrictionLaw::None, FrictionLaw::Exponential]);
+    let third = Scene::from_toml(&plan.points[2].scene_text, "point").expect("scene");
+    assert_eq!(third.solver.relaxation, 0.5);
+    assert_eq!(third.solver.mass, dyncontact::scene::MassKind::Lumped, "a dotted key in [set] is a leaf");
+}
+
+/// (issue 24, item 8) A misspelled figure is refused when the sweep is read, naming the key and
+/// the figures there are; a point's warnings (a step beyond (C.k)) reach sweep.csv's last
+/// column, `warnings`, and one line on stderr names the points.
+#[test]
+fn sweeps_say_what_went_wrong() {
+    let dir = tmp("sweep_says");
+    let f = dir.join("typo.toml");
+    std::fs::write(&f, "name = \"typo\"\n[plot]\nfigures = [\"max_penetraton\"]\n").expect("write");
+    let e = Plan::from_file(&f, &[]).expect_err("refused").to_string();
+    assert!(e.contains("plot.figures[0]") && e.contains("max_penetraton") && e.contains("max_penetration"), "{e}");
+    let f = dir.join("ck.toml");
+    std::fs::write(
+        &f,
+        "name = \"ck\"\n[[axis]]\nkey = \"time.step\"\nvalues = [1e-2, 5e-3]\n[set]\n\"domain.cells\" = [8, 4]\n\"time.end\" = 0.02\n",
+    )
+    .expect("write");
+    let out = dir.join("out");
+    let o = Command::new(BIN).arg("sweep").arg(&f).args(["--jobs", "1", "--out"]).arg(&out).output().expect("sweep");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).expect("sweep.csv");
+    assert!(csv.lines().next().is_some_and(|h| h.ends_with(",reason,warnings")), "{csv}");
+    assert!(csv.lines().skip(1).all(|l| l.contains("(C.k)")), "{csv}");
+    assert!(stderr.contains("2 of 2 points ran beyond (C.k): p000, p001"), "{stderr}");
 }

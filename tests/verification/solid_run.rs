@@ -582,6 +582,7 @@ fn outputs_3d_have_the_contract_columns_and_charts() {
         progress: false,
         checkpoint_every: None,
         resume: false,
+        scene_text: None,
         stop_after: None,
         interrupt: None,
     };
