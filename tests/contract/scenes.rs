@@ -725,3 +725,89 @@ step = 0.1
     let s = Scene::from_toml(&inf, "inf.toml").expect("penetration_bound = \"inf\" is valid");
     assert_eq!(Scene::bound_of(s.contact.as_ref().unwrap()).unwrap(), Bound::Infinite);
 }
+
+/// The README's scene template (the first TOML block of its "Scenes" section) with the comment
+/// `#` of each line that shows an alternative kept.
+fn readme_scene_template() -> String {
+    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).expect("README.md");
+    let scenes = &readme[readme.find("\n## Scenes").expect("a Scenes section")..];
+    let start = scenes.find("```toml\n").expect("a TOML block in Scenes") + "```toml\n".len();
+    let end = start + scenes[start..].find("\n```").expect("the block ends");
+    scenes[start..end].to_string()
+}
+
+/// The README's scene template is the default scene, whole (it validates to the same model), and
+/// it names every key of the scene schema (src/scene/schema.rs) and every value of the scene's
+/// enumerations (src/model/kinds.rs), so it cannot fall behind the parser.
+#[test]
+fn the_readme_scene_template_is_the_default_scene_and_names_every_key() {
+    let template = readme_scene_template();
+    let model = Scene::from_toml(&template, "README.md").and_then(|s| s.validate()).expect("the template validates");
+    let default = Scene::from_toml(dyncontact::scene::DEFAULT_SCENE, "academic.toml")
+        .and_then(|s| s.validate())
+        .expect("default");
+    assert_eq!(format!("{model:?}"), format!("{default:?}"), "the template is not the default scene");
+
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let schema = std::fs::read_to_string(root.join("src/scene/schema.rs")).expect("schema.rs");
+    let mut missing = Vec::new();
+    let mut rename: Option<String> = None;
+    for line in schema.lines().map(str::trim) {
+        if let Some(r) = line.strip_prefix("#[serde(rename = \"").and_then(|r| r.split('"').next()) {
+            rename = Some(r.to_string());
+        } else if let Some(field) = line.strip_prefix("pub ").and_then(|l| l.split_once(':')).map(|(f, _)| f) {
+            if field.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_') {
+                let key = rename.take().unwrap_or_else(|| field.to_string());
+                let named = template.lines().any(|l| {
+                    let l = l.trim_start_matches(['#', ' ', '[']);
+                    l.starts_with(&format!("{key} "))
+                        || l.starts_with(&format!("{key}="))
+                        || l.starts_with(&format!("{key}]"))
+                        || l.contains(&format!("{{ {key} ="))
+                        || l.contains(&format!(", {key} ="))
+                        || l.contains(&format!("({key} ="))
+                        || l.contains(&format!(".{key}]"))
+                });
+                if !named {
+                    missing.push(format!("key `{key}`"));
+                }
+            }
+        } else if !line.starts_with("#[") && !line.starts_with("///") {
+            rename = None;
+        }
+    }
+
+    let kinds = std::fs::read_to_string(root.join("src/model/kinds.rs")).expect("kinds.rs");
+    let lines: Vec<&str> = kinds.lines().map(str::trim).collect();
+    for (i, l) in lines.iter().enumerate() {
+        let Some(case) = l.strip_prefix("#[serde(rename_all = \"").and_then(|r| r.split('"').next()) else { continue };
+        let mut variant_rename: Option<String> = None;
+        for v in lines[i + 1..].iter().skip_while(|v| !v.starts_with("pub enum")).skip(1) {
+            if v.starts_with('}') {
+                break;
+            }
+            if let Some(r) = v.strip_prefix("#[serde(rename = \"").and_then(|r| r.split('"').next()) {
+                variant_rename = Some(r.to_string());
+                continue;
+            }
+            let name: String = v.chars().take_while(|c| c.is_ascii_alphanumeric()).collect();
+            if name.is_empty() || !name.starts_with(|c: char| c.is_ascii_uppercase()) {
+                continue;
+            }
+            let value = variant_rename.take().unwrap_or_else(|| {
+                let mut s = String::new();
+                for (k, c) in name.chars().enumerate() {
+                    if c.is_ascii_uppercase() && k > 0 && case == "kebab-case" {
+                        s.push('-');
+                    }
+                    s.push(c.to_ascii_lowercase());
+                }
+                s
+            });
+            if !template.contains(&format!("\"{value}\"")) {
+                missing.push(format!("value \"{value}\""));
+            }
+        }
+    }
+    assert!(missing.is_empty(), "the README's scene template does not name: {}", missing.join(", "));
+}
