@@ -39,7 +39,7 @@ pub struct Model {
     pub contact: Option<ContactParams>,
     pub time: TimeParams,
     pub solver: SolverParams,
-    /// a frame every `output_every` steps
+    /// a frame every `output_every` steps (0: no frames)
     pub output_every: usize,
     /// write trajectory.f64 (u, v at every step)
     pub output_trajectory: bool,

@@ -199,7 +199,7 @@ impl Writer {
     }
 
     /// Record a step: a history row always; a frame and contact rows every `every` steps and
-    /// when `last` is set. `state` is the simulation's state after the step (for the frame).
+    /// when `last` is set, none when `every` is 0 (`output.every = 0`: no frames). `state` is the simulation's state after the step (for the frame).
     pub fn record(&mut self, rec: &StepRecord, problem: &Problem, state: &State, last: bool) -> Result<()> {
         let mut row = String::with_capacity(512);
         for (j, (_, value)) in HISTORY.iter().enumerate() {
@@ -224,7 +224,7 @@ impl Writer {
         if let Some(tw) = self.trajectory.as_mut() {
             tw.record(rec.step, rec.t, &state.u, &state.v)?;
         }
-        if rec.step.is_multiple_of(self.every) || last {
+        if self.every > 0 && (rec.step.is_multiple_of(self.every) || last) {
             self.frame(rec, problem, state)?;
         }
         Ok(())

@@ -31,8 +31,11 @@ impl Scene {
         };
         let time = self.validate_time()?;
         let solver = self.validate_solver()?;
-        if self.output.every < 1 {
-            return Err(Error::scene("output.every", format!("must be >= 1, got {}", self.output.every)));
+        if self.output.every < 0 {
+            return Err(Error::scene(
+                "output.every",
+                format!("must be >= 0 (0: no frames), got {}", self.output.every),
+            ));
         }
         Ok(Model {
             name: self.name.clone(),

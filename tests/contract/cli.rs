@@ -208,3 +208,27 @@ fn toml_errors_keep_their_diagram_and_name_where_the_value_came_from() {
     assert!(e.contains("time.end: ") && e.contains("came from --set time.end=\"abc\""), "{e}");
     assert_eq!(e.lines().count(), 1, "no diagram of the overridden text: {e}");
 }
+
+/// `[output] every = 0` writes no frames (and so no contact.csv rows, which are per frame): the
+/// run completes with its full history.csv, its charts and no VTU file.
+#[test]
+fn output_every_zero_writes_no_frames() {
+    let out = tmp("every_zero");
+    let o = Command::new(BIN)
+        .args(["run", "--set", "output.every=0", "--set", "time.end=0.05", "--out"])
+        .arg(&out)
+        .output()
+        .expect("run");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let frames = std::fs::read_dir(out.join("frames")).map_or(0, |d| d.count());
+    assert_eq!(frames, 0, "no frame is written");
+    assert!(!out.join("series.pvd").exists(), "no series of frames");
+    let history = std::fs::read_to_string(out.join("history.csv")).expect("history.csv");
+    assert_eq!(history.lines().count(), 1 + 101, "a header and steps 0..=100");
+    let contact = std::fs::read_to_string(out.join("contact.csv")).expect("contact.csv");
+    assert_eq!(contact.lines().count(), 1, "contact.csv has its header only");
+    for chart in ["forces.svg", "energy.svg", "contact_status.svg"] {
+        let svg = std::fs::read_to_string(out.join("plots").join(chart)).expect(chart);
+        assert!(!svg.contains("NaN"), "{chart} has a NaN");
+    }
+}

@@ -521,7 +521,12 @@ fn cases() -> Vec<Malformed> {
             "solver.max_newton_iterations",
             "must be in 1..=100000",
         ),
-        case("output every 0 steps", edit("every = 10", "every = 0"), "output.every", "must be >= 1, got 0"),
+        case(
+            "output every -1 steps",
+            edit("every = 10", "every = -1"),
+            "output.every",
+            "must be >= 0 (0: no frames), got -1",
+        ),
         // ---- checks against the mesh (Problem::new) ----
         mesh_case(
             "contact side the mesh lacks",
