@@ -9,6 +9,7 @@ use plotters::prelude::*;
 
 use super::ChartRow;
 use super::plots::{self, Options, Series, SeriesLabelPosition};
+use super::units;
 use crate::mesh::Mesh;
 use crate::model::contact::ContactModel;
 use crate::model::kinds::Bound;
@@ -164,22 +165,26 @@ fn cell_edges(centres: &[f64], lone_width: f64) -> Vec<f64> {
 }
 
 /// Normal and tangential contact force against t, with p(g)·|Γ3|: above it the constraint
-/// carries load and the friction bound is capped at μ p(g) (the Coulomb→Tresca switch).
-pub fn forces(rows: &[ChartRow], reference: Option<f64>) -> Result<String, String> {
+/// carries load and the friction bound is capped at μ p(g) (the Coulomb→Tresca switch). Forces
+/// in the units of dimension `dim` (N/m per unit thickness in 2-D, N in 3-D).
+pub fn forces(rows: &[ChartRow], reference: Option<f64>, dim: usize) -> Result<String, String> {
     let hist = |f: fn(&ChartRow) -> f64| rows.iter().map(|r| (r.t, f(r))).collect();
     let series = [
         Series { name: "normal force Σ ω (q + λ)".into(), points: hist(|r| r.normal_force) },
         Series { name: "tangential force −Σ ω t".into(), points: hist(|r| r.tangential_force) },
     ];
-    let hlines: Vec<(String, f64)> =
-        reference.filter(|r| r.is_finite()).map(|r| (format!("p(g)·|Γ3| = {r:.4} N/m"), r)).into_iter().collect();
+    let hlines: Vec<(String, f64)> = reference
+        .filter(|r| r.is_finite())
+        .map(|r| (format!("p(g)·|Γ3| = {r:.4} {}", units::force(dim)), r))
+        .into_iter()
+        .collect();
     let title = if hlines.is_empty() {
         "Contact forces on Γ3"
     } else {
         "Contact forces on Γ3 (above p(g)·|Γ3|: constraint active, friction capped at μ p(g): Coulomb→Tresca)"
     };
     let opts = Options { markers: false, legend: SeriesLabelPosition::UpperRight, headroom: 0.3 };
-    plots::line_chart_with(title, "t [s]", "force per unit thickness [N/m]", &series, &hlines, &opts)
+    plots::line_chart_with(title, "t [s]", &units::force_axis(dim), &series, &hlines, &opts)
 }
 
 /// Normal stress q + λ along Γ3 at about five frames spread over the contact phase, with p(g),

@@ -18,6 +18,7 @@ pub mod plots;
 pub mod resume;
 pub mod summary;
 pub mod trajectory;
+pub mod units;
 pub mod vtu;
 
 use std::fmt::Write as _;
@@ -318,13 +319,16 @@ impl Writer {
             s("constraint dissipation", |r| r.constraint),
         ];
         let residual = [s("(E.1) residual", |r| r.residual)];
+        let dim = p.mesh.dim();
+        let (energy_axis, residual_axis) =
+            (format!("energy [{}]", units::energy(dim)), format!("residual [{}]", units::energy(dim)));
         let energy = plots::stacked_chart(
             &[
                 (
                     plots::Panel {
                         title: "Energy balance (E.1)",
                         x_desc: "t [s]",
-                        y_desc: "energy [J/m]",
+                        y_desc: &energy_axis,
                         series: &terms,
                         hlines: &[],
                         log: (false, false),
@@ -335,7 +339,7 @@ impl Writer {
                     plots::Panel {
                         title: "(E.1) residual per step",
                         x_desc: "t [s]",
-                        y_desc: "residual [J/m]",
+                        y_desc: &residual_axis,
                         series: &residual,
                         hlines: &[],
                         log: (false, false),
@@ -359,7 +363,7 @@ impl Writer {
         };
         let p_g = contact_charts::p_at_bound(c);
         let gamma3: f64 = c.omega.iter().sum();
-        save("forces.svg", contact_charts::forces(&self.rows, p_g.map(|q| q * gamma3)))?;
+        save("forces.svg", contact_charts::forces(&self.rows, p_g.map(|q| q * gamma3), dim))?;
         save("status_fractions.svg", contact_charts::status_fractions(&self.contact_frames))?;
         let Some(mesh) = p.mesh.plane() else {
             // 3-D: maps of Γ3 in the tangent plane of its first node

@@ -47,6 +47,10 @@ pub struct ModelInfo {
     pub ck_limiting_name: String,
     /// why (C.k) gives no limit, when it does not
     pub ck_note: String,
+    /// the unit of every numeric column of history.csv and contact.csv (forces and energies per
+    /// unit thickness in 2-D, absolute in 3-D); absent from summaries written before it
+    #[serde(default)]
+    pub units: super::units::Units,
     /// where the model switched on is less than the scene states (from validation)
     #[serde(skip)]
     pub scene_warnings: Vec<String>,
@@ -90,6 +94,7 @@ impl ModelInfo {
             ck_limiting_node: None,
             ck_limiting_name: String::new(),
             ck_note: "no velocity-dependent friction: every step problem is convex".into(),
+            units: super::units::Units::of(p.mesh.dim()),
             scene_warnings: s.warnings.clone(),
         };
         if let (Some(c), Some(cs)) = (&p.contact, &s.contact) {

@@ -266,6 +266,51 @@ fn forces_chart_has_both_histories_and_the_reference_line() {
     );
 }
 
+/// Units follow the dimension: every chart of every 3-D fixture (a few steps each) is free of
+/// the 2-D units per unit thickness (N/m, J/m) and reads N and J, and summary.json's
+/// `model.units` says the same; the 2-D charts (impact_friction) read N/m and J/m.
+#[test]
+fn charts_use_the_units_of_the_dimension() {
+    let charts = |out: &Path| -> Vec<(String, String)> {
+        let mut v: Vec<(String, String)> = std::fs::read_dir(out.join("plots"))
+            .expect("plots/")
+            .map(|e| e.expect("entry").path())
+            .filter(|p| p.extension().is_some_and(|e| e == "svg"))
+            .map(|p| (p.file_name().unwrap().to_string_lossy().into_owned(), read(&p)))
+            .collect();
+        v.sort();
+        v
+    };
+    for name in ["academic3d", "cantilever3d", "column_impact3d", "sliding_block3d", "hertz3d", "gmsh_block3d"] {
+        let scene = Scene::from_file(&scene_dir().join(format!("{name}.toml"))).expect("scene");
+        let (out, problem) = run_scene(name, Some(3.0 * scene.time.step), 1000);
+        assert_eq!(problem.mesh.dim(), 3, "{name}");
+        let all = charts(&out);
+        for (chart, text) in &all {
+            for unit in ["N/m", "J/m"] {
+                assert!(!text.contains(unit), "{name}: plots/{chart} contains {unit:?}");
+            }
+        }
+        let energy = &all.iter().find(|(c, _)| c == "energy.svg").expect("energy.svg").1;
+        assert!(energy.contains("energy [J]") && energy.contains("residual [J]"), "{name}: energy.svg in J");
+        if let Some((_, forces)) = all.iter().find(|(c, _)| c == "forces.svg") {
+            assert!(forces.contains("force [N]"), "{name}: forces.svg in N");
+        }
+        let summary: serde_json::Value = serde_json::from_str(&read(&out.join("summary.json"))).expect("json");
+        let units = &summary["model"]["units"];
+        assert_eq!(units["history"]["force"]["unit"], "N", "{name}: {units}");
+        assert_eq!(units["history"]["energy"]["unit"], "J", "{name}: {units}");
+        println!("{name}: {} charts in N and J", all.len());
+    }
+    let all = charts(&impact().out);
+    let joined: String = all.iter().map(|(_, t)| t.as_str()).collect();
+    assert!(joined.contains("force per unit thickness [N/m]") && joined.contains("N/m"), "2-D forces in N/m");
+    assert!(joined.contains("energy [J/m]"), "2-D energies in J/m");
+    let summary: serde_json::Value = serde_json::from_str(&read(&impact().out.join("summary.json"))).expect("json");
+    assert_eq!(summary["model"]["units"]["history"]["force"]["unit"], "N/m");
+    assert_eq!(summary["model"]["units"]["history"]["energy"]["unit"], "J/m");
+}
+
 /// contact_status.svg has a filled cell per (frame, contact node) and a legend entry for each
 /// status category present in contact.csv.
 #[test]
@@ -418,10 +463,11 @@ fn charts_accept_empty_and_non_finite_data() {
         (1, 0.1, vec![rec(1.0, 0.0, NodeStatus::Slip)]),
     ];
     let outputs = [
-        contact_charts::forces(&[], Some(nan)),
+        contact_charts::forces(&[], Some(nan), 2),
         contact_charts::forces(
             &[row(0.0, nan), row(nan, 1.0), row(0.1, f64::INFINITY), row(0.2, 1e308), row(0.3, -1e308)],
             Some(1.0),
+            3,
         ),
         contact_charts::contact_status(&[], &along),
         contact_charts::contact_status(&frames, &along),
