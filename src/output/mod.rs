@@ -363,8 +363,10 @@ impl Writer {
         };
         let p_g = contact_charts::p_at_bound(c);
         let gamma3: f64 = c.omega.iter().sum();
-        save("forces.svg", contact_charts::forces(&self.rows, p_g.map(|q| q * gamma3), dim))?;
-        save("status_fractions.svg", contact_charts::status_fractions(&self.contact_frames))?;
+        // a friction law gives stick, slip and a tangential force; without one there are none
+        let friction = c.friction.is_some();
+        save("forces.svg", contact_charts::forces(&self.rows, p_g.map(|q| q * gamma3), dim, friction))?;
+        save("status_fractions.svg", contact_charts::status_fractions(&self.contact_frames, friction))?;
         let Some(mesh) = p.mesh.plane() else {
             // 3-D: maps of Γ3 in the tangent plane of its first node
             let f0 = c.frames.first().copied().unwrap_or(crate::model::contact::Frame::spatial([0.0, 0.0, 1.0]));
@@ -377,10 +379,10 @@ impl Writer {
                     [dot(f0.tangents[0]), dot(f0.tangents[1])]
                 })
                 .collect();
-            return save("contact_status.svg", contact_charts::status_maps(&self.contact_frames, &xy));
+            return save("contact_status.svg", contact_charts::status_maps(&self.contact_frames, &xy, friction));
         };
         let along = contact_charts::Along::of(mesh, c, &p.model.contact_sides);
-        save("contact_status.svg", contact_charts::contact_status(&self.contact_frames, &along))?;
+        save("contact_status.svg", contact_charts::contact_status(&self.contact_frames, &along, friction))?;
         save("normal_stress.svg", contact_charts::normal_stress(&self.contact_frames, &along, p_g))
     }
 }
