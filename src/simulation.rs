@@ -111,7 +111,10 @@ pub struct StepRecord {
     pub chatter: f64,
     /// ½ Σ m_i (v_c,i^{n+1})² over the same nodes (diagonal mass): kinetic energy trapped there
     pub trapped_kinetic: f64,
+    /// nodes that carry load (q + λ > 0): the stick and slip nodes under a friction law, every
+    /// such node without one
     pub contact_nodes: usize,
+    /// nodes in slip, in stick (both 0 without a friction law: a frictionless node is neither)
     pub slip_nodes: usize,
     pub stick_nodes: usize,
     pub report: StepReport,
@@ -563,11 +566,14 @@ impl<'p> Simulation<'p> {
                 rec.tangential_force -= omega * sol.t[i];
             }
             max_pen = max_pen.max(d_new[i]);
+            // a frictionless node in contact counts in contact_nodes only: neither stick nor slip
             match sol.status[i] {
                 NodeStatus::Separated => {}
                 NodeStatus::Stick => rec.stick_nodes += 1,
                 NodeStatus::Slip => rec.slip_nodes += 1,
+                NodeStatus::Contact => {}
             }
+            rec.contact_nodes += usize::from(sol.status[i] != NodeStatus::Separated);
             let kin = self.kinematics;
             let v_now = c.tangential(i, &self.state.v);
             let vbar: [f64; 2] = std::array::from_fn(|j| {
@@ -591,7 +597,6 @@ impl<'p> Simulation<'p> {
         if c.dim == 3 {
             rec.tangential_force = rec.friction_force.iter().map(|f| f * f).sum::<f64>().sqrt();
         }
-        rec.contact_nodes = rec.stick_nodes + rec.slip_nodes;
         rec.max_penetration = if rec.nodes.is_empty() { 0.0 } else { max_pen };
     }
 

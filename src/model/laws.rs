@@ -216,7 +216,8 @@ impl FrictionCoefficient {
         }
     }
 
-    /// True when μ does not depend on the slip rate (one convex solve per step suffices).
+    /// True when μ does not depend on the slip rate (with S's normal part at the predictor, one
+    /// convex solve per step suffices; the total bound and the midpoint still iterate F.1).
     pub fn is_constant(&self) -> bool {
         match self {
             FrictionCoefficient::Constant(_) => true,

@@ -9,6 +9,7 @@ use plotters::prelude::*;
 
 use super::ChartRow;
 use super::plots::{self, Options, Series, SeriesLabelPosition};
+use super::units;
 use crate::mesh::Mesh;
 use crate::model::contact::ContactModel;
 use crate::model::kinds::Bound;
@@ -96,7 +97,9 @@ fn arc_length(mesh: &Mesh, sides: &[String], nodes: &[usize]) -> Vec<f64> {
     nodes.iter().map(|&v| if arc[v].is_nan() { mesh.nodes[v][0] } else { arc[v] }).collect()
 }
 
-/// The contact-status categories of the status map.
+/// The contact-status categories of the status map: separated, or in contact through the
+/// compliance alone or with the constraint active (λ > 0), in stick or slip under a friction law
+/// and neither without one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Category {
     Separated,
@@ -104,18 +107,31 @@ pub enum Category {
     ComplianceSlip,
     ConstraintStick,
     ConstraintSlip,
+    /// in contact through the compliance, no friction law
+    Compliance,
+    /// in contact with the constraint active, no friction law
+    Constraint,
 }
 
 impl Category {
-    pub const ALL: [Category; 5] = [
+    pub const ALL: [Category; 7] = [
         Category::Separated,
         Category::ComplianceStick,
         Category::ComplianceSlip,
         Category::ConstraintStick,
         Category::ConstraintSlip,
+        Category::Compliance,
+        Category::Constraint,
     ];
 
-    /// The category of a node record: separated, else by the constraint (λ > 0) and stick/slip.
+    /// The categories a run can show: with a friction law (`friction`) separated and the four
+    /// of compliance or constraint × stick or slip; without one separated, compliance and
+    /// constraint.
+    pub fn of_run(friction: bool) -> &'static [Category] {
+        if friction { &Category::ALL[..5] } else { &[Category::Separated, Category::Compliance, Category::Constraint] }
+    }
+
+    /// The category of a node record: separated, else by the constraint (λ > 0) and the status.
     pub fn of(r: &NodeRecord) -> Category {
         match (r.status, r.lambda > 0.0) {
             (NodeStatus::Separated, _) => Category::Separated,
@@ -123,6 +139,8 @@ impl Category {
             (NodeStatus::Slip, false) => Category::ComplianceSlip,
             (NodeStatus::Stick, true) => Category::ConstraintStick,
             (NodeStatus::Slip, true) => Category::ConstraintSlip,
+            (NodeStatus::Contact, false) => Category::Compliance,
+            (NodeStatus::Contact, true) => Category::Constraint,
         }
     }
 
@@ -134,6 +152,8 @@ impl Category {
             Category::ComplianceSlip => "compliance & slip",
             Category::ConstraintStick => "constraint (λ > 0) & stick",
             Category::ConstraintSlip => "constraint (λ > 0) & slip",
+            Category::Compliance => "compliance, no friction",
+            Category::Constraint => "constraint (λ > 0), no friction",
         }
     }
 
@@ -144,6 +164,8 @@ impl Category {
             Category::ComplianceSlip => RGBColor(33, 113, 181),
             Category::ConstraintStick => RGBColor(253, 174, 107),
             Category::ConstraintSlip => RGBColor(217, 72, 1),
+            Category::Compliance => RGBColor(116, 196, 118),
+            Category::Constraint => RGBColor(0, 109, 44),
         }
     }
 }
@@ -164,22 +186,32 @@ fn cell_edges(centres: &[f64], lone_width: f64) -> Vec<f64> {
 }
 
 /// Normal and tangential contact force against t, with p(g)·|Γ3|: above it the constraint
-/// carries load and the friction bound is capped at μ p(g) (the Coulomb→Tresca switch).
-pub fn forces(rows: &[ChartRow], reference: Option<f64>) -> Result<String, String> {
+/// carries load and the friction bound is capped at μ p(g) (the Coulomb→Tresca switch). Forces
+/// in the units of dimension `dim` (N/m per unit thickness in 2-D, N in 3-D).
+///
+/// Without a friction law (`friction` false) the tangential force is no line of the chart: it is
+/// zero by definition, not a result.
+pub fn forces(rows: &[ChartRow], reference: Option<f64>, dim: usize, friction: bool) -> Result<String, String> {
     let hist = |f: fn(&ChartRow) -> f64| rows.iter().map(|r| (r.t, f(r))).collect();
-    let series = [
-        Series { name: "normal force Σ ω (q + λ)".into(), points: hist(|r| r.normal_force) },
-        Series { name: "tangential force −Σ ω t".into(), points: hist(|r| r.tangential_force) },
-    ];
-    let hlines: Vec<(String, f64)> =
-        reference.filter(|r| r.is_finite()).map(|r| (format!("p(g)·|Γ3| = {r:.4} N/m"), r)).into_iter().collect();
-    let title = if hlines.is_empty() {
-        "Contact forces on Γ3"
-    } else {
-        "Contact forces on Γ3 (above p(g)·|Γ3|: constraint active, friction capped at μ p(g): Coulomb→Tresca)"
+    let mut series = vec![Series { name: "normal force Σ ω (q + λ)".into(), points: hist(|r| r.normal_force) }];
+    if friction {
+        series.push(Series { name: "tangential force −Σ ω t".into(), points: hist(|r| r.tangential_force) });
+    }
+    let hlines: Vec<(String, f64)> = reference
+        .filter(|r| r.is_finite())
+        .map(|r| (format!("p(g)·|Γ3| = {r:.4} {}", units::force(dim)), r))
+        .into_iter()
+        .collect();
+    let title = match (hlines.is_empty(), friction) {
+        (true, true) => "Contact forces on Γ3",
+        (true, false) => "Normal contact force on Γ3 (no friction law)",
+        (false, true) => {
+            "Contact forces on Γ3 (above p(g)·|Γ3|: constraint active, friction capped at μ p(g): Coulomb→Tresca)"
+        }
+        (false, false) => "Normal contact force on Γ3 (no friction law; above p(g)·|Γ3|: constraint active)",
     };
     let opts = Options { markers: false, legend: SeriesLabelPosition::UpperRight, headroom: 0.3 };
-    plots::line_chart_with(title, "t [s]", "force per unit thickness [N/m]", &series, &hlines, &opts)
+    plots::line_chart_with(title, "t [s]", &units::force_axis(dim), &series, &hlines, &opts)
 }
 
 /// Normal stress q + λ along Γ3 at about five frames spread over the contact phase, with p(g),
@@ -213,26 +245,30 @@ pub fn normal_stress(frames: &[ContactFrame], along: &Along, p_g: Option<f64>) -
 }
 
 /// The colour key of the status map with the number of cells of each category.
+/// `shown`: the categories of the run ([`Category::of_run`]).
 fn draw_status_legend(
     area: &DrawingArea<SVGBackend, plotters::coord::Shift>,
-    counts: &[usize; 5],
+    shown: &[Category],
+    counts: &[usize; Category::ALL.len()],
     nodes: usize,
     frames: usize,
 ) -> Result<(), DrawingAreaErrorKind<std::io::Error>> {
     let font = ("sans-serif", 14);
     area.draw(&Text::new("status (cells)", (10, 60), font))?;
-    for (k, cat) in Category::ALL.iter().enumerate() {
+    for (k, cat) in shown.iter().enumerate() {
         let y = 90 + 26 * k as i32;
         area.draw(&Rectangle::new([(10, y), (28, y + 16)], cat.color().filled()))?;
         area.draw(&Rectangle::new([(10, y), (28, y + 16)], BLACK.stroke_width(1)))?;
-        area.draw(&Text::new(format!("{} ({})", cat.label(), counts[k]), (36, y + 2), font))?;
+        area.draw(&Text::new(format!("{} ({})", cat.label(), counts[*cat as usize]), (36, y + 2), font))?;
     }
-    area.draw(&Text::new(format!("{nodes} nodes × {frames} frames"), (10, 90 + 26 * 5 + 10), font))
+    let y = 90 + 26 * shown.len() as i32 + 10;
+    area.draw(&Text::new(format!("{nodes} nodes × {frames} frames"), (10, y), font))
 }
 
 /// Space–time map of the contact status along Γ3 (one row per frame), so the spread of
-/// separation, compliance, active constraint, stick and slip over the run is seen at once.
-pub fn contact_status(frames: &[ContactFrame], along: &Along) -> Result<String, String> {
+/// separation, compliance, active constraint, stick and slip over the run is seen at once
+/// (`friction`: the run has a friction law; without one the legend has no stick or slip).
+pub fn contact_status(frames: &[ContactFrame], along: &Along, friction: bool) -> Result<String, String> {
     let n = along.order.len();
     let stride = (frames.len() * n).div_ceil(MAX_CELLS).max(1);
     let rows: Vec<&ContactFrame> = frames.iter().step_by(stride).filter(|f| f.1.is_finite()).collect();
@@ -242,7 +278,7 @@ pub fn contact_status(frames: &[ContactFrame], along: &Along) -> Result<String, 
     let te = cell_edges(&ts, 1.0);
     let span = |e: &[f64]| if e.len() >= 2 && e[0] < e[e.len() - 1] { (e[0], e[e.len() - 1]) } else { (0.0, 1.0) };
     let ((x0, x1), (t0, t1)) = (span(&xe), span(&te));
-    let mut counts = [0usize; 5];
+    let mut counts = [0usize; Category::ALL.len()];
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (1100, 600)).into_drawing_area();
@@ -284,7 +320,7 @@ pub fn contact_status(frames: &[ContactFrame], along: &Along) -> Result<String, 
             counts[cat as usize] = cells.len();
             chart.draw_series(cells).map_err(|e| e.to_string())?;
         }
-        draw_status_legend(&legend, &counts, n, rows.len()).map_err(|e| e.to_string())?;
+        draw_status_legend(&legend, Category::of_run(friction), &counts, n, rows.len()).map_err(|e| e.to_string())?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)
@@ -402,9 +438,10 @@ pub fn deformed(mesh: &Mesh, u: &[[f64; 2]], t: f64) -> Result<String, String> {
 }
 
 /// The share of Γ3's nodes in each status category against t, over the contact frames (any
-/// dimension): the 3-D counterpart of the space–time map, which needs a 1-D Γ3.
-pub fn status_fractions(frames: &[ContactFrame]) -> Result<String, String> {
-    let series: Vec<plots::Series> = Category::ALL
+/// dimension): the 3-D counterpart of the space–time map, which needs a 1-D Γ3; the categories
+/// of the run's friction law (`friction`).
+pub fn status_fractions(frames: &[ContactFrame], friction: bool) -> Result<String, String> {
+    let series: Vec<plots::Series> = Category::of_run(friction)
         .iter()
         .map(|&cat| plots::Series {
             name: cat.label().to_string(),
@@ -422,8 +459,8 @@ pub fn status_fractions(frames: &[ContactFrame]) -> Result<String, String> {
 
 /// Maps of the contact status on a 2-D Γ3 (a surface of a 3-D body) at four frames spread over
 /// the run: each node a square at its in-plane coordinates `xy` (along the tangents of the first
-/// contact node's frame), coloured by its category.
-pub fn status_maps(frames: &[ContactFrame], xy: &[[f64; 2]]) -> Result<String, String> {
+/// contact node's frame), coloured by its category (`friction`: the run has a friction law).
+pub fn status_maps(frames: &[ContactFrame], xy: &[[f64; 2]], friction: bool) -> Result<String, String> {
     let with_nodes: Vec<&ContactFrame> = frames.iter().filter(|f| !f.2.is_empty() && f.1.is_finite()).collect();
     let picks: Vec<&ContactFrame> = match with_nodes.len() {
         0 => Vec::new(),
@@ -441,7 +478,7 @@ pub fn status_maps(frames: &[ContactFrame], xy: &[[f64; 2]]) -> Result<String, S
     // the square of a node: a share of the patch's size per node along each axis
     let side = (((x1 - x0) * (y1 - y0)) / xy.len().max(1) as f64).sqrt().max(1e-12);
     let (x0, x1, y0, y1) = (x0 - 0.5 * side, x1 + 0.5 * side, y0 - 0.5 * side, y1 + 0.5 * side);
-    let mut counts = [0usize; 5];
+    let mut counts = [0usize; Category::ALL.len()];
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (1100, 820)).into_drawing_area();
@@ -475,7 +512,8 @@ pub fn status_maps(frames: &[ContactFrame], xy: &[[f64; 2]]) -> Result<String, S
             });
             chart.draw_series(squares.collect::<Vec<_>>()).map_err(|e| e.to_string())?;
         }
-        draw_status_legend(&legend, &counts, xy.len(), picks.len()).map_err(|e| e.to_string())?;
+        draw_status_legend(&legend, Category::of_run(friction), &counts, xy.len(), picks.len())
+            .map_err(|e| e.to_string())?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)

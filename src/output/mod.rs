@@ -18,6 +18,7 @@ pub mod plots;
 pub mod resume;
 pub mod summary;
 pub mod trajectory;
+pub mod units;
 pub mod vtu;
 
 use std::fmt::Write as _;
@@ -318,13 +319,16 @@ impl Writer {
             s("constraint dissipation", |r| r.constraint),
         ];
         let residual = [s("(E.1) residual", |r| r.residual)];
+        let dim = p.mesh.dim();
+        let (energy_axis, residual_axis) =
+            (format!("energy [{}]", units::energy(dim)), format!("residual [{}]", units::energy(dim)));
         let energy = plots::stacked_chart(
             &[
                 (
                     plots::Panel {
                         title: "Energy balance (E.1)",
                         x_desc: "t [s]",
-                        y_desc: "energy [J/m]",
+                        y_desc: &energy_axis,
                         series: &terms,
                         hlines: &[],
                         log: (false, false),
@@ -335,7 +339,7 @@ impl Writer {
                     plots::Panel {
                         title: "(E.1) residual per step",
                         x_desc: "t [s]",
-                        y_desc: "residual [J/m]",
+                        y_desc: &residual_axis,
                         series: &residual,
                         hlines: &[],
                         log: (false, false),
@@ -359,8 +363,10 @@ impl Writer {
         };
         let p_g = contact_charts::p_at_bound(c);
         let gamma3: f64 = c.omega.iter().sum();
-        save("forces.svg", contact_charts::forces(&self.rows, p_g.map(|q| q * gamma3)))?;
-        save("status_fractions.svg", contact_charts::status_fractions(&self.contact_frames))?;
+        // a friction law gives stick, slip and a tangential force; without one there are none
+        let friction = c.friction.is_some();
+        save("forces.svg", contact_charts::forces(&self.rows, p_g.map(|q| q * gamma3), dim, friction))?;
+        save("status_fractions.svg", contact_charts::status_fractions(&self.contact_frames, friction))?;
         let Some(mesh) = p.mesh.plane() else {
             // 3-D: maps of Γ3 in the tangent plane of its first node
             let f0 = c.frames.first().copied().unwrap_or(crate::model::contact::Frame::spatial([0.0, 0.0, 1.0]));
@@ -373,10 +379,10 @@ impl Writer {
                     [dot(f0.tangents[0]), dot(f0.tangents[1])]
                 })
                 .collect();
-            return save("contact_status.svg", contact_charts::status_maps(&self.contact_frames, &xy));
+            return save("contact_status.svg", contact_charts::status_maps(&self.contact_frames, &xy, friction));
         };
         let along = contact_charts::Along::of(mesh, c, &p.model.contact_sides);
-        save("contact_status.svg", contact_charts::contact_status(&self.contact_frames, &along))?;
+        save("contact_status.svg", contact_charts::contact_status(&self.contact_frames, &along, friction))?;
         save("normal_stress.svg", contact_charts::normal_stress(&self.contact_frames, &along, p_g))
     }
 }

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::failure::{FailureKind, RunStatus};
 use crate::model::contact::ContactModel;
-use crate::model::kinds::{self, Bound, BoundAt, ContactSolve, FixedPointAcceleration, FrictionBound};
+use crate::model::kinds::{self, Bound, BoundAt, ContactSolve, FixedPointAcceleration, FrictionBound, InnerSolver};
 use crate::model::laws::FrictionCoefficient;
 use crate::model::{ContactParams, Enforcement};
 use crate::problem::{ConvexityLimit, Problem};
@@ -47,6 +47,10 @@ pub struct ModelInfo {
     pub ck_limiting_name: String,
     /// why (C.k) gives no limit, when it does not
     pub ck_note: String,
+    /// the unit of every numeric column of history.csv and contact.csv (forces and energies per
+    /// unit thickness in 2-D, absolute in 3-D); absent from summaries written before it
+    #[serde(default)]
+    pub units: super::units::Units,
     /// where the model switched on is less than the scene states (from validation)
     #[serde(skip)]
     pub scene_warnings: Vec<String>,
@@ -90,6 +94,7 @@ impl ModelInfo {
             ck_limiting_node: None,
             ck_limiting_name: String::new(),
             ck_note: "no velocity-dependent friction: every step problem is convex".into(),
+            units: super::units::Units::of(p.mesh.dim()),
             scene_warnings: s.warnings.clone(),
         };
         if let (Some(c), Some(cs)) = (&p.contact, &s.contact) {
@@ -148,11 +153,7 @@ impl ModelInfo {
         }
         self.friction = match &c.friction {
             None => "none: frictionless, no fixed point".into(),
-            Some(FrictionCoefficient::Constant(mu)) => format!("constant μ = {mu}: one convex solve per step"),
-            Some(FrictionCoefficient::Exponential { a, b, alpha }) => {
-                format!("μ(r) = ({a} − {b}) e^(−{alpha} r) + {b}: fixed point on S (F.1)")
-            }
-            Some(FrictionCoefficient::Table(pts)) => format!("table with {} points: fixed point on S (F.1)", pts.len()),
+            Some(mu) => format!("{}: {}", coefficient(mu), step_solves(mu, cs, p.model.solver.inner)),
         };
         if c.friction.is_some() {
             self.friction_unknowns = c.n() * (c.dim - 1);
@@ -274,6 +275,40 @@ impl ModelInfo {
                 self.step, self.ck_limiting_name
             )
         })
+    }
+}
+
+/// The friction coefficient in words.
+fn coefficient(mu: &FrictionCoefficient) -> String {
+    match mu {
+        FrictionCoefficient::Constant(mu) => format!("constant μ = {mu}"),
+        FrictionCoefficient::Exponential { a, b, alpha } => format!("μ(r) = ({a} − {b}) e^(−{alpha} r) + {b}"),
+        FrictionCoefficient::Table(pts) => format!("table with {} points", pts.len()),
+    }
+}
+
+/// What a step solves under the friction coefficient `mu`, the bound of `cs` and the inner
+/// solver: one convex solve only where S is known before the solve (μ constant, its normal part
+/// at the predictor); else the fixed point on S (F.1), where S follows the slip rate (μ not
+/// constant), the iterate's midpoint u_ν^{n+½} or the whole contact force q + λ (the total
+/// bound) — or Newton on the unfrozen problem with F.1 as its fallback (`newton-unfrozen`).
+fn step_solves(mu: &FrictionCoefficient, cs: &ContactParams, inner: InnerSolver) -> String {
+    let unfrozen = inner == InnerSolver::NewtonUnfrozen;
+    match (cs.friction_bound, cs.friction_bound_at) {
+        (FrictionBound::Total, _) if unfrozen => {
+            "S = μ (q + λ) follows the contact force: Newton on the coupled Coulomb problem (Co.3), fixed point on S \
+             (F.1) as its fallback"
+                .into()
+        }
+        (FrictionBound::Total, _) => {
+            "S = μ (q + λ) follows the contact force: fixed point on S (F.1), a convex solve per iteration".into()
+        }
+        (_, BoundAt::Midpoint) => {
+            "S follows u_ν^{n+½} of the iterate: fixed point on S (F.1), a convex solve per iteration".into()
+        }
+        _ if mu.is_constant() => "S known at the predictor: one convex solve per step".into(),
+        _ if unfrozen => "Newton on the unfrozen problem (N.4), fixed point on S (F.1) as its fallback".into(),
+        _ => "S follows the slip rate: fixed point on S (F.1), a convex solve per iteration".into(),
     }
 }
 

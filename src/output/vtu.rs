@@ -20,8 +20,8 @@ pub struct Snapshot<'a> {
     /// nodal displacement and velocity (z = 0 in 2-D)
     pub u: &'a [[f64; 3]],
     pub v: &'a [[f64; 3]],
-    /// contact data per mesh node: (pressure q + λ, q, λ, friction −t, status code), status −1
-    /// off Γ3
+    /// contact data per mesh node: (pressure q + λ, q, λ, friction −t, status code), the code
+    /// of `NodeStatus::code` (0 separated, 1 stick, 2 slip, 3 contact without friction), −1 off Γ3
     pub contact: &'a [(f64, f64, f64, f64, i32)],
 }
 

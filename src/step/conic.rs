@@ -425,7 +425,7 @@ fn finish(step: &StepData, s: &[f64], y: Vec<f64>, r: Vec<f64>, iterations: usiz
     let status = (0..n)
         .map(|i| {
             let stick = step.friction && s[i] > 0.0 && step.slip_norm(i, &y) <= STICK_FLOOR * step.a_v * scale;
-            NodeStatus::classify(q[i] + lambda[i], SEPARATION_FLOOR * f_max, stick)
+            NodeStatus::classify(q[i] + lambda[i], SEPARATION_FLOOR * f_max, step.friction.then_some(stick))
         })
         .collect();
     // relative consistency of y with y_free − W r (the equality constraint)

@@ -51,48 +51,56 @@ pub struct StepData<'a> {
     pub inverse: Option<&'a delassus::InverseDelassus>,
 }
 
-/// Contact status of a node after a step (contact.csv `status`).
+/// Contact status of a node after a step (contact.csv `status`, VTU `contact_status` code).
+/// Stick and slip are the two states of a friction law; without one a node that carries load is
+/// in [`NodeStatus::Contact`], neither sticking nor slipping.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum NodeStatus {
     Separated,
     Stick,
     Slip,
+    /// in contact (q + λ > 0) under no friction law (frictionless)
+    Contact,
 }
 
 impl NodeStatus {
     /// The one rule for a node's status after a step: separated when its contact force
     /// q_i + λ_i is at most `separated_below` (0 for the exact active sets of Newton, a small
     /// fraction of the largest force for an interior point), else stick or slip as the solver's
-    /// friction set says.
-    pub fn classify(force: f64, separated_below: f64, stick: bool) -> NodeStatus {
-        if force <= separated_below {
-            NodeStatus::Separated
-        } else if stick {
-            NodeStatus::Stick
-        } else {
-            NodeStatus::Slip
+    /// friction set says (`stick`), or in contact when there is no friction law (`stick` None).
+    pub fn classify(force: f64, separated_below: f64, stick: Option<bool>) -> NodeStatus {
+        match stick {
+            _ if force <= separated_below => NodeStatus::Separated,
+            None => NodeStatus::Contact,
+            Some(true) => NodeStatus::Stick,
+            Some(false) => NodeStatus::Slip,
         }
     }
-    pub const ALL: [NodeStatus; 3] = [NodeStatus::Separated, NodeStatus::Stick, NodeStatus::Slip];
+    pub const ALL: [NodeStatus; 4] = [NodeStatus::Separated, NodeStatus::Stick, NodeStatus::Slip, NodeStatus::Contact];
 
     /// The status named `name` in contact.csv.
     pub fn from_name(name: &str) -> Option<NodeStatus> {
         NodeStatus::ALL.into_iter().find(|s| s.as_str() == name)
     }
 
-    /// The contact.csv name of the status.
+    /// The contact.csv name of the status: separated, stick, slip, contact.
     pub fn as_str(self) -> &'static str {
         match self {
             NodeStatus::Separated => "separated",
             NodeStatus::Stick => "stick",
             NodeStatus::Slip => "slip",
+            NodeStatus::Contact => "contact",
         }
     }
+
+    /// The VTU `contact_status` code: 0 separated, 1 stick, 2 slip, 3 contact without friction
+    /// (−1 marks the nodes off Γ3).
     pub fn code(self) -> i32 {
         match self {
             NodeStatus::Separated => 0,
             NodeStatus::Stick => 1,
             NodeStatus::Slip => 2,
+            NodeStatus::Contact => 3,
         }
     }
 }

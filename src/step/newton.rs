@@ -386,7 +386,8 @@ fn solution(step: &StepData, x: Iterate, stick: &[bool], iterations: usize, resi
     let n = step.n();
     let q: Vec<f64> = (0..n).map(|i| step.q(i, &x.y)).collect();
     // exact active sets: a node is separated when it carries no force at all
-    let status = (0..n).map(|i| NodeStatus::classify(q[i] + x.lambda[i], 0.0, stick[i])).collect();
+    let status =
+        (0..n).map(|i| NodeStatus::classify(q[i] + x.lambda[i], 0.0, step.friction.then_some(stick[i]))).collect();
     ContactSolution { y: x.y, lambda: x.lambda, t: x.t, q, status, iterations, residual }
 }
 

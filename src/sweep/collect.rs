@@ -30,8 +30,10 @@ use crate::output::plots::{Options, Panel, Series, stacked_chart};
 use crate::output::write_atomic;
 
 /// The figures of sweep.csv, in column order (SCENES.md: final energies, cumulative
-/// dissipations, max normal force, max penetration, max |energy_residual|, iteration totals).
-pub const FIGURES: [&str; 18] = [
+/// dissipations, max normal force, max penetration, max |energy_residual|, iteration totals),
+/// then the iteration totals' means per step (total / steps_completed: a total grows with the
+/// number of steps, so against time.step it reads the wrong way round).
+pub const FIGURES: [&str; 20] = [
     "final_kinetic",
     "final_elastic",
     "final_compliance",
@@ -50,6 +52,8 @@ pub const FIGURES: [&str; 18] = [
     "fixed_point_cap_hits",
     "steps_completed",
     "final_time",
+    "newton_iterations_per_step",
+    "fixed_point_iterations_per_step",
 ];
 
 /// A point's `status` in sweep.csv: how its run ended (its summary.json's status), or why no
@@ -197,6 +201,13 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
             ("final_time", json(d.final_time.into())),
         ] {
             figures.insert(fig, v);
+        }
+        // the means per step of a run that did a step
+        let steps = summary.steps_completed;
+        if steps > 0 {
+            let per_step = |total: usize| json((total as f64 / steps as f64).into());
+            figures.insert("newton_iterations_per_step", per_step(d.newton_iterations_total));
+            figures.insert("fixed_point_iterations_per_step", per_step(d.fixed_point_iterations_total));
         }
     }
     // from history.csv: the last row and the maxima

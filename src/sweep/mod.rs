@@ -115,9 +115,16 @@ impl Default for PlotSpec {
 }
 
 fn default_figures() -> Vec<String> {
-    ["max_normal_force", "max_penetration", "friction_dissipation", "max_relative_energy_residual", "newton_iterations"]
-        .map(String::from)
-        .to_vec()
+    // iterations as a mean per step: a total grows with the number of steps
+    [
+        "max_normal_force",
+        "max_penetration",
+        "friction_dissipation",
+        "max_relative_energy_residual",
+        "newton_iterations_per_step",
+    ]
+    .map(String::from)
+    .to_vec()
 }
 
 /// A resolved axis: its column in sweep.csv, the label of each value, the numbers when every

@@ -208,11 +208,7 @@ fn contact_categories(out: &Path) -> (BTreeSet<usize>, Vec<&'static str>) {
         let c: Vec<&str> = line.split(',').collect();
         steps.insert(c[0].parse::<usize>().expect("step"));
         let lambda: f64 = c[9].parse().expect("lambda");
-        let status = match c[11] {
-            "stick" => NodeStatus::Stick,
-            "slip" => NodeStatus::Slip,
-            _ => NodeStatus::Separated,
-        };
+        let status = NodeStatus::from_name(c[11]).unwrap_or_else(|| panic!("unknown status {:?}", c[11]));
         let rec = NodeRecord {
             u_n: 0.0,
             u_t: 0.0,
@@ -264,6 +260,104 @@ fn forces_chart_has_both_histories_and_the_reference_line() {
         labels.iter().any(|t| t.starts_with("normal force"))
             && labels.iter().any(|t| t.starts_with("tangential force"))
     );
+}
+
+/// Units follow the dimension: every chart of every 3-D fixture (a few steps each) is free of
+/// the 2-D units per unit thickness (N/m, J/m) and reads N and J, and summary.json's
+/// `model.units` says the same; the 2-D charts (impact_friction) read N/m and J/m.
+#[test]
+fn charts_use_the_units_of_the_dimension() {
+    let charts = |out: &Path| -> Vec<(String, String)> {
+        let mut v: Vec<(String, String)> = std::fs::read_dir(out.join("plots"))
+            .expect("plots/")
+            .map(|e| e.expect("entry").path())
+            .filter(|p| p.extension().is_some_and(|e| e == "svg"))
+            .map(|p| (p.file_name().unwrap().to_string_lossy().into_owned(), read(&p)))
+            .collect();
+        v.sort();
+        v
+    };
+    for name in ["academic3d", "cantilever3d", "column_impact3d", "sliding_block3d", "hertz3d", "gmsh_block3d"] {
+        let scene = Scene::from_file(&scene_dir().join(format!("{name}.toml"))).expect("scene");
+        let (out, problem) = run_scene(name, Some(3.0 * scene.time.step), 1000);
+        assert_eq!(problem.mesh.dim(), 3, "{name}");
+        let all = charts(&out);
+        for (chart, text) in &all {
+            for unit in ["N/m", "J/m"] {
+                assert!(!text.contains(unit), "{name}: plots/{chart} contains {unit:?}");
+            }
+        }
+        let energy = &all.iter().find(|(c, _)| c == "energy.svg").expect("energy.svg").1;
+        assert!(energy.contains("energy [J]") && energy.contains("residual [J]"), "{name}: energy.svg in J");
+        if let Some((_, forces)) = all.iter().find(|(c, _)| c == "forces.svg") {
+            assert!(forces.contains("force [N]"), "{name}: forces.svg in N");
+        }
+        let summary: serde_json::Value = serde_json::from_str(&read(&out.join("summary.json"))).expect("json");
+        let units = &summary["model"]["units"];
+        assert_eq!(units["history"]["force"]["unit"], "N", "{name}: {units}");
+        assert_eq!(units["history"]["energy"]["unit"], "J", "{name}: {units}");
+        println!("{name}: {} charts in N and J", all.len());
+    }
+    let all = charts(&impact().out);
+    let joined: String = all.iter().map(|(_, t)| t.as_str()).collect();
+    assert!(joined.contains("force per unit thickness [N/m]") && joined.contains("N/m"), "2-D forces in N/m");
+    assert!(joined.contains("energy [J/m]"), "2-D energies in J/m");
+    let summary: serde_json::Value = serde_json::from_str(&read(&impact().out.join("summary.json"))).expect("json");
+    assert_eq!(summary["model"]["units"]["history"]["force"]["unit"], "N/m");
+    assert_eq!(summary["model"]["units"]["history"]["energy"]["unit"], "J/m");
+}
+
+/// The VTU `contact_status` codes of a frame (Int32, inline binary).
+fn vtu_status_codes(vtu: &str) -> Vec<i32> {
+    use base64::Engine as _;
+    let start = vtu.find("Name=\"contact_status\"").expect("a contact_status array");
+    let body = &vtu[start..];
+    let body = &body[body.find('>').expect("tag end") + 1..body.find("</DataArray>").expect("array end")];
+    let bytes = base64::engine::general_purpose::STANDARD.decode(body.trim()).expect("base64");
+    bytes[8..].chunks_exact(4).map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
+}
+
+/// Without a friction law a node in contact is neither stick nor slip (bar_impact: Signorini,
+/// no friction): contact.csv says `contact`, history.csv counts it in contact_nodes with
+/// slip_nodes = stick_nodes = 0, VTU gives it code 3, the status map and fractions name no stick
+/// or slip, and forces.svg draws no tangential force. impact_friction (a friction law) still
+/// says stick and slip.
+#[test]
+fn frictionless_contact_is_neither_stick_nor_slip() {
+    let (out, _) = run_scene("bar_impact", None, 10);
+    let (_, cats) = contact_categories(&out);
+    let contact = read(&out.join("contact.csv"));
+    let statuses: BTreeSet<&str> = contact.lines().skip(1).map(|l| l.split(',').nth(11).expect("status")).collect();
+    println!("bar_impact: statuses {statuses:?}, categories {:?}", cats.iter().collect::<BTreeSet<_>>());
+    assert!(statuses.contains("contact") && statuses.iter().all(|s| ["separated", "contact"].contains(s)));
+    let history = read(&out.join("history.csv"));
+    let header: Vec<&str> = history.lines().next().expect("header").split(',').collect();
+    let col = |name: &str| header.iter().position(|c| *c == name).expect(name);
+    let (c, sl, st) = (col("contact_nodes"), col("slip_nodes"), col("stick_nodes"));
+    let rows: Vec<Vec<&str>> = history.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert!(rows.iter().any(|r| r[c] != "0"), "bar_impact never touches");
+    assert!(rows.iter().all(|r| r[sl] == "0" && r[st] == "0"), "a frictionless run counts stick or slip");
+    let mut codes = BTreeSet::new();
+    for e in std::fs::read_dir(out.join("frames")).expect("frames/").flatten() {
+        codes.extend(vtu_status_codes(&read(&e.path())));
+    }
+    assert!(codes.contains(&3) && codes.iter().all(|k| [-1, 0, 3].contains(k)), "VTU status codes {codes:?}");
+    for chart in ["contact_status.svg", "status_fractions.svg"] {
+        let labels = texts(&svg(&out, chart));
+        assert!(labels.iter().any(|t| t.contains("no friction")), "{chart}: {labels:?}");
+        assert!(!labels.iter().any(|t| t.contains("stick") || t.contains("slip")), "{chart}: {labels:?}");
+    }
+    let forces = texts(&svg(&out, "forces.svg"));
+    assert!(forces.iter().any(|t| t.starts_with("normal force")), "{forces:?}");
+    assert!(!forces.iter().any(|t| t.contains("tangential")), "{forces:?}");
+    for status in NodeStatus::ALL {
+        assert_eq!(NodeStatus::from_name(status.as_str()), Some(status));
+    }
+    assert_eq!(NodeStatus::ALL.map(NodeStatus::code), [0, 1, 2, 3]);
+    // with a friction law: stick and slip, no `contact`
+    let contact = read(&impact().out.join("contact.csv"));
+    assert!(contact.lines().skip(1).all(|l| l.split(',').nth(11) != Some("contact")));
+    assert!(texts(&svg(&impact().out, "forces.svg")).iter().any(|t| t.starts_with("tangential force")));
 }
 
 /// contact_status.svg has a filled cell per (frame, contact node) and a legend entry for each
@@ -418,13 +512,15 @@ fn charts_accept_empty_and_non_finite_data() {
         (1, 0.1, vec![rec(1.0, 0.0, NodeStatus::Slip)]),
     ];
     let outputs = [
-        contact_charts::forces(&[], Some(nan)),
+        contact_charts::forces(&[], Some(nan), 2, true),
         contact_charts::forces(
             &[row(0.0, nan), row(nan, 1.0), row(0.1, f64::INFINITY), row(0.2, 1e308), row(0.3, -1e308)],
             Some(1.0),
+            3,
+            false,
         ),
-        contact_charts::contact_status(&[], &along),
-        contact_charts::contact_status(&frames, &along),
+        contact_charts::contact_status(&[], &along, true),
+        contact_charts::contact_status(&frames, &along, false),
         contact_charts::normal_stress(&[], &along, None),
         contact_charts::normal_stress(&frames, &along, Some(nan)),
         plots::line_chart("empty", "x", "y", &[], &[]),

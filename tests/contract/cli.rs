@@ -79,6 +79,82 @@ fn check_prints_the_ck_limit_and_warns() {
     assert!(out.contains("32 contact nodes") && out.contains("32 multipliers"));
 }
 
+/// `check`'s friction line (summary.json `model.friction`) says what a step solves, true for every
+/// friction bound: "one convex solve per step" only where S is known before the solve (μ
+/// constant, bound at the predictor), and there every step does at most one F.1 iteration; the
+/// total bound (the contact force, Coulomb) and the midpoint name the fixed point (F.1), and the
+/// total bound's run iterates it; `newton-unfrozen` names (Co.3) or (N.4). impact_friction to
+/// t = 0.1 with a constant μ = 0.3.
+#[test]
+fn friction_words_are_true_for_every_bound() {
+    use dyncontact::output::ModelInfo;
+    use dyncontact::problem::Problem;
+    use dyncontact::scene::{BoundAt, FrictionBound, FrictionLaw, InnerSolver, Scene};
+    use dyncontact::simulation::Simulation;
+    let dir = scene("impact_friction").parent().expect("dir").to_path_buf();
+    let cases = [
+        (
+            FrictionLaw::Constant,
+            FrictionBound::Capped,
+            BoundAt::Predictor,
+            InnerSolver::Newton,
+            "one convex solve per step",
+        ),
+        (
+            FrictionLaw::Constant,
+            FrictionBound::Uncapped,
+            BoundAt::Predictor,
+            InnerSolver::Newton,
+            "one convex solve per step",
+        ),
+        (
+            FrictionLaw::Constant,
+            FrictionBound::Total,
+            BoundAt::Predictor,
+            InnerSolver::Newton,
+            "fixed point on S (F.1)",
+        ),
+        (FrictionLaw::Constant, FrictionBound::Total, BoundAt::Predictor, InnerSolver::NewtonUnfrozen, "(Co.3)"),
+        (
+            FrictionLaw::Constant,
+            FrictionBound::Capped,
+            BoundAt::Midpoint,
+            InnerSolver::Newton,
+            "fixed point on S (F.1)",
+        ),
+        (
+            FrictionLaw::Exponential,
+            FrictionBound::Capped,
+            BoundAt::Predictor,
+            InnerSolver::Newton,
+            "fixed point on S (F.1)",
+        ),
+        (FrictionLaw::Exponential, FrictionBound::Capped, BoundAt::Predictor, InnerSolver::NewtonUnfrozen, "(N.4)"),
+    ];
+    for (law, bound, at, inner, words) in cases {
+        let mut s = Scene::from_file(&scene("impact_friction")).expect("scene");
+        s.time.end = 0.1;
+        let c = s.contact.as_mut().expect("contact");
+        (c.friction_bound, c.friction_bound_at) = (bound, at);
+        if law == FrictionLaw::Constant {
+            c.friction = dyncontact::scene::Friction { law, coefficient: Some(0.3), ..Default::default() };
+        }
+        s.solver.inner = inner;
+        let p = Problem::from_scene(&s, &dir).expect("problem");
+        let friction = ModelInfo::of(&p).friction;
+        println!("{law:?} {bound:?} {at:?} {inner:?}: {friction}");
+        assert!(friction.contains(words), "{bound:?} {at:?} {inner:?}: {friction:?} does not say {words:?}");
+        let one_solve = friction.contains("one convex solve");
+        assert_eq!(one_solve, words == "one convex solve per step", "{friction:?}");
+        if inner == InnerSolver::Newton && law == FrictionLaw::Constant {
+            let mut sim = Simulation::new(&p).expect("setup");
+            let most = sim.steps().map(|r| r.expect("step").report.fixed_point_iterations).max().unwrap_or(0);
+            println!("  at most {most} F.1 iterations per step");
+            assert!(if one_solve { most <= 1 } else { most > 1 }, "{friction:?}: at most {most} F.1 iterations");
+        }
+    }
+}
+
 /// Bad input exits with code 1 and one message naming the key path; a missing file names it.
 #[test]
 fn cli_bad_input_exits_1_with_a_message() {

@@ -181,6 +181,29 @@ fn six_point_sweep_matches_separate_runs_and_resumes() {
         assert_eq!(r.figure("max_normal_force"), Some(peak));
     }
     println!("6 points: sweep.csv rows and figures equal separate runs");
+    // the iteration totals' means per step, right after the figures that were there before them
+    let at = |name: &str| header.iter().position(|c| *c == name).unwrap_or_else(|| panic!("no {name} column"));
+    assert_eq!(
+        (at("newton_iterations_per_step"), at("fixed_point_iterations_per_step")),
+        (at("final_time") + 1, at("final_time") + 2)
+    );
+    for r in &rows {
+        let steps = r.figure("steps_completed").expect("steps_completed");
+        for (mean, total) in [
+            ("newton_iterations_per_step", "newton_iterations"),
+            ("fixed_point_iterations_per_step", "fixed_point_iterations"),
+        ] {
+            let (m, t) = (r.figure(mean).expect(mean), r.figure(total).expect(total));
+            println!("{}: {total} {t}, {mean} {m}", r.point);
+            assert_eq!(m, t / steps, "{}: {mean}", r.point);
+        }
+    }
+    // the charts draw the mean per step, not the total: the default figures and this sweep's
+    let chart = std::fs::read_to_string(dir.join("plots/time.step.svg")).expect("plots/time.step.svg");
+    assert!(chart.contains("newton_iterations_per_step"), "the time.step chart has no per-step iterations");
+    let defaults = dyncontact::sweep::PlotSpec::default().figures;
+    assert!(defaults.iter().any(|f| f == "newton_iterations_per_step"), "{defaults:?}");
+    assert!(!defaults.iter().any(|f| f == "newton_iterations" || f == "fixed_point_iterations"), "{defaults:?}");
     // resume: nothing runs again
     let stamp = |id: &str| {
         std::fs::metadata(dir.join("points").join(id).join("history.csv")).and_then(|m| m.modified()).expect("mtime")
