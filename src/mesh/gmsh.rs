@@ -7,7 +7,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::{Geometry, Mesh, PlaneMesh, Side, SolidMesh, key};
+use super::{Cell, Geometry, Mesh, PlaneMesh, Side, SolidMesh, key};
 use crate::error::{Error, Result};
 
 /// Read a 2-D `.msh` file (triangles); a file with tetrahedra is an error here (see [`read_any`]).
@@ -373,29 +373,50 @@ fn read_elements_41(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
     c.expect("$EndElements")
 }
 
+/// The file's nodes numbered in file order, for the elements to refer to.
+struct Numbering<'a> {
+    index: HashMap<i64, usize>,
+    file: &'a str,
+}
+
+impl<'a> Numbering<'a> {
+    fn new(raw: &Raw, file: &'a str) -> Numbering<'a> {
+        Numbering { index: raw.node_order.iter().enumerate().map(|(i, &tag)| (tag, i)).collect(), file }
+    }
+
+    /// The indices of an element's node tags; an error names the element (`what`) and the
+    /// first tag that is not in $Nodes.
+    fn nodes<const N: usize>(&self, tags: [i64; N], what: &str) -> Result<[usize; N]> {
+        let mut out = [0; N];
+        for (v, t) in out.iter_mut().zip(tags) {
+            *v =
+                self.index.get(&t).copied().ok_or_else(|| {
+                    Error::mesh(self.file, format!("{what} refers to node {t}, which is not in $Nodes"))
+                })?;
+        }
+        Ok(out)
+    }
+}
+
+/// Add facet `f` to the side `name`, which is created at its first facet.
+fn add_facet<C: Cell>(sides: &mut Vec<Side<C>>, name: String, f: C::Facet) {
+    match sides.iter_mut().find(|s| s.name == name) {
+        Some(s) => s.facets.push(f),
+        None => sides.push(Side { name, facets: vec![f] }),
+    }
+}
+
 fn build(raw: Raw, file: &str) -> Result<PlaneMesh> {
     if raw.triangles.is_empty() {
         return Err(Error::mesh(file, "contains no triangles (element type 2); mesh the surface with triangles"));
     }
     // number nodes in file order; check that elements refer to known nodes
-    let mut index: HashMap<i64, usize> = HashMap::new();
-    let mut nodes = Vec::with_capacity(raw.node_order.len());
-    for tag in &raw.node_order {
-        index.insert(*tag, nodes.len());
-        let x = raw.nodes[tag];
-        nodes.push([x[0], x[1]]);
-    }
-    let lookup = |t: i64, what: &str| {
-        index
-            .get(&t)
-            .copied()
-            .ok_or_else(|| Error::mesh(file, format!("{what} refers to node {t}, which is not in $Nodes")))
-    };
+    let numbering = Numbering::new(&raw, file);
+    let nodes = raw.node_order.iter().map(|tag| [raw.nodes[tag][0], raw.nodes[tag][1]]).collect();
     let mut cells = Vec::with_capacity(raw.triangles.len());
     let mut tags = Vec::with_capacity(raw.triangles.len());
     for (tag, _, t) in &raw.triangles {
-        let what = format!("triangle {tag}");
-        cells.push([lookup(t[0], &what)?, lookup(t[1], &what)?, lookup(t[2], &what)?]);
+        cells.push(numbering.nodes(*t, &format!("triangle {tag}"))?);
         tags.push(*tag);
     }
     // sides: one per physical curve (dim 1), named by $PhysicalNames or by the tag
@@ -403,15 +424,11 @@ fn build(raw: Raw, file: &str) -> Result<PlaneMesh> {
     // (element tag, side name, node tags, node indices) of every side edge, for the check below
     let mut side_lines: Vec<(i64, String, [i64; 2], [usize; 2])> = Vec::new();
     for (tag, phys, [ta, tb]) in &raw.lines {
-        let what = format!("line element {tag}");
-        let (a, b) = (lookup(*ta, &what)?, lookup(*tb, &what)?);
+        let edge = numbering.nodes([*ta, *tb], &format!("line element {tag}"))?;
         for p in phys {
             let name = raw.names.get(&(1, *p)).cloned().unwrap_or_else(|| p.to_string());
-            side_lines.push((*tag, name.clone(), [*ta, *tb], [a, b]));
-            match sides.iter_mut().find(|s| s.name == name) {
-                Some(s) => s.facets.push([a, b]),
-                None => sides.push(Side { name, facets: vec![[a, b]] }),
-            }
+            side_lines.push((*tag, name.clone(), [*ta, *tb], edge));
+            add_facet(&mut sides, name, edge);
         }
     }
     let mut mesh = Mesh {
@@ -435,33 +452,18 @@ fn build(raw: Raw, file: &str) -> Result<PlaneMesh> {
 /// triangles. The structural checks are `Mesh::check`'s (degenerate tetrahedra, unused
 /// nodes, side faces on the boundary).
 fn build_solid(raw: Raw, file: &str) -> Result<SolidMesh> {
-    let mut index: HashMap<i64, usize> = HashMap::new();
-    let mut nodes = Vec::with_capacity(raw.node_order.len());
-    for tag in &raw.node_order {
-        index.insert(*tag, nodes.len());
-        nodes.push(raw.nodes[tag]);
-    }
-    let lookup = |t: i64, what: &str| {
-        index
-            .get(&t)
-            .copied()
-            .ok_or_else(|| Error::mesh(file, format!("{what} refers to node {t}, which is not in $Nodes")))
-    };
+    let numbering = Numbering::new(&raw, file);
+    let nodes = raw.node_order.iter().map(|tag| raw.nodes[tag]).collect();
     let mut cells = Vec::with_capacity(raw.tets.len());
     for (tag, t) in &raw.tets {
-        let what = format!("tetrahedron {tag}");
-        cells.push([lookup(t[0], &what)?, lookup(t[1], &what)?, lookup(t[2], &what)?, lookup(t[3], &what)?]);
+        cells.push(numbering.nodes(*t, &format!("tetrahedron {tag}"))?);
     }
     let mut sides: Vec<Side<_>> = Vec::new();
     for (tag, phys, t) in &raw.triangles {
-        let what = format!("triangle {tag}");
-        let face = [lookup(t[0], &what)?, lookup(t[1], &what)?, lookup(t[2], &what)?];
+        let face = numbering.nodes(*t, &format!("triangle {tag}"))?;
         for p in phys {
             let name = raw.names.get(&(2, *p)).cloned().unwrap_or_else(|| p.to_string());
-            match sides.iter_mut().find(|s| s.name == name) {
-                Some(s) => s.facets.push(face),
-                None => sides.push(Side { name, facets: vec![face] }),
-            }
+            add_facet(&mut sides, name, face);
         }
     }
     let tags: Vec<i64> = raw.tets.iter().map(|(tag, _)| *tag).collect();
