@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::fem::assemble::nodal_masses;
 use crate::fem::{Dofs, LoadVector};
 use crate::mesh::solid::SolidMesh;
-use crate::mesh::{self, Geometry, Mesh};
+use crate::mesh::{self, Geometry, PlaneMesh};
 use crate::model::contact::ContactModel;
 use crate::model::expr::VecExpr;
 use crate::model::kinds::{Bound, FrictionBound};
@@ -183,13 +183,13 @@ pub fn build_loads(model: &Model, mesh: &Geometry, dofs: &Dofs) -> Result<LoadVe
             m,
             dofs,
             &model.loads.body,
-            &surface_loads(model, |side| m.side(side).map(|s| s.edges.clone()).unwrap_or_default()),
+            &surface_loads(model, |side| m.side(side).map(|s| s.facets.clone()).unwrap_or_default()),
         ),
         Geometry::Solid(m) => LoadVector::solid(
             m,
             dofs,
             &model.loads.body,
-            &surface_loads(model, |side| m.side(side).map(|s| s.faces.clone()).unwrap_or_default()),
+            &surface_loads(model, |side| m.side(side).map(|s| s.facets.clone()).unwrap_or_default()),
         ),
     };
     loads.check_finite(0.0)?;
@@ -243,7 +243,9 @@ fn at(mesh: &Geometry, v: usize) -> String {
 
 fn build_mesh(domain: &Domain, scene_dir: &Path) -> Result<Geometry> {
     let mesh = match domain {
-        Domain::Rectangle { size, cells } => Geometry::Plane(Mesh::rectangle(size[0], size[1], cells[0], cells[1])),
+        Domain::Rectangle { size, cells } => {
+            Geometry::Plane(PlaneMesh::rectangle(size[0], size[1], cells[0], cells[1]))
+        }
         Domain::Box { size, cells } => Geometry::Solid(SolidMesh::cuboid(*size, *cells)),
         Domain::Gmsh { .. } => {
             let path = domain.mesh_path(scene_dir).unwrap_or_default();

@@ -182,8 +182,8 @@ pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
             match mesh::gmsh::read_any(&path)? {
                 mesh::Geometry::Plane(mesh) => {
                     let on_contact: usize =
-                        model.contact_sides.iter().filter_map(|s| mesh.side(s)).map(|s| s.edges.len() + 1).sum();
-                    (mesh.nodes.len(), mesh.triangles.len(), on_contact)
+                        model.contact_sides.iter().filter_map(|s| mesh.side(s)).map(|s| s.facets.len() + 1).sum();
+                    (mesh.nodes.len(), mesh.cells.len(), on_contact)
                 }
                 mesh::Geometry::Solid(mesh) => {
                     // a surface's nodes: at most its faces' vertices (each face adds ≤ 1 node on a
@@ -192,9 +192,9 @@ pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
                         .contact_sides
                         .iter()
                         .filter_map(|s| mesh.side(s))
-                        .map(|s| s.faces.iter().flatten().collect::<std::collections::HashSet<_>>().len())
+                        .map(|s| s.facets.iter().flatten().collect::<std::collections::HashSet<_>>().len())
                         .sum();
-                    (mesh.nodes.len(), mesh.tets.len(), on_contact)
+                    (mesh.nodes.len(), mesh.cells.len(), on_contact)
                 }
             }
         }

@@ -4,7 +4,7 @@
 use crate::error::{Error, Result};
 use crate::linalg::{self, SpMat};
 use crate::mesh::solid::SolidMesh;
-use crate::mesh::{Geometry, Mesh};
+use crate::mesh::{Geometry, PlaneMesh};
 use crate::model::kinds::MassKind;
 use crate::model::material::Material;
 
@@ -77,12 +77,12 @@ pub struct Operators {
 /// (P.2) Galerkin form of ρü = Div σ + f0 with σ from (P.1): assembles, on all 2N DOFs,
 /// M_ij = ∫ρ φ_j·φ_i (consistent, or row-lumped), K_ij = ∫ Bε(φ_j):ε(φ_i) and
 /// C_ij = ∫ Aε(φ_j):ε(φ_i). Returns (M, K, C).
-pub fn assemble_full(mesh: &Mesh, mat: &Material, mass: MassKind) -> Result<(SpMat, SpMat, SpMat)> {
+pub fn assemble_full(mesh: &PlaneMesh, mat: &Material, mass: MassKind) -> Result<(SpMat, SpMat, SpMat)> {
     let n = 2 * mesh.nodes.len();
     let (db, da) = (mat.elasticity(), mat.viscosity());
-    let cap = 36 * mesh.triangles.len();
+    let cap = 36 * mesh.cells.len();
     let (mut tm, mut tk, mut tc) = (Vec::with_capacity(cap), Vec::with_capacity(cap), Vec::with_capacity(cap));
-    for tri in &mesh.triangles {
+    for tri in &mesh.cells {
         let x = [mesh.nodes[tri[0]], mesh.nodes[tri[1]], mesh.nodes[tri[2]]];
         let area = element::gradients(x).1.abs();
         let ke = element::operator_matrix(x, &db);
@@ -137,9 +137,9 @@ impl Element<'_> {
 pub fn assemble_solid(mesh: &SolidMesh, mat: &Material, mass: MassKind) -> Result<(SpMat, SpMat, SpMat)> {
     let n = 3 * mesh.nodes.len();
     let (db, da) = (mat.elasticity_3d(), mat.viscosity_3d());
-    let cap = 144 * mesh.tets.len();
+    let cap = 144 * mesh.cells.len();
     let (mut tm, mut tk, mut tc) = (Vec::with_capacity(cap), Vec::with_capacity(cap), Vec::with_capacity(cap));
-    for (t, tet) in mesh.tets.iter().enumerate() {
+    for (t, tet) in mesh.cells.iter().enumerate() {
         let x = tet.map(|v| mesh.nodes[v]);
         let degenerate = || {
             Error::mesh(
@@ -213,8 +213,8 @@ pub fn nodal_masses(
 /// Row-sum lumped mass per node of a tetrahedral mesh: Σ over adjacent tetrahedra of ρ|T|/4.
 pub fn solid_vertex_masses(mesh: &SolidMesh, mat: &Material) -> Vec<f64> {
     let mut mass = vec![0.0; mesh.nodes.len()];
-    for (t, tet) in mesh.tets.iter().enumerate() {
-        let m = tet::vertex_mass(mesh.signed_volume(t).abs(), mat.rho);
+    for (t, tet) in mesh.cells.iter().enumerate() {
+        let m = tet::vertex_mass(mesh.signed_measure(t).abs(), mat.rho);
         for &v in tet {
             mass[v] += m;
         }
@@ -239,8 +239,8 @@ pub fn modified_masses(mesh: &Geometry, mat: &Material, dofs: &Dofs, contact_nod
     let dim = mesh.dim();
     let n = mesh.n_nodes();
     let (mut mass, cells): (Vec<f64>, Vec<Vec<usize>>) = match mesh {
-        Geometry::Plane(m) => (vertex_masses(m, mat), m.triangles.iter().map(|t| t.to_vec()).collect()),
-        Geometry::Solid(m) => (solid_vertex_masses(m, mat), m.tets.iter().map(|t| t.to_vec()).collect()),
+        Geometry::Plane(m) => (vertex_masses(m, mat), m.cells.iter().map(|t| t.to_vec()).collect()),
+        Geometry::Solid(m) => (solid_vertex_masses(m, mat), m.cells.iter().map(|t| t.to_vec()).collect()),
     };
     let original = mass.clone();
     let mut adj = vec![Vec::new(); n];
@@ -410,9 +410,9 @@ fn least_weights(dim: usize, rows: &[[f64; 4]], cand: &[usize], m: &[f64]) -> Op
 }
 
 /// Row-sum lumped mass per mesh node: Σ over adjacent triangles of ρ|T|/3.
-pub fn vertex_masses(mesh: &Mesh, mat: &Material) -> Vec<f64> {
+pub fn vertex_masses(mesh: &PlaneMesh, mat: &Material) -> Vec<f64> {
     let mut mass = vec![0.0; mesh.nodes.len()];
-    for tri in &mesh.triangles {
+    for tri in &mesh.cells {
         let x = [mesh.nodes[tri[0]], mesh.nodes[tri[1]], mesh.nodes[tri[2]]];
         let area = element::gradients(x).1.abs();
         for &v in tri {

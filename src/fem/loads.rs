@@ -2,7 +2,7 @@
 //! Parts that do not depend on t are integrated once and cached.
 
 use crate::error::{Error, Result};
-use crate::mesh::Mesh;
+use crate::mesh::PlaneMesh;
 use crate::mesh::solid::SolidMesh;
 use crate::model::expr::VecExpr;
 
@@ -38,7 +38,12 @@ pub struct LoadVector {
 
 impl LoadVector {
     /// `body` is f0; `surface` lists (edges, f2, key path) for each loaded side.
-    pub fn new(mesh: &Mesh, dofs: &Dofs, body: &VecExpr, surface: &[(Vec<[usize; 2]>, VecExpr, String)]) -> LoadVector {
+    pub fn new(
+        mesh: &PlaneMesh,
+        dofs: &Dofs,
+        body: &VecExpr,
+        surface: &[(Vec<[usize; 2]>, VecExpr, String)],
+    ) -> LoadVector {
         let mut terms = Vec::new();
         if !body.is_zero() {
             terms.push(Term { field: body.clone(), points: body_points(mesh), path: "loads.body".into() });
@@ -142,10 +147,10 @@ fn integrate(term: &Term, t: f64, dofs: &Dofs, f: &mut [f64]) {
 }
 
 /// Edge-midpoint rule on each triangle: weights |T|/3, φ = ½ on the edge's two nodes.
-fn body_points(mesh: &Mesh) -> Vec<QPoint> {
-    let mut pts = Vec::with_capacity(3 * mesh.triangles.len());
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        let w = mesh.signed_area(t) / 3.0;
+fn body_points(mesh: &PlaneMesh) -> Vec<QPoint> {
+    let mut pts = Vec::with_capacity(3 * mesh.cells.len());
+    for (t, tri) in mesh.cells.iter().enumerate() {
+        let w = mesh.signed_measure(t) / 3.0;
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
             let (p, q) = (mesh.nodes[a], mesh.nodes[b]);
@@ -159,7 +164,7 @@ fn body_points(mesh: &Mesh) -> Vec<QPoint> {
 }
 
 /// Two-point Gauss rule on each edge: ξ = ½ ∓ 1/(2√3), weights |e|/2, φ_a = 1 − ξ, φ_b = ξ.
-fn edge_points(mesh: &Mesh, edges: &[[usize; 2]]) -> Vec<QPoint> {
+fn edge_points(mesh: &PlaneMesh, edges: &[[usize; 2]]) -> Vec<QPoint> {
     let g = 0.5 / 3f64.sqrt();
     let mut pts = Vec::with_capacity(2 * edges.len());
     for &[a, b] in edges {
@@ -178,9 +183,9 @@ fn edge_points(mesh: &Mesh, edges: &[[usize; 2]]) -> Vec<QPoint> {
 fn tet_points(mesh: &SolidMesh) -> Vec<QPoint> {
     let a = (5.0 + 3.0 * 5f64.sqrt()) / 20.0;
     let b = (5.0 - 5f64.sqrt()) / 20.0;
-    let mut pts = Vec::with_capacity(4 * mesh.tets.len());
-    for (t, tet) in mesh.tets.iter().enumerate() {
-        let w = mesh.signed_volume(t).abs() / 4.0;
+    let mut pts = Vec::with_capacity(4 * mesh.cells.len());
+    for (t, tet) in mesh.cells.iter().enumerate() {
+        let w = mesh.signed_measure(t).abs() / 4.0;
         let x = tet.map(|v| mesh.nodes[v]);
         for k in 0..4 {
             let lam: [f64; 4] = std::array::from_fn(|j| if j == k { a } else { b });

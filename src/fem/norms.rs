@@ -3,7 +3,7 @@
 //! error is far below the discretization error measured.
 
 use super::element;
-use crate::mesh::Mesh;
+use crate::mesh::PlaneMesh;
 use crate::mesh::solid::SolidMesh;
 use crate::model::material::Material;
 
@@ -30,7 +30,7 @@ const RULE: [([f64; 3], f64); 7] = {
 /// energy norm). `u_h` is nodal; `u`, `grad_u` are the exact field and its gradient
 /// [[∂x ux, ∂y ux], [∂x uy, ∂y uy]].
 pub fn error_norms(
-    mesh: &Mesh,
+    mesh: &PlaneMesh,
     mat: &Material,
     u_h: &[[f64; 2]],
     u: impl Fn(f64, f64) -> [f64; 2],
@@ -38,7 +38,7 @@ pub fn error_norms(
 ) -> (f64, f64) {
     let d = mat.elasticity();
     let (mut l2, mut en) = (0.0, 0.0);
-    for tri in &mesh.triangles {
+    for tri in &mesh.cells {
         let x = [mesh.nodes[tri[0]], mesh.nodes[tri[1]], mesh.nodes[tri[2]]];
         let (grad, signed) = element::gradients(x);
         let area = signed.abs();
@@ -105,7 +105,7 @@ pub fn error_norms_3d(
     let d = mat.elasticity_3d();
     let rule = tet_rule();
     let (mut l2, mut en) = (0.0, 0.0);
-    for tet in &mesh.tets {
+    for tet in &mesh.cells {
         let x = tet.map(|v| mesh.nodes[v]);
         let Some((grad, signed)) = super::tet::gradients(x) else { continue };
         let volume = signed.abs();

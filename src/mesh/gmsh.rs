@@ -7,12 +7,11 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::solid::{SolidMesh, Surface};
-use super::{Geometry, Mesh, Side};
+use super::{Cell, Geometry, Mesh, PlaneMesh, Side, SolidMesh, key};
 use crate::error::{Error, Result};
 
 /// Read a 2-D `.msh` file (triangles); a file with tetrahedra is an error here (see [`read_any`]).
-pub fn read(path: &Path) -> Result<Mesh> {
+pub fn read(path: &Path) -> Result<PlaneMesh> {
     match read_any(path)? {
         Geometry::Plane(m) => Ok(m),
         Geometry::Solid(m) => {
@@ -113,7 +112,7 @@ struct Raw {
 }
 
 /// Parse the text of a 2-D `.msh` file; `file` names it in messages.
-pub fn parse(text: &str, file: &str) -> Result<Mesh> {
+pub fn parse(text: &str, file: &str) -> Result<PlaneMesh> {
     match parse_any(text, file)? {
         Geometry::Plane(m) => Ok(m),
         Geometry::Solid(_) => {
@@ -374,50 +373,67 @@ fn read_elements_41(c: &mut Cursor, raw: &mut Raw) -> Result<()> {
     c.expect("$EndElements")
 }
 
-fn build(raw: Raw, file: &str) -> Result<Mesh> {
+/// The file's nodes numbered in file order, for the elements to refer to.
+struct Numbering<'a> {
+    index: HashMap<i64, usize>,
+    file: &'a str,
+}
+
+impl<'a> Numbering<'a> {
+    fn new(raw: &Raw, file: &'a str) -> Numbering<'a> {
+        Numbering { index: raw.node_order.iter().enumerate().map(|(i, &tag)| (tag, i)).collect(), file }
+    }
+
+    /// The indices of an element's node tags; an error names the element (`what`) and the
+    /// first tag that is not in $Nodes.
+    fn nodes<const N: usize>(&self, tags: [i64; N], what: &str) -> Result<[usize; N]> {
+        let mut out = [0; N];
+        for (v, t) in out.iter_mut().zip(tags) {
+            *v =
+                self.index.get(&t).copied().ok_or_else(|| {
+                    Error::mesh(self.file, format!("{what} refers to node {t}, which is not in $Nodes"))
+                })?;
+        }
+        Ok(out)
+    }
+}
+
+/// Add facet `f` to the side `name`, which is created at its first facet.
+fn add_facet<C: Cell>(sides: &mut Vec<Side<C>>, name: String, f: C::Facet) {
+    match sides.iter_mut().find(|s| s.name == name) {
+        Some(s) => s.facets.push(f),
+        None => sides.push(Side { name, facets: vec![f] }),
+    }
+}
+
+fn build(raw: Raw, file: &str) -> Result<PlaneMesh> {
     if raw.triangles.is_empty() {
         return Err(Error::mesh(file, "contains no triangles (element type 2); mesh the surface with triangles"));
     }
     // number nodes in file order; check that elements refer to known nodes
-    let mut index: HashMap<i64, usize> = HashMap::new();
-    let mut nodes = Vec::with_capacity(raw.node_order.len());
-    for tag in &raw.node_order {
-        index.insert(*tag, nodes.len());
-        let x = raw.nodes[tag];
-        nodes.push([x[0], x[1]]);
-    }
-    let lookup = |t: i64, what: &str| {
-        index
-            .get(&t)
-            .copied()
-            .ok_or_else(|| Error::mesh(file, format!("{what} refers to node {t}, which is not in $Nodes")))
-    };
-    let mut triangles = Vec::with_capacity(raw.triangles.len());
+    let numbering = Numbering::new(&raw, file);
+    let nodes = raw.node_order.iter().map(|tag| [raw.nodes[tag][0], raw.nodes[tag][1]]).collect();
+    let mut cells = Vec::with_capacity(raw.triangles.len());
     let mut tags = Vec::with_capacity(raw.triangles.len());
     for (tag, _, t) in &raw.triangles {
-        let what = format!("triangle {tag}");
-        triangles.push([lookup(t[0], &what)?, lookup(t[1], &what)?, lookup(t[2], &what)?]);
+        cells.push(numbering.nodes(*t, &format!("triangle {tag}"))?);
         tags.push(*tag);
     }
     // sides: one per physical curve (dim 1), named by $PhysicalNames or by the tag
-    let mut sides: Vec<Side> = Vec::new();
+    let mut sides: Vec<Side<_>> = Vec::new();
     // (element tag, side name, node tags, node indices) of every side edge, for the check below
     let mut side_lines: Vec<(i64, String, [i64; 2], [usize; 2])> = Vec::new();
     for (tag, phys, [ta, tb]) in &raw.lines {
-        let what = format!("line element {tag}");
-        let (a, b) = (lookup(*ta, &what)?, lookup(*tb, &what)?);
+        let edge = numbering.nodes([*ta, *tb], &format!("line element {tag}"))?;
         for p in phys {
             let name = raw.names.get(&(1, *p)).cloned().unwrap_or_else(|| p.to_string());
-            side_lines.push((*tag, name.clone(), [*ta, *tb], [a, b]));
-            match sides.iter_mut().find(|s| s.name == name) {
-                Some(s) => s.edges.push([a, b]),
-                None => sides.push(Side { name, edges: vec![[a, b]] }),
-            }
+            side_lines.push((*tag, name.clone(), [*ta, *tb], edge));
+            add_facet(&mut sides, name, edge);
         }
     }
     let mut mesh = Mesh {
         nodes,
-        triangles,
+        cells,
         sides,
         source: file.to_string(),
         tags: Some(super::Tags { nodes: raw.node_order.clone(), cells: tags.clone() }),
@@ -433,42 +449,27 @@ fn build(raw: Raw, file: &str) -> Result<Mesh> {
 /// The 3-D mesh of a file with tetrahedra: nodes in file order, each tetrahedron oriented
 /// positively (Gmsh's orientation is kept when positive, two vertices swapped otherwise), one
 /// side per physical surface (dim 2; named by $PhysicalNames or by the tag) made of its
-/// triangles. The structural checks are `SolidMesh::check`'s (degenerate tetrahedra, unused
+/// triangles. The structural checks are `Mesh::check`'s (degenerate tetrahedra, unused
 /// nodes, side faces on the boundary).
 fn build_solid(raw: Raw, file: &str) -> Result<SolidMesh> {
-    let mut index: HashMap<i64, usize> = HashMap::new();
-    let mut nodes = Vec::with_capacity(raw.node_order.len());
-    for tag in &raw.node_order {
-        index.insert(*tag, nodes.len());
-        nodes.push(raw.nodes[tag]);
-    }
-    let lookup = |t: i64, what: &str| {
-        index
-            .get(&t)
-            .copied()
-            .ok_or_else(|| Error::mesh(file, format!("{what} refers to node {t}, which is not in $Nodes")))
-    };
-    let mut tets = Vec::with_capacity(raw.tets.len());
+    let numbering = Numbering::new(&raw, file);
+    let nodes = raw.node_order.iter().map(|tag| raw.nodes[tag]).collect();
+    let mut cells = Vec::with_capacity(raw.tets.len());
     for (tag, t) in &raw.tets {
-        let what = format!("tetrahedron {tag}");
-        tets.push([lookup(t[0], &what)?, lookup(t[1], &what)?, lookup(t[2], &what)?, lookup(t[3], &what)?]);
+        cells.push(numbering.nodes(*t, &format!("tetrahedron {tag}"))?);
     }
-    let mut sides: Vec<Surface> = Vec::new();
+    let mut sides: Vec<Side<_>> = Vec::new();
     for (tag, phys, t) in &raw.triangles {
-        let what = format!("triangle {tag}");
-        let face = [lookup(t[0], &what)?, lookup(t[1], &what)?, lookup(t[2], &what)?];
+        let face = numbering.nodes(*t, &format!("triangle {tag}"))?;
         for p in phys {
             let name = raw.names.get(&(2, *p)).cloned().unwrap_or_else(|| p.to_string());
-            match sides.iter_mut().find(|s| s.name == name) {
-                Some(s) => s.faces.push(face),
-                None => sides.push(Surface { name, faces: vec![face] }),
-            }
+            add_facet(&mut sides, name, face);
         }
     }
     let tags: Vec<i64> = raw.tets.iter().map(|(tag, _)| *tag).collect();
-    let mut mesh = SolidMesh {
+    let mut mesh = Mesh {
         nodes,
-        tets,
+        cells,
         sides,
         source: file.to_string(),
         tags: Some(super::Tags { nodes: raw.node_order.clone(), cells: tags.clone() }),
@@ -481,9 +482,9 @@ fn build_solid(raw: Raw, file: &str) -> Result<SolidMesh> {
 /// Orientation in 3-D, as in 2-D ([`orient`]): every tetrahedron of one sign is a consistent
 /// mesh (all negative ones get two vertices swapped); a mix means that the mesh folds over
 /// itself (a node moved through a face) and is refused, naming a tetrahedron of the minority by
-/// its tag in the file. Degenerate ones are left to `SolidMesh::check`.
+/// its tag in the file. Degenerate ones are left to `Mesh::check`.
 fn orient_solid(mesh: &mut SolidMesh, tags: &[i64], file: &str) -> Result<()> {
-    let signs: Vec<f64> = (0..mesh.tets.len()).map(|t| mesh.signed_volume(t)).collect();
+    let signs: Vec<f64> = (0..mesh.cells.len()).map(|t| mesh.signed_measure(t)).collect();
     let negative = signs.iter().filter(|v| **v < 0.0).count();
     let positive = signs.iter().filter(|v| **v > 0.0).count();
     if negative > 0 && positive > 0 {
@@ -505,7 +506,7 @@ fn orient_solid(mesh: &mut SolidMesh, tags: &[i64], file: &str) -> Result<()> {
         ));
     }
     if negative > 0 {
-        for t in mesh.tets.iter_mut() {
+        for t in mesh.cells.iter_mut() {
             t.swap(2, 3);
         }
     }
@@ -514,8 +515,8 @@ fn orient_solid(mesh: &mut SolidMesh, tags: &[i64], file: &str) -> Result<()> {
 
 /// Orientation: all clockwise (surface normal −z) is flipped; a mix means a folded mesh.
 /// `tags` are the file's triangle tags, for messages.
-fn orient(mesh: &mut Mesh, tags: &[i64], file: &str) -> Result<()> {
-    let signs: Vec<f64> = (0..mesh.triangles.len()).map(|t| mesh.signed_area(t)).collect();
+fn orient(mesh: &mut PlaneMesh, tags: &[i64], file: &str) -> Result<()> {
+    let signs: Vec<f64> = (0..mesh.cells.len()).map(|t| mesh.signed_measure(t)).collect();
     let scale = 1e-14 * mesh.bbox_diameter().powi(2);
     if let Some(t) = signs.iter().position(|a| !a.is_finite()) {
         return Err(Error::mesh(
@@ -528,7 +529,7 @@ fn orient(mesh: &mut Mesh, tags: &[i64], file: &str) -> Result<()> {
     }
     let negative = signs.iter().filter(|a| **a < 0.0).count();
     if negative == signs.len() {
-        for t in mesh.triangles.iter_mut() {
+        for t in mesh.cells.iter_mut() {
             t.swap(1, 2);
         }
     } else if negative > 0 {
@@ -554,7 +555,7 @@ fn orient(mesh: &mut Mesh, tags: &[i64], file: &str) -> Result<()> {
 
 /// Duplicate nodes: coordinates equal within tol under different tags. A grid of cells of
 /// size tol finds every pair within tol in both coordinates among the 9 cells around a node.
-fn check_duplicates(mesh: &Mesh, node_tags: &[i64], file: &str) -> Result<()> {
+fn check_duplicates(mesh: &PlaneMesh, node_tags: &[i64], file: &str) -> Result<()> {
     let tol = 1e-12 * mesh.bbox_diameter();
     let lo = mesh.nodes.iter().fold([f64::INFINITY; 2], |m, p| [m[0].min(p[0]), m[1].min(p[1])]);
     let cell = |p: [f64; 2]| (((p[0] - lo[0]) / tol).floor() as i64, ((p[1] - lo[1]) / tol).floor() as i64);
@@ -581,9 +582,9 @@ fn check_duplicates(mesh: &Mesh, node_tags: &[i64], file: &str) -> Result<()> {
 }
 
 /// Every node is a vertex of some triangle.
-fn check_unreferenced(mesh: &Mesh, node_tags: &[i64], file: &str) -> Result<()> {
+fn check_unreferenced(mesh: &PlaneMesh, node_tags: &[i64], file: &str) -> Result<()> {
     let mut used = vec![false; mesh.nodes.len()];
-    mesh.triangles.iter().flatten().for_each(|&v| used[v] = true);
+    mesh.cells.iter().flatten().for_each(|&v| used[v] = true);
     if let Some(v) = used.iter().position(|u| !u) {
         return Err(Error::mesh(
             file,
@@ -598,16 +599,10 @@ fn check_unreferenced(mesh: &Mesh, node_tags: &[i64], file: &str) -> Result<()> 
 
 /// Side edges must be boundary edges (one owning triangle); say so in Gmsh's terms.
 /// `side_lines` are (element tag, side name, node tags, node indices) of every side edge.
-fn check_side_edges(mesh: &Mesh, side_lines: &[(i64, String, [i64; 2], [usize; 2])], file: &str) -> Result<()> {
-    let mut owners: HashMap<(usize, usize), usize> = HashMap::new();
-    for tri in &mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
-            *owners.entry((a.min(b), a.max(b))).or_default() += 1;
-        }
-    }
-    for (tag, name, [ta, tb], [a, b]) in side_lines {
-        match owners.get(&(*a.min(b), *a.max(b))).copied().unwrap_or(0) {
+fn check_side_edges(mesh: &PlaneMesh, side_lines: &[(i64, String, [i64; 2], [usize; 2])], file: &str) -> Result<()> {
+    let owners = mesh.facet_owners();
+    for (tag, name, [ta, tb], edge) in side_lines {
+        match owners.get(&key(*edge)).map_or(0, Vec::len) {
             1 => {}
             0 => {
                 return Err(Error::mesh(

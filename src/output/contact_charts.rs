@@ -10,7 +10,7 @@ use plotters::prelude::*;
 use super::ChartRow;
 use super::plots::{self, Options, Series, SeriesLabelPosition};
 use super::units;
-use crate::mesh::Mesh;
+use crate::mesh::PlaneMesh;
 use crate::model::contact::ContactModel;
 use crate::model::kinds::Bound;
 use crate::simulation::NodeRecord;
@@ -43,7 +43,7 @@ pub struct Along {
 
 impl Along {
     /// Positions of the contact nodes of `c` on `mesh`; `sides` are the Γ3 side names.
-    pub fn of(mesh: &Mesh, c: &ContactModel, sides: &[String]) -> Along {
+    pub fn of(mesh: &PlaneMesh, c: &ContactModel, sides: &[String]) -> Along {
         let xy: Vec<[f64; 2]> = c.nodes.iter().map(|&v| mesh.nodes[v]).collect();
         let (ylo, yhi) = xy.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[1]), b.max(p[1])));
         let horizontal = yhi - ylo <= 1e-9 * mesh.bbox_diameter().max(f64::MIN_POSITIVE);
@@ -60,11 +60,11 @@ impl Along {
 
 /// Arc length of `nodes` along the chains formed by the edges of `sides` (each chain walked
 /// from its leftmost end; chains laid end to end). Nodes on no edge fall back to x.
-fn arc_length(mesh: &Mesh, sides: &[String], nodes: &[usize]) -> Vec<f64> {
+fn arc_length(mesh: &PlaneMesh, sides: &[String], nodes: &[usize]) -> Vec<f64> {
     let n = mesh.nodes.len();
     let mut adj: Vec<Vec<usize>> = vec![Vec::new(); n];
     for side in sides.iter().filter_map(|name| mesh.side(name)) {
-        for &[a, b] in &side.edges {
+        for &[a, b] in &side.facets {
             if a < n && b < n {
                 adj[a].push(b);
                 adj[b].push(a);
@@ -352,9 +352,9 @@ fn deformed_frame<'a, 'b>(
 type Edge = (usize, usize);
 
 /// The edges of a triangulation, each once, and the boundary edges (those of one triangle).
-fn mesh_edges(mesh: &Mesh) -> (Vec<Edge>, Vec<Edge>) {
+fn mesh_edges(mesh: &PlaneMesh) -> (Vec<Edge>, Vec<Edge>) {
     let mut edges: Vec<Edge> = mesh
-        .triangles
+        .cells
         .iter()
         .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
         .collect();
@@ -374,7 +374,7 @@ fn mesh_edges(mesh: &Mesh) -> (Vec<Edge>, Vec<Edge>) {
 
 /// The deformed mesh x + s·u at time `t` over the grey undeformed outline, s chosen so the
 /// largest displacement is 10% of the domain size, to see the final shape at a glance.
-pub fn deformed(mesh: &Mesh, u: &[[f64; 2]], t: f64) -> Result<String, String> {
+pub fn deformed(mesh: &PlaneMesh, u: &[[f64; 2]], t: f64) -> Result<String, String> {
     let (unique, outline) = mesh_edges(mesh);
     let finite = |d: &[f64; 2]| d[0].is_finite() && d[1].is_finite();
     let u_max = u.iter().filter(|d| finite(d)).map(|d| d[0].hypot(d[1])).fold(0.0, f64::max);

@@ -54,7 +54,7 @@ pub fn export_operators(p: &Problem, dir: &Path) -> Result<()> {
     write_atomic(&dir.join("f.txt"), ft.as_bytes())?;
     // every surface load the vector holds, as (side, expression source, edges)
     let surface = |side: &str, value: &VecExpr| {
-        let edges = mesh.side(side).map(|s| s.edges.clone()).unwrap_or_default();
+        let edges = mesh.side(side).map(|s| s.facets.clone()).unwrap_or_default();
         serde_json::json!({"side": side, "value": value.sources(), "edges": edges})
     };
     let mut tractions: Vec<_> = model.loads.traction.iter().map(|tr| surface(&tr.side, &tr.value)).collect();

@@ -71,7 +71,7 @@ pub fn vtu(frame: &Snapshot) -> String {
         Geometry::Plane(m) => {
             // stress (σ_xx, σ_yy, σ_xy, σ_zz) per triangle, from (P.1)
             let mut stress = Vec::with_capacity(4 * nc);
-            for tri in &m.triangles {
+            for tri in &m.cells {
                 let x = [m.nodes[tri[0]], m.nodes[tri[1]], m.nodes[tri[2]]];
                 let (grad, _) = element::gradients(x);
                 let strain = |f: &[[f64; 3]]| {
@@ -86,13 +86,13 @@ pub fn vtu(frame: &Snapshot) -> String {
                 };
                 stress.extend(frame.material.stress(strain(frame.u), strain(frame.v)));
             }
-            (stress, 4, m.triangles.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 3, 5u8)
+            (stress, 4, m.cells.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 3, 5u8)
         }
         Geometry::Solid(m) => {
             // stress (σ_xx, σ_yy, σ_zz, σ_yz, σ_xz, σ_xy) per tetrahedron, from (P.1)
             let (b, a) = (frame.material.elasticity_3d(), frame.material.viscosity_3d());
             let mut stress = Vec::with_capacity(6 * nc);
-            for t in &m.tets {
+            for t in &m.cells {
                 let Some((grad, _)) = tet::gradients(t.map(|v| m.nodes[v])) else {
                     stress.extend([0.0; 6]);
                     continue;
@@ -102,7 +102,7 @@ pub fn vtu(frame: &Snapshot) -> String {
                 let sigma = b * (sm * nodal(frame.u)) + a * (sm * nodal(frame.v));
                 stress.extend(sigma.iter().copied());
             }
-            (stress, 6, m.tets.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 4, 10u8)
+            (stress, 6, m.cells.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 4, 10u8)
         }
     };
     floats(&mut s, "stress", comps, stress.into_iter());

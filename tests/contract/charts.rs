@@ -46,7 +46,7 @@ fn impact() -> &'static Fixture {
     RUN.get_or_init(|| {
         let (out, problem) = run_scene("impact_friction", Some(0.1), 10);
         let contact_nodes = problem.contact.as_ref().expect("contact").n();
-        Fixture { out, triangles: problem.mesh.plane().expect("a 2-D mesh").triangles.len(), contact_nodes }
+        Fixture { out, triangles: problem.mesh.plane().expect("a 2-D mesh").cells.len(), contact_nodes }
     })
 }
 
@@ -458,10 +458,10 @@ fn no_contact_scene_writes_only_energy_and_deformed() {
     println!(
         "gmsh_square: energy.svg {} polylines, deformed.svg {edges} edges for {} triangles",
         polylines(&energy).len(),
-        problem.mesh.plane().expect("a 2-D mesh").triangles.len()
+        problem.mesh.plane().expect("a 2-D mesh").cells.len()
     );
     assert!(polylines(&energy).len() >= 8);
-    assert!(edges >= problem.mesh.plane().expect("a 2-D mesh").triangles.len());
+    assert!(edges >= problem.mesh.plane().expect("a 2-D mesh").cells.len());
     for name in CONTACT_CHARTS {
         assert!(!out.join("plots").join(name).exists(), "{name} written without contact");
     }
@@ -529,7 +529,7 @@ fn charts_accept_empty_and_non_finite_data() {
         let text = o.unwrap_or_else(|e| panic!("chart {k} failed: {e}"));
         check_xml(&text).unwrap_or_else(|e| panic!("chart {k}: {e}"));
     }
-    let mesh = dyncontact::mesh::Mesh::rectangle(1.0, 1.0, 2, 2);
+    let mesh = dyncontact::mesh::PlaneMesh::rectangle(1.0, 1.0, 2, 2);
     let u = vec![[nan, 0.0]; mesh.nodes.len()];
     let text = contact_charts::deformed(&mesh, &u, nan).expect("deformed with NaN displacement");
     check_xml(&text).expect("deformed");

@@ -10,7 +10,7 @@
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
-use dyncontact::mesh::{Mesh, gmsh};
+use dyncontact::mesh::{PlaneMesh, gmsh};
 use dyncontact::problem::Problem;
 use dyncontact::run::{RunOptions, run};
 use dyncontact::scene::Scene;
@@ -19,12 +19,12 @@ fn fixture(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures").join(rel)
 }
 
-fn load(name: &str) -> Mesh {
+fn load(name: &str) -> PlaneMesh {
     let path = fixture(&format!("meshes/{name}"));
     gmsh::read(&path).unwrap_or_else(|e| panic!("{name} should load: {e}"))
 }
 
-fn side_names(m: &Mesh) -> Vec<String> {
+fn side_names(m: &PlaneMesh) -> Vec<String> {
     m.sides.iter().map(|s| s.name.clone()).collect()
 }
 
@@ -40,13 +40,13 @@ fn v22_and_v41_give_the_same_mesh() {
     let (a, b) = (load("square_v22.msh"), load("square_v41.msh"));
     // both files carry the same 16-digit decimal strings, so equality is exact
     assert_eq!(a.nodes, b.nodes);
-    assert_eq!(a.triangles, b.triangles);
+    assert_eq!(a.cells, b.cells);
     assert_eq!(side_names(&a), side_names(&b));
     for (sa, sb) in a.sides.iter().zip(&b.sides) {
-        assert_eq!(sa.edges, sb.edges, "side {}", sa.name);
+        assert_eq!(sa.facets, sb.facets, "side {}", sa.name);
     }
     assert_eq!(a.nodes.len(), 12);
-    assert_eq!(a.triangles.len(), 14);
+    assert_eq!(a.cells.len(), 14);
 }
 
 /// The unit square mesh has area 1 up to round-off (|A − 1| ≤ 1e-14).
@@ -56,7 +56,7 @@ fn square_area_is_one() {
         let m = load(name);
         // boundary nodes sit exactly on x, y ∈ {0, 1}, so the polygon is exactly the unit
         // square; 14 terms of size ~0.07 summed in double precision err by ~1e-16
-        assert!((m.area() - 1.0).abs() <= 1e-14, "{name}: area {}", m.area());
+        assert!((m.measure() - 1.0).abs() <= 1e-14, "{name}: area {}", m.measure());
     }
 }
 
@@ -66,7 +66,7 @@ fn triangles_are_counterclockwise() {
     // the orientation is computed here from the coordinates, not by the library
     for name in ["square_v22.msh", "square_v41.msh", "half_disk.msh"] {
         let m = load(name);
-        for (t, &[a, b, c]) in m.triangles.iter().enumerate() {
+        for (t, &[a, b, c]) in m.cells.iter().enumerate() {
             let (p, q, r) = (m.nodes[a], m.nodes[b], m.nodes[c]);
             let cross = (q[0] - p[0]) * (r[1] - p[1]) - (r[0] - p[0]) * (q[1] - p[1]);
             assert!(cross > 0.0, "{name}: triangle {t} {:?} is not counterclockwise", [a, b, c]);
@@ -79,8 +79,8 @@ fn triangles_are_counterclockwise() {
 fn all_clockwise_mesh_is_flipped() {
     let text = msh22(UNIT_NODES, &["1 2 0 1 5 2", "2 2 0 2 5 3", "3 2 0 3 5 4", "4 2 0 4 5 1"]);
     let m = gmsh::parse(&text, "cw.msh").expect("an all-clockwise mesh is valid");
-    assert!((0..m.triangles.len()).all(|t| m.signed_area(t) > 0.0));
-    assert!((m.area() - 1.0).abs() <= 1e-15);
+    assert!((0..m.cells.len()).all(|t| m.signed_measure(t) > 0.0));
+    assert!((m.measure() - 1.0).abs() <= 1e-15);
 }
 
 /// Each physical curve becomes one side with its edges: the square has 4 sides of 2 edges each.
@@ -94,16 +94,16 @@ fn square_sides_have_the_right_edges() {
     let lines = [("bottom", 1, 0.0), ("right", 0, 1.0), ("top", 1, 1.0), ("left", 0, 0.0)];
     for (name, k, v) in lines {
         let side = m.side(name).unwrap_or_else(|| panic!("no side {name}"));
-        assert_eq!(side.edges.len(), 2, "side {name}");
+        assert_eq!(side.facets.len(), 2, "side {name}");
         let mut length = 0.0;
-        for &[a, b] in &side.edges {
+        for &[a, b] in &side.facets {
             assert_eq!(m.nodes[a][k], v, "side {name}: node {a}");
             assert_eq!(m.nodes[b][k], v, "side {name}: node {b}");
             length += dist(m.nodes[a], m.nodes[b]);
         }
         assert!((length - 1.0).abs() <= 1e-15, "side {name} has length {length}");
         // every side edge is a boundary edge (one owning triangle), else this errors
-        m.edge_geometry(side).unwrap_or_else(|e| panic!("side {name}: {e}"));
+        m.facet_geometry(side).unwrap_or_else(|e| panic!("side {name}: {e}"));
     }
 }
 
@@ -113,7 +113,7 @@ fn unnamed_physical_curve_is_named_by_its_tag() {
     let text = msh22(UNIT_NODES, &[&UNIT_TRIANGLES[..], &["5 1 2 7 1 1 2"]].concat());
     let m = gmsh::parse(&text, "unnamed.msh").expect("valid");
     assert_eq!(side_names(&m), ["7"]);
-    assert_eq!(m.sides[0].edges, [[0, 1]]);
+    assert_eq!(m.sides[0].facets, [[0, 1]]);
 }
 
 /// Physical names may contain spaces, and physical tag 0 (Gmsh's "no group") makes no side.
@@ -124,15 +124,15 @@ fn physical_names_with_spaces_and_tag_zero() {
         .replace("1 1 \"bottom\"", "1  1   \"bottom side\"");
     let m = gmsh::parse(&text, "names.msh").expect("valid");
     assert_eq!(side_names(&m), ["bottom side"]);
-    assert_eq!(m.sides[0].edges, [[0, 1]]);
+    assert_eq!(m.sides[0].facets, [[0, 1]]);
 }
 
 // ---------------------------------------------------------------- the half disk
 
 /// Arc nodes of half_disk.msh in order of angle, with their angles.
-fn arc_nodes(m: &Mesh) -> Vec<(usize, f64)> {
+fn arc_nodes(m: &PlaneMesh) -> Vec<(usize, f64)> {
     let arc = m.side("arc").expect("side arc");
-    let mut v: Vec<usize> = arc.edges.iter().flatten().copied().collect();
+    let mut v: Vec<usize> = arc.facets.iter().flatten().copied().collect();
     v.sort_unstable();
     v.dedup();
     let mut out: Vec<(usize, f64)> = v.into_iter().map(|i| (i, m.nodes[i][1].atan2(m.nodes[i][0]))).collect();
@@ -146,8 +146,8 @@ fn half_disk_geometry() {
     // arc nodes on the unit circle at the angles kπ/12; area to round-off (1e-14)
     let m = load("half_disk.msh");
     assert_eq!(side_names(&m), ["arc", "flat"]);
-    assert_eq!(m.side("arc").map(|s| s.edges.len()), Some(12));
-    assert_eq!(m.side("flat").map(|s| s.edges.len()), Some(8));
+    assert_eq!(m.side("arc").map(|s| s.facets.len()), Some(12));
+    assert_eq!(m.side("flat").map(|s| s.facets.len()), Some(8));
     let arc = arc_nodes(&m);
     assert_eq!(arc.len(), 13);
     for (k, &(i, th)) in arc.iter().enumerate() {
@@ -157,7 +157,7 @@ fn half_disk_geometry() {
     }
     // the mesh fills the 12-gon inscribed in the half circle exactly (the flat side is straight)
     let polygon = 6.0 * (PI / 12.0).sin();
-    assert!((m.area() - polygon).abs() <= 1e-14, "area {} vs {polygon}", m.area());
+    assert!((m.measure() - polygon).abs() <= 1e-14, "area {} vs {polygon}", m.measure());
 }
 
 /// Outward nodal normals on a chord-discretized circle are radial at equidistant nodes (round-off).
@@ -208,7 +208,7 @@ fn arc_weights_sum_to_the_polygon_length() {
     let m = load("half_disk.msh");
     let sn = m.side_nodes(&["arc".to_string()], &[]).expect("side_nodes(arc)");
     let arc = m.side("arc").expect("side arc");
-    let chords: f64 = arc.edges.iter().map(|&[a, b]| dist(m.nodes[a], m.nodes[b])).sum();
+    let chords: f64 = arc.facets.iter().map(|&[a, b]| dist(m.nodes[a], m.nodes[b])).sum();
     let omega: f64 = sn.omega.iter().sum();
     assert!((omega - chords).abs() <= 1e-14, "Σω = {omega}, chord polygon {chords}");
     let n = 12.0;
@@ -250,7 +250,7 @@ fn gmsh_scene_runs() {
     let dir = path.parent().expect("scene dir");
     let problem = Problem::from_scene(&scene, dir).expect("gmsh_square.toml builds");
     assert_eq!(problem.mesh.plane().expect("a 2-D mesh").nodes.len(), 12);
-    assert_eq!(problem.mesh.plane().expect("a 2-D mesh").triangles.len(), 14);
+    assert_eq!(problem.mesh.plane().expect("a 2-D mesh").cells.len(), 14);
     assert!(problem.contact.is_none());
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("gmsh_scene_runs");
     let _ = std::fs::remove_dir_all(&out);
@@ -464,8 +464,8 @@ fn folded_3d_mesh_is_refused_naming_the_tetrahedron() {
             panic!("3-D")
         };
         // every tetrahedron positive after reading; volume 1/6 + 1/6 (exact in binary: round-off only)
-        assert!((0..2).all(|t| m.signed_volume(t) > 0.0));
-        assert!((m.volume() - 1.0 / 3.0).abs() < 1e-15, "volume {}", m.volume());
+        assert!((0..2).all(|t| m.signed_measure(t) > 0.0));
+        assert!((m.measure() - 1.0 / 3.0).abs() < 1e-15, "volume {}", m.measure());
     }
     let e = parse_any(&two_tets("0.2 0.2 0.5", false), "folded.msh").expect_err("a folded mesh is refused").to_string();
     println!("{e}");

@@ -212,7 +212,7 @@ fn r1_modified_mass_keeps_total_mass_and_centre_of_mass() {
         let c = p.contact.as_ref().expect("contact");
         let m = modified_masses(&p.mesh, &p.material, &p.dofs, &c.nodes).expect("modified mass");
         let mut lumped = vec![0.0; p.mesh.plane().expect("a 2-D mesh").nodes.len()];
-        for tri in &p.mesh.plane().expect("a 2-D mesh").triangles {
+        for tri in &p.mesh.plane().expect("a 2-D mesh").cells {
             let x = [
                 p.mesh.plane().expect("a 2-D mesh").nodes[tri[0]],
                 p.mesh.plane().expect("a 2-D mesh").nodes[tri[1]],

@@ -131,9 +131,9 @@ fn p1_p2_gmsh_solid_operators_match_scikit_fem() {
         dyncontact::mesh::Geometry::Plane(_) => panic!("{f}: expected tetrahedra"),
     };
     let (mesh, mesh22) = (read("holed_block.msh"), read("holed_block_22.msh"));
-    assert_eq!((mesh.nodes.len(), mesh.tets.len()), (329, 1016));
+    assert_eq!((mesh.nodes.len(), mesh.cells.len()), (329, 1016));
     assert_eq!(mesh.nodes, mesh22.nodes, "2.2 and 4.1 give the same nodes");
-    assert_eq!(mesh.tets, mesh22.tets, "2.2 and 4.1 give the same tetrahedra");
+    assert_eq!(mesh.cells, mesh22.cells, "2.2 and 4.1 give the same tetrahedra");
     let names: Vec<&str> = mesh.sides.iter().map(|s| s.name.as_str()).collect();
     for side in ["left", "right", "front", "back", "bottom", "top", "hole"] {
         assert!(names.contains(&side), "side {side} missing: {names:?}");

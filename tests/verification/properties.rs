@@ -8,7 +8,7 @@
 use dyncontact::fem::assemble::{Dofs, assemble_full};
 use dyncontact::fem::{LoadVector, element};
 use dyncontact::linalg;
-use dyncontact::mesh::Mesh;
+use dyncontact::mesh::PlaneMesh;
 use dyncontact::model::MaterialParams;
 use dyncontact::model::expr::VecExpr;
 use dyncontact::model::laws::{FrictionBoundLaw, FrictionCoefficient, NormalForceRule, NormalLaw};
@@ -99,7 +99,7 @@ proptest! {
     /// (P.2) Assembled over a mesh, both mass matrices sum to ρ·|Ω| per component.
     #[test]
     fn p2_assembled_mass_sums_to_rho_area(lx in 0.1..5.0f64, ly in 0.1..5.0f64, nx in 1usize..8, ny in 1usize..8, consistent in any::<bool>()) {
-        let mesh = Mesh::rectangle(lx, ly, nx, ny);
+        let mesh = PlaneMesh::rectangle(lx, ly, nx, ny);
         let mat = material(100.0, 0.3, 0.0, 0.0, Plane::Strain);
         let kind = if consistent { MassKind::Consistent } else { MassKind::Lumped };
         let (m, _, _) = assemble_full(&mesh, &mat, kind).expect("assembly");
@@ -111,14 +111,14 @@ proptest! {
     /// (P.4) A constant body force integrates to f0·|Ω| and a constant traction to f2·|side|.
     #[test]
     fn p4_constant_loads_sum_to_force(lx in 0.1..5.0f64, ly in 0.1..5.0f64, nx in 1usize..8, ny in 1usize..8, fx in -10.0..10.0f64, fy in -10.0..10.0f64) {
-        let mesh = Mesh::rectangle(lx, ly, nx, ny);
+        let mesh = PlaneMesh::rectangle(lx, ly, nx, ny);
         let dofs = Dofs::with_dim(mesh.nodes.len(), &vec![false; mesh.nodes.len()], 2);
         let body = VecExpr::parse(&[format!("{fx}"), format!("{fy}")], &["x", "y", "t"], "b").expect("expr");
         let f = LoadVector::new(&mesh, &dofs, &body, &[]).at(0.3);
         let (sx, sy): (f64, f64) = (f.iter().step_by(2).sum(), f.iter().skip(1).step_by(2).sum());
         let tol = 1e-12 * (fx.abs() + fy.abs() + 1.0) * lx * ly;
         prop_assert!((sx - fx * lx * ly).abs() <= tol && (sy - fy * lx * ly).abs() <= tol);
-        let top = mesh.side("top").expect("top").edges.clone();
+        let top = mesh.side("top").expect("top").facets.clone();
         let tr = VecExpr::parse(&[format!("{fy}"), format!("{fx}")], &["x", "y", "t"], "t").expect("expr");
         let g = LoadVector::new(&mesh, &dofs, &VecExpr::zero(2), &[(top, tr, "t".into())]).at(0.0);
         let (gx, gy): (f64, f64) = (g.iter().step_by(2).sum(), g.iter().skip(1).step_by(2).sum());
@@ -128,7 +128,7 @@ proptest! {
     /// (P.3) Clamping a side removes both DOFs of each of its nodes and nothing else.
     #[test]
     fn p3_clamped_dofs_are_eliminated(nx in 1usize..10, ny in 1usize..10) {
-        let mesh = Mesh::rectangle(1.0, 1.0, nx, ny);
+        let mesh = PlaneMesh::rectangle(1.0, 1.0, nx, ny);
         let clamped = mesh.nodes_on(&["left".to_string()]).expect("left");
         let dofs = Dofs::with_dim(mesh.nodes.len(), &clamped, 2);
         prop_assert_eq!(dofs.n_free, 2 * (mesh.nodes.len() - (ny + 1)));

@@ -11,7 +11,7 @@
 use dyncontact::fem::assemble::assemble_solid;
 use dyncontact::fem::tet;
 use dyncontact::linalg;
-use dyncontact::mesh::solid::{SolidMesh, Surface};
+use dyncontact::mesh::{Side, SolidMesh};
 use dyncontact::model::MaterialParams;
 use dyncontact::model::contact::Frame;
 use dyncontact::model::material::Material;
@@ -147,10 +147,10 @@ fn box_of_tetrahedra_tiles_the_box_with_six_sides() {
     let mesh = SolidMesh::cuboid(l, n);
     mesh.check().expect("the box is a valid mesh");
     assert_eq!(mesh.nodes.len(), 5 * 4 * 3);
-    assert_eq!(mesh.tets.len(), 6 * 4 * 3 * 2);
-    assert!((0..mesh.tets.len()).all(|t| mesh.signed_volume(t) > 0.0));
+    assert_eq!(mesh.cells.len(), 6 * 4 * 3 * 2);
+    assert!((0..mesh.cells.len()).all(|t| mesh.signed_measure(t) > 0.0));
     let vol = l[0] * l[1] * l[2];
-    assert!((mesh.volume() - vol).abs() <= 1e-13 * vol, "volume {} against {vol}", mesh.volume());
+    assert!((mesh.measure() - vol).abs() <= 1e-13 * vol, "volume {} against {vol}", mesh.measure());
     let faces = mesh.boundary_faces().len();
     assert_eq!(faces, 2 * 2 * (n[0] * n[1] + n[1] * n[2] + n[0] * n[2]), "boundary faces (conformity)");
     let expect = [
@@ -163,15 +163,15 @@ fn box_of_tetrahedra_tiles_the_box_with_six_sides() {
     ];
     for (name, normal, area, cells) in expect {
         let side = mesh.side(name).expect(name);
-        assert_eq!(side.faces.len(), 2 * cells, "{name}: faces");
-        let geo = mesh.face_geometry(side).expect("boundary faces");
+        assert_eq!(side.facets.len(), 2 * cells, "{name}: faces");
+        let geo = mesh.facet_geometry(side).expect("boundary faces");
         let total: f64 = geo.iter().map(|g| g.1).sum();
         assert!((total - area).abs() <= 1e-14 * area * cells as f64, "{name}: area {total} against {area}");
         for (nrm, _) in &geo {
             assert!((0..3).all(|c| (nrm[c] - normal[c]).abs() <= 1e-15), "{name}: normal {nrm:?}");
         }
         // the stored orientation is outward too: (x1 − x0) × (x2 − x0) along the normal
-        for f in &side.faces {
+        for f in &side.facets {
             let [p, q, r] = f.map(|v| mesh.nodes[v]);
             let c = [
                 (q[1] - p[1]) * (r[2] - p[2]) - (q[2] - p[2]) * (r[1] - p[1]),
@@ -243,16 +243,16 @@ fn p2_box_operators_have_rigid_kernel_and_total_mass() {
 #[test]
 fn solid_mesh_errors_name_the_defect() {
     let mut mesh = SolidMesh::cuboid([1.0, 1.0, 1.0], [1, 1, 1]);
-    mesh.tets[3].swap(0, 1);
+    mesh.cells[3].swap(0, 1);
     let e = mesh.check().expect_err("inverted").to_string();
     assert!(e.contains("tetrahedron 3") && e.contains("negative (inverted)"), "{e}");
 
     let mut flat = SolidMesh::cuboid([1.0, 1.0, 1.0], [1, 1, 1]);
-    let t = flat.tets[0];
+    let t = flat.cells[0];
     flat.nodes.push([0.5, 0.5, 0.0]);
     flat.nodes.push([0.25, 0.25, 0.0]);
     let (p, q) = (flat.nodes.len() - 2, flat.nodes.len() - 1);
-    flat.tets.push([t[0], t[1], p, q]);
+    flat.cells.push([t[0], t[1], p, q]);
     let e = flat.check().expect_err("degenerate").to_string();
     assert!(e.contains("zero (degenerate)"), "{e}");
 
@@ -261,7 +261,7 @@ fn solid_mesh_errors_name_the_defect() {
         vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
     let mut bowtie = SolidMesh {
         nodes,
-        tets: vec![[0, 1, 2, 3], [0, 1, 4, 5]],
+        cells: vec![[0, 1, 2, 3], [0, 1, 4, 5]],
         sides: Vec::new(),
         source: "bowtie".into(),
         tags: None,
@@ -269,7 +269,7 @@ fn solid_mesh_errors_name_the_defect() {
     let faces: Vec<[usize; 3]> =
         bowtie.boundary_faces().into_iter().filter(|f| f.contains(&0) && f.contains(&1)).collect();
     assert_eq!(faces.len(), 4);
-    bowtie.sides.push(Surface { name: "contact".into(), faces });
+    bowtie.sides.push(Side { name: "contact".into(), facets: faces });
     bowtie.check().expect("each tetrahedron is valid");
     let e = bowtie.side_nodes(&["contact".to_string()], &[]).expect_err("non-manifold").to_string();
     assert!(e.contains("the edge between node 0 and node 1") && e.contains("not a manifold"), "{e}");
