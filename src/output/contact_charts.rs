@@ -199,7 +199,7 @@ pub fn forces(rows: &[ChartRow], reference: Option<f64>, dim: usize, friction: b
     }
     let hlines: Vec<(String, f64)> = reference
         .filter(|r| r.is_finite())
-        .map(|r| (format!("p(g)·|Γ3| = {r:.4} {}", units::force(dim)), r))
+        .map(|r| (format!("p(g)·|Γ3| = {} {}", plots::number(r), units::force(dim)), r))
         .into_iter()
         .collect();
     let title = match (hlines.is_empty(), friction) {
@@ -228,11 +228,11 @@ pub fn normal_stress(frames: &[ContactFrame], along: &Along, p_g: Option<f64>) -
             let (_, t, recs) = pool[k];
             let points =
                 along.order.iter().filter_map(|&i| Some((along.s[i], recs.get(i).map(|r| r.p + r.lambda)?))).collect();
-            Series { name: format!("t = {t:.4} s"), points }
+            Series { name: format!("t = {} s", plots::number(*t)), points }
         })
         .collect();
     let hlines: Vec<(String, f64)> =
-        p_g.map(|p| (format!("p(g) = {p:.4} Pa (compliance bound)"), p)).into_iter().collect();
+        p_g.map(|p| (format!("p(g) = {} Pa (compliance bound)", plots::number(p)), p)).into_iter().collect();
     let opts = Options { markers: true, legend: SeriesLabelPosition::UpperRight, headroom: 0.35 };
     plots::line_chart_with(
         "Normal stress q + λ along Γ3 (frames with contact load)",
@@ -396,7 +396,8 @@ pub fn deformed(mesh: &PlaneMesh, u: &[[f64; 2]], t: f64) -> Result<String, Stri
     // equal scales on both axes: widen the narrower range to the plotting area's aspect
     let (w, h) = (960u32, ((960.0 * (y1 - y0) / (x1 - x0)) as u32).clamp(360, 900));
     let title = format!(
-        "Deformed mesh at t = {t:.4} s, displacement × {scale:.3} (largest |u| = {u_max:.3e} m); grey: undeformed outline"
+        "Deformed mesh at t = {} s, displacement × {scale:.3} (largest |u| = {u_max:.3e} m); grey: undeformed outline",
+        plots::number(t)
     );
     let (pw, ph) = {
         let mut scratch = String::new();

@@ -79,6 +79,18 @@ pub fn tick_label(v: f64, lo: f64, hi: f64) -> String {
     if s == "-0" { "0".into() } else { s }
 }
 
+/// A number in a chart's label: at most four decimals with trailing zeros dropped (39.375, 20,
+/// 0.2, 39.1667), or scientific notation outside [1e-3, 1e5) (1.0e-5).
+pub fn number(v: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && !(1e-3..1e5).contains(&a) {
+        return format!("{v:.1e}");
+    }
+    let s = format!("{v:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+    if s == "-0" { "0".into() } else { s }
+}
+
 /// One panel of a chart: title, axis names, series and labelled horizontal lines, and which
 /// axes are logarithmic (x, y: the values' log10 is drawn and the ticks read as powers of ten;
 /// non-positive values are left out).

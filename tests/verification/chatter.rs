@@ -25,6 +25,18 @@ enum Variant {
 
 const VARIANTS: [Variant; 4] = [Variant::Midpoint, Variant::ModifiedMass, Variant::Persistency, Variant::BackwardEuler];
 
+impl Variant {
+    /// The variant in the scene file's words (the chart's legend).
+    fn label(self) -> &'static str {
+        match self {
+            Variant::Midpoint => "midpoint",
+            Variant::ModifiedMass => "midpoint, mass = \"modified\" (R.1)",
+            Variant::Persistency => "midpoint, persistency = true (R.2)",
+            Variant::BackwardEuler => "backward-euler",
+        }
+    }
+}
+
 fn with(mut s: Scene, v: Variant) -> Scene {
     match v {
         Variant::Midpoint => {}
@@ -127,7 +139,7 @@ fn r1_r2_bar_impact_chatter_and_remedies() {
     let series: Vec<dyncontact::output::plots::Series> = VARIANTS
         .iter()
         .map(|&v| dyncontact::output::plots::Series {
-            name: format!("{v:?}"),
+            name: v.label().to_string(),
             points: force_history(with(fixture("bar_impact"), v)).into_iter().filter(|p| p.0 <= 2.4).collect(),
         })
         .collect();
