@@ -68,6 +68,10 @@ pub fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
 /// ticks apart (60, 2.5, 0.125: four significant digits of the span, trailing zeros dropped),
 /// or scientific notation when the axis reaches values ≥ 1e5 or lies entirely below 1e-3.
 pub fn tick_label(v: f64, lo: f64, hi: f64) -> String {
+    // a tick at zero computed as lo + k·step carries the rounding of the sum (−2.5e-32)
+    if v.abs() <= 1e-9 * (hi - lo).abs() {
+        return "0".into();
+    }
     let big = lo.abs().max(hi.abs());
     if big >= 1e5 || (big < 1e-3 && big > 0.0) {
         return format!("{v:.1e}");
@@ -77,6 +81,28 @@ pub fn tick_label(v: f64, lo: f64, hi: f64) -> String {
     let s = format!("{v:.decimals$}");
     let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s };
     if s == "-0" { "0".into() } else { s }
+}
+
+/// A linear axis range widened to whole multiples of a round step (1, 2 or 5 × 10^n, about an
+/// eighth of the span), so both ends are labelled ticks — a force reaching −15 gets a −20 tick.
+pub fn nice_bounds(lo: f64, hi: f64) -> (f64, f64) {
+    let span = hi - lo;
+    if !(span > 0.0) || !span.is_finite() {
+        return (lo, hi);
+    }
+    let raw = span / 8.0;
+    let mag = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * mag).find(|s| *s >= raw).unwrap_or(10.0 * mag);
+    let (mut a, mut b) = ((lo / step).floor() * step, (hi / step).ceil() * step);
+    // an end that is only the 5% padding past zero stays where it is (non-negative data keep
+    // their axis at 0, not at −step)
+    if lo < 0.0 && lo >= -0.06 * span {
+        a = lo;
+    }
+    if hi > 0.0 && hi <= 0.06 * span {
+        b = hi;
+    }
+    if a.is_finite() && b.is_finite() { (a, b) } else { (lo, hi) }
 }
 
 /// A number in a chart's label: at most four decimals with trailing zeros dropped (39.375, 20,
@@ -181,9 +207,13 @@ fn draw_panel<DB: DrawingBackend>(
         .collect();
     let hlines: Vec<(String, f64)> = p.hlines.iter().map(|h| (h.0.clone(), fy(h.1))).collect();
     let (x0, x1) = range(drawn.iter().flat_map(|s| s.points.iter().map(|q| q.0)));
-    let (y0, mut y1) = range(drawn.iter().flat_map(|s| s.points.iter().map(|q| q.1)).chain(hlines.iter().map(|h| h.1)));
+    let (mut y0, mut y1) =
+        range(drawn.iter().flat_map(|s| s.points.iter().map(|q| q.1)).chain(hlines.iter().map(|h| h.1)));
     if opts.headroom > 0.0 && (y1 + opts.headroom * (y1 - y0)).is_finite() {
         y1 += opts.headroom * (y1 - y0);
+    }
+    if !p.log.1 {
+        (y0, y1) = nice_bounds(y0, y1);
     }
     let mut chart = ChartBuilder::on(area)
         .caption(p.title, ("sans-serif", 20))
@@ -229,4 +259,23 @@ fn draw_panel<DB: DrawingBackend>(
         .draw()
         .map_err(|e| e.to_string())?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Chart numbers read as written: labels without padding zeros, a round labelled tick below a
+    /// negative minimum, an axis of non-negative data kept at 0, and a zero tick read as 0 (exact
+    /// comparisons: every value here is a short decimal or a product of one).
+    #[test]
+    fn chart_numbers_read_as_written() {
+        assert_eq!(number(39.375), "39.375");
+        assert_eq!(number(20.0), "20");
+        assert_eq!(number(39.166_666_666), "39.1667");
+        assert_eq!(number(1e-5), "1.0e-5");
+        assert_eq!(nice_bounds(-18.0, 103.0), (-20.0, 120.0));
+        assert_eq!(nice_bounds(-0.1, 3.0).0, -0.1);
+        assert_eq!(tick_label(-2.5e-32, -2e-16, 5e-17), "0");
+    }
 }
