@@ -159,7 +159,8 @@ impl Category {
 
     fn color(self) -> RGBColor {
         match self {
-            Category::Separated => RGBColor(235, 235, 235),
+            // light enough for a cell, dark enough for a line on white
+            Category::Separated => RGBColor(200, 200, 200),
             Category::ComplianceStick => RGBColor(158, 202, 225),
             Category::ComplianceSlip => RGBColor(33, 113, 181),
             Category::ConstraintStick => RGBColor(253, 174, 107),
@@ -210,7 +211,7 @@ pub fn forces(rows: &[ChartRow], reference: Option<f64>, dim: usize, friction: b
         }
         (false, false) => "Normal contact force on Γ3 (no friction law; above p(g)·|Γ3|: constraint active)",
     };
-    let opts = Options { markers: false, legend: SeriesLabelPosition::UpperRight, headroom: 0.3 };
+    let opts = Options { markers: false, legend: SeriesLabelPosition::UpperRight, headroom: 0.3, ..Options::default() };
     plots::line_chart_with(title, "t [s]", &units::force_axis(dim), &series, &hlines, &opts)
 }
 
@@ -233,7 +234,7 @@ pub fn normal_stress(frames: &[ContactFrame], along: &Along, p_g: Option<f64>) -
         .collect();
     let hlines: Vec<(String, f64)> =
         p_g.map(|p| (format!("p(g) = {} Pa (compliance bound)", plots::number(p)), p)).into_iter().collect();
-    let opts = Options { markers: true, legend: SeriesLabelPosition::UpperRight, headroom: 0.35 };
+    let opts = Options { markers: true, legend: SeriesLabelPosition::UpperRight, headroom: 0.35, ..Options::default() };
     plots::line_chart_with(
         "Normal stress q + λ along Γ3 (frames with contact load)",
         along.label,
@@ -442,6 +443,7 @@ pub fn deformed(mesh: &PlaneMesh, u: &[[f64; 2]], t: f64) -> Result<String, Stri
 /// dimension): the 3-D counterpart of the space–time map, which needs a 1-D Γ3; the categories
 /// of the run's friction law (`friction`).
 pub fn status_fractions(frames: &[ContactFrame], friction: bool) -> Result<String, String> {
+    let colors = Category::of_run(friction).iter().map(|c| c.color()).collect();
     let series: Vec<plots::Series> = Category::of_run(friction)
         .iter()
         .map(|&cat| plots::Series {
@@ -455,7 +457,14 @@ pub fn status_fractions(frames: &[ContactFrame], friction: bool) -> Result<Strin
                 .collect(),
         })
         .collect();
-    plots::line_chart("Contact status on Γ3: share of the nodes", "t [s]", "share of the contact nodes", &series, &[])
+    plots::line_chart_with(
+        "Contact status on Γ3: share of the nodes (the status map's colours)",
+        "t [s]",
+        "share of the contact nodes",
+        &series,
+        &[],
+        &plots::Options { colors, ..plots::Options::default() },
+    )
 }
 
 /// Maps of the contact status on a 2-D Γ3 (a surface of a 3-D body) at four frames spread over

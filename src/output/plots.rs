@@ -22,11 +22,14 @@ pub struct Options {
     /// extra room above the data, as a fraction of the primary range (keeps a legend placed
     /// at the top off the lines)
     pub headroom: f64,
+    /// the colour of each series in order (empty: [`PALETTE`]); a chart whose series are
+    /// categories drawn elsewhere too passes the categories' colours, so a status has one colour
+    pub colors: Vec<RGBColor>,
 }
 
 impl Default for Options {
     fn default() -> Options {
-        Options { markers: false, legend: SeriesLabelPosition::UpperLeft, headroom: 0.0 }
+        Options { markers: false, legend: SeriesLabelPosition::UpperLeft, headroom: 0.0, colors: Vec::new() }
     }
 }
 
@@ -231,7 +234,7 @@ fn draw_panel<DB: DrawingBackend>(
         .draw()
         .map_err(|e| e.to_string())?;
     for (k, s) in drawn.iter().enumerate() {
-        let color = PALETTE[k % PALETTE.len()];
+        let color = opts.colors.get(k).copied().unwrap_or(PALETTE[k % PALETTE.len()]);
         let style = ShapeStyle::from(&color).stroke_width(2);
         let pts = s.points.iter().copied().filter(|q| q.0.is_finite() && q.1.is_finite());
         if opts.markers {
