@@ -218,7 +218,11 @@ pub fn forces(rows: &[ChartRow], reference: Option<f64>, dim: usize, friction: b
 /// Normal stress q + λ along Γ3 at about five frames spread over the contact phase, with p(g),
 /// to show where the constraint lifts the stress above the compliance bound.
 pub fn normal_stress(frames: &[ContactFrame], along: &Along, p_g: Option<f64>) -> Result<String, String> {
-    let loaded: Vec<&ContactFrame> = frames.iter().filter(|f| f.2.iter().any(|r| r.p + r.lambda > 0.0)).collect();
+    // frames whose largest q + λ is at least 1% of the run's largest: a frame just touching
+    // (1e-5 Pa against 70) would draw a flat line at 0
+    let peak = |f: &ContactFrame| f.2.iter().map(|r| r.p + r.lambda).fold(0.0, f64::max);
+    let top = frames.iter().map(peak).fold(0.0, f64::max);
+    let loaded: Vec<&ContactFrame> = frames.iter().filter(|f| top > 0.0 && peak(f) >= 0.01 * top).collect();
     let pool: Vec<&ContactFrame> = if loaded.len() >= 5 { loaded } else { frames.iter().collect() };
     let mut picks: Vec<usize> =
         (0..5).map(|j| (j * pool.len().saturating_sub(1) + 2) / 4).filter(|&k| k < pool.len()).collect();
