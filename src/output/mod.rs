@@ -350,7 +350,7 @@ impl Writer {
             &plots::Options::default(),
         );
         save("energy.svg", energy)?;
-        // the charts of the mesh and of Γ3 along its arc are 2-D (3-D maps of Γ3: issue 14)
+        // the charts of the mesh and of Γ3 along its arc are 2-D (in 3-D, Γ3 is drawn as maps in its plane)
         if let Some(mesh) = p.mesh.plane() {
             let u: Vec<[f64; 2]> = p.dofs.expand_dim(&state.u).iter().map(|u| [u[0], u[1]]).collect();
             save("deformed.svg", contact_charts::deformed(mesh, &u, p.time(state.n)))?;
