@@ -379,7 +379,32 @@ fn mesh_edges(mesh: &PlaneMesh) -> (Vec<Edge>, Vec<Edge>) {
 
 /// The deformed mesh x + s·u at time `t` over the grey undeformed outline, s chosen so the
 /// largest displacement is 10% of the domain size, to see the final shape at a glance.
-pub fn deformed(mesh: &PlaneMesh, u: &[[f64; 2]], t: f64) -> Result<String, String> {
+/// Γ3's foundation for the deformed-mesh chart: the contact nodes in order along Γ3, where
+/// the foundation lies (x + gap ν) and where the penetration bound lies (x + (gap + g) ν), both
+/// drawn at the chart's displacement scale so that a node on the bound sits on its line.
+pub struct Foundation {
+    /// (node position x, outward normal ν, gap) per contact node, in order along Γ3
+    pub nodes: Vec<([f64; 2], [f64; 2], f64)>,
+    /// the penetration bound g (None: pure normal compliance)
+    pub g: Option<f64>,
+}
+
+impl Foundation {
+    /// The foundation of the contact model `c` on `mesh`, its nodes in the order of `along`.
+    pub fn of(mesh: &PlaneMesh, c: &ContactModel, along: &Along) -> Foundation {
+        let nodes = along
+            .order
+            .iter()
+            .map(|&i| {
+                let n = c.frames[i].normal;
+                (mesh.nodes[c.nodes[i]], [n[0], n[1]], c.gap[i])
+            })
+            .collect();
+        Foundation { nodes, g: c.constraint.filter(|g| g.is_finite()) }
+    }
+}
+
+pub fn deformed(mesh: &PlaneMesh, u: &[[f64; 2]], t: f64, foundation: Option<&Foundation>) -> Result<String, String> {
     let (unique, outline) = mesh_edges(mesh);
     let finite = |d: &[f64; 2]| d[0].is_finite() && d[1].is_finite();
     let u_max = u.iter().filter(|d| finite(d)).map(|d| d[0].hypot(d[1])).fold(0.0, f64::max);
@@ -395,7 +420,28 @@ pub fn deformed(mesh: &PlaneMesh, u: &[[f64; 2]], t: f64) -> Result<String, Stri
             (p.0.is_finite() && p.1.is_finite()).then_some(p)
         })
         .collect();
-    let pts = mesh.nodes.iter().map(|x| (x[0], x[1])).chain(moved.iter().flatten().copied());
+    // the foundation and the bound at the displacement scale, x + scale (gap + offset) ν, where
+    // that is near the body (within a fifth of its size: a curved foundation's far flanks, its
+    // gap magnified with the displacements, would shrink the body to a dot)
+    let line = |offset: f64| -> Vec<(f64, f64)> {
+        foundation.map_or(Vec::new(), |f| {
+            f.nodes
+                .iter()
+                .filter(|(_, _, gap)| (scale * (gap + offset)).abs() <= 0.2 * size)
+                .map(|(x, n, gap)| (x[0] + scale * (gap + offset) * n[0], x[1] + scale * (gap + offset) * n[1]))
+                .filter(|p| p.0.is_finite() && p.1.is_finite())
+                .collect()
+        })
+    };
+    let surface = line(0.0);
+    let bound = foundation.and_then(|f| f.g).map(line).unwrap_or_default();
+    let pts = mesh
+        .nodes
+        .iter()
+        .map(|x| (x[0], x[1]))
+        .chain(moved.iter().flatten().copied())
+        .chain(surface.iter().copied())
+        .chain(bound.iter().copied());
     let (xs, ys): (Vec<f64>, Vec<f64>) = pts.unzip();
     let ((mut x0, mut x1), (mut y0, mut y1)) = (plots::range(xs.into_iter()), plots::range(ys.into_iter()));
     // equal scales on both axes: widen the narrower range to the plotting area's aspect
@@ -438,6 +484,33 @@ pub fn deformed(mesh: &PlaneMesh, u: &[[f64; 2]], t: f64) -> Result<String, Stri
         let blue = plots::PALETTE[0].stroke_width(1);
         let drawn = unique.iter().filter_map(|&(a, b)| Some(PathElement::new(vec![moved[a]?, moved[b]?], blue)));
         chart.draw_series(drawn).map_err(|e| e.to_string())?;
+        let mut legend = false;
+        if surface.len() >= 2 {
+            let black = BLACK.stroke_width(2);
+            chart
+                .draw_series([PathElement::new(surface, black)])
+                .map_err(|e| e.to_string())?
+                .label("foundation (gap × the displacement scale)")
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], black));
+            legend = true;
+        }
+        if bound.len() >= 2 {
+            let red = plots::PALETTE[3].stroke_width(1);
+            chart
+                .draw_series([PathElement::new(bound, red)])
+                .map_err(|e| e.to_string())?
+                .label("penetration bound g (same scale)")
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], red));
+        }
+        if legend {
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw()
+                .map_err(|e| e.to_string())?;
+        }
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)

@@ -353,7 +353,11 @@ impl Writer {
         // the charts of the mesh and of Γ3 along its arc are 2-D (in 3-D, Γ3 is drawn as maps in its plane)
         if let Some(mesh) = p.mesh.plane() {
             let u: Vec<[f64; 2]> = p.dofs.expand_dim(&state.u).iter().map(|u| [u[0], u[1]]).collect();
-            save("deformed.svg", contact_charts::deformed(mesh, &u, p.time(state.n)))?;
+            let foundation = p.contact.as_ref().map(|c| {
+                let along = contact_charts::Along::of(mesh, c, &p.model.contact_sides);
+                contact_charts::Foundation::of(mesh, c, &along)
+            });
+            save("deformed.svg", contact_charts::deformed(mesh, &u, p.time(state.n), foundation.as_ref()))?;
         }
         let Some(c) = &p.contact else {
             for stale in ["forces.svg", "contact_status.svg", "normal_stress.svg", "status_fractions.svg"] {

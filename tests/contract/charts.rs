@@ -411,7 +411,8 @@ fn normal_stress_has_five_profiles_and_p_of_g() {
 }
 
 /// deformed.svg draws at least one edge per triangle of the deformed mesh, the grey undeformed
-/// outline, and says the displacement scale in the title.
+/// outline, the foundation and the penetration bound at the displacement scale, and says the
+/// scale in the title.
 #[test]
 fn deformed_mesh_has_every_edge_and_the_outline() {
     let f = impact();
@@ -428,6 +429,10 @@ fn deformed_mesh_has_every_edge_and_the_outline() {
     // 16 × 8 cells: 48 boundary edges
     assert_eq!(outline, 48, "outline edges");
     assert!(title.contains("displacement ×"), "{title}");
+    // the foundation under Γ3 (impact_friction: a bound g, so its line too), in the legend
+    let labels = texts(&svg);
+    assert!(labels.iter().any(|t| t.starts_with("foundation")), "no foundation line: {labels:?}");
+    assert!(labels.iter().any(|t| t.starts_with("penetration bound g")), "no bound line: {labels:?}");
 }
 
 /// Every chart of the contact run is well-formed SVG, and energy.svg keeps its eight series.
@@ -462,6 +467,7 @@ fn no_contact_scene_writes_only_energy_and_deformed() {
     );
     assert!(polylines(&energy).len() >= 8);
     assert!(edges >= problem.mesh.plane().expect("a 2-D mesh").cells.len());
+    assert!(!texts(&deformed).iter().any(|t| t.starts_with("foundation")), "a foundation without contact");
     for name in CONTACT_CHARTS {
         assert!(!out.join("plots").join(name).exists(), "{name} written without contact");
     }
@@ -531,9 +537,9 @@ fn charts_accept_empty_and_non_finite_data() {
     }
     let mesh = dyncontact::mesh::PlaneMesh::rectangle(1.0, 1.0, 2, 2);
     let u = vec![[nan, 0.0]; mesh.nodes.len()];
-    let text = contact_charts::deformed(&mesh, &u, nan).expect("deformed with NaN displacement");
+    let text = contact_charts::deformed(&mesh, &u, nan, None).expect("deformed with NaN displacement");
     check_xml(&text).expect("deformed");
-    let text = contact_charts::deformed(&mesh, &[], 0.0).expect("deformed without displacement");
+    let text = contact_charts::deformed(&mesh, &[], 0.0, None).expect("deformed without displacement");
     check_xml(&text).expect("deformed");
 }
 
