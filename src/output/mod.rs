@@ -347,7 +347,8 @@ impl Writer {
                     1.0,
                 ),
             ],
-            &plots::Options::default(),
+            // room above the data for the legend (it covered the first 0.12 s of the residual)
+            &plots::Options { headroom: 0.4, ..plots::Options::default() },
         );
         save("energy.svg", energy)?;
         // the charts of the mesh and of Γ3 along its arc are 2-D (in 3-D, Γ3 is drawn as maps in its plane)
