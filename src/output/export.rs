@@ -37,7 +37,7 @@ pub fn export_operators(p: &Problem, dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let n = mesh.nodes.len();
     let zero = vec![[0.0; 3]; n];
-    let contact = vec![(0.0, 0.0, 0.0, 0.0, -1); n];
+    let contact = vec![vtu::NodeContact::OFF; n];
     let frame = vtu::Snapshot { mesh: &p.mesh, material: &p.material, u: &zero, v: &zero, contact: &contact };
     write_atomic(&dir.join("mesh.vtu"), vtu::vtu(&frame).as_bytes())?;
     let model = &p.model;

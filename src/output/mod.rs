@@ -232,13 +232,19 @@ impl Writer {
     }
 
     fn frame(&mut self, rec: &StepRecord, p: &Problem, state: &State) -> Result<()> {
-        let mut contact = vec![(0.0, 0.0, 0.0, 0.0, -1); p.mesh.n_nodes()];
+        let mut contact = vec![vtu::NodeContact::OFF; p.mesh.n_nodes()];
         if let (Some(c), Some(w)) = (&p.contact, self.contact.as_mut()) {
             let mut rows = String::with_capacity(160 * rec.nodes.len());
             for (i, nr) in rec.nodes.iter().enumerate() {
                 let node = c.nodes[i];
                 let x = p.mesh.point(node);
-                contact[node] = (nr.p + nr.lambda, nr.p, nr.lambda, nr.friction, nr.status.code());
+                contact[node] = vtu::NodeContact {
+                    pressure: nr.p + nr.lambda,
+                    q: nr.p,
+                    lambda: nr.lambda,
+                    friction: nr.friction_vec,
+                    status: nr.status.code(),
+                };
                 // the columns of contact_columns(d): z after y in 3-D, the global components
                 // of v̄ and of the friction before friction_bound
                 let dim = c.dim;

@@ -20,17 +20,44 @@ pub struct Snapshot<'a> {
     /// nodal displacement and velocity (z = 0 in 2-D)
     pub u: &'a [[f64; 3]],
     pub v: &'a [[f64; 3]],
-    /// contact data per mesh node: (pressure q + λ, q, λ, friction −t, status code), the code
-    /// of `NodeStatus::code` (0 separated, 1 stick, 2 slip, 3 contact without friction), −1 off Γ3
-    pub contact: &'a [(f64, f64, f64, f64, i32)],
+    /// contact data per mesh node ([`NodeContact::OFF`] off Γ3)
+    pub contact: &'a [NodeContact],
 }
 
-/// One inline binary DataArray of `vtk_type` with the little-endian bytes `data`.
-fn array(out: &mut String, vtk_type: &str, name: &str, comps: usize, data: &[u8]) {
-    let _ = writeln!(
-        out,
-        "<DataArray type=\"{vtk_type}\" Name=\"{name}\" NumberOfComponents=\"{comps}\" format=\"binary\">"
-    );
+/// The contact fields of one mesh node in a frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodeContact {
+    /// contact pressure q + λ
+    pub pressure: f64,
+    /// compliance pressure q
+    pub q: f64,
+    /// constraint multiplier λ
+    pub lambda: f64,
+    /// the friction traction −t on the body in global components (along τ in 2-D, z = 0)
+    pub friction: [f64; 3],
+    /// `NodeStatus::code` (0 separated, 1 stick, 2 slip, 3 contact without friction), −1 off Γ3
+    pub status: i32,
+}
+
+impl NodeContact {
+    /// A node off the contact boundary Γ3: zero fields, status −1.
+    pub const OFF: NodeContact = NodeContact { pressure: 0.0, q: 0.0, lambda: 0.0, friction: [0.0; 3], status: -1 };
+}
+
+/// Names of the components of a 3-vector (`ComponentName0..2`).
+const VECTOR: &[&str] = &["x", "y", "z"];
+/// Names of the components of a symmetric tensor in VTK's order (`ComponentName0..5`).
+const SYMMETRIC_TENSOR: &[&str] = &["XX", "YY", "ZZ", "XY", "YZ", "XZ"];
+
+/// One inline binary DataArray of `vtk_type` with the little-endian bytes `data`; `names`
+/// (empty, or one per component) become its `ComponentName0..` attributes.
+fn array(out: &mut String, vtk_type: &str, name: &str, comps: usize, names: &[&str], data: &[u8]) {
+    let _ = write!(out, "<DataArray type=\"{vtk_type}\" Name=\"{name}\" NumberOfComponents=\"{comps}\"");
+    debug_assert!(names.is_empty() || names.len() == comps);
+    for (k, c) in names.iter().enumerate() {
+        let _ = write!(out, " ComponentName{k}=\"{c}\"");
+    }
+    out.push_str(" format=\"binary\">\n");
     let mut bytes = Vec::with_capacity(8 + data.len());
     bytes.extend_from_slice(&(data.len() as u64).to_le_bytes());
     bytes.extend_from_slice(data);
@@ -38,19 +65,21 @@ fn array(out: &mut String, vtk_type: &str, name: &str, comps: usize, data: &[u8]
     out.push_str("\n</DataArray>\n");
 }
 
-fn floats(out: &mut String, name: &str, comps: usize, vals: impl Iterator<Item = f64>) {
+fn floats(out: &mut String, name: &str, comps: usize, names: &[&str], vals: impl Iterator<Item = f64>) {
     // non-finite values never reach a frame (the time loop stops first); write 0 defensively
     let data: Vec<u8> = vals.flat_map(|x| if x.is_finite() { x } else { 0.0 }.to_le_bytes()).collect();
-    array(out, "Float64", name, comps, &data);
+    array(out, "Float64", name, comps, names, &data);
 }
 
-fn ints(out: &mut String, name: &str, comps: usize, vals: impl Iterator<Item = i64>) {
+fn ints(out: &mut String, name: &str, vals: impl Iterator<Item = i64>) {
     let data: Vec<u8> = vals.flat_map(i64::to_le_bytes).collect();
-    array(out, "Int64", name, comps, &data);
+    array(out, "Int64", name, 1, &[], &data);
 }
 
-/// The VTU document of a frame: triangles (VTK type 5) with the stress (σ_xx, σ_yy, σ_xy, σ_zz)
-/// per cell in 2-D, tetrahedra (VTK type 10) with (σ_xx, σ_yy, σ_zz, σ_yz, σ_xz, σ_xy) in 3-D.
+/// The VTU document of a frame: triangles (VTK type 5) in 2-D, tetrahedra (VTK type 10) in 3-D;
+/// vectors with 3 components (z = 0 in 2-D) named x, y, z; the (P.1) stress per cell as VTK's
+/// symmetric tensor (σ_xx, σ_yy, σ_zz, σ_xy, σ_yz, σ_xz) named XX, YY, ZZ, XY, YZ, XZ (in 2-D
+/// σ_yz = σ_xz = 0 and σ_zz the out-of-plane stress: 0 in plane stress).
 pub fn vtu(frame: &Snapshot) -> String {
     let mesh = frame.mesh;
     let (np, nc) = (mesh.n_nodes(), mesh.n_cells());
@@ -58,19 +87,19 @@ pub fn vtu(frame: &Snapshot) -> String {
     s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n");
     let _ = writeln!(s, "<Piece NumberOfPoints=\"{np}\" NumberOfCells=\"{nc}\">");
     s.push_str("<PointData Vectors=\"displacement\">\n");
-    floats(&mut s, "displacement", 3, frame.u.iter().flatten().copied());
-    floats(&mut s, "velocity", 3, frame.v.iter().flatten().copied());
-    floats(&mut s, "contact_pressure", 1, frame.contact.iter().map(|c| c.0));
-    floats(&mut s, "compliance_pressure", 1, frame.contact.iter().map(|c| c.1));
-    floats(&mut s, "lambda", 1, frame.contact.iter().map(|c| c.2));
-    floats(&mut s, "friction", 1, frame.contact.iter().map(|c| c.3));
-    let status: Vec<u8> = frame.contact.iter().flat_map(|c| c.4.to_le_bytes()).collect();
-    array(&mut s, "Int32", "contact_status", 1, &status);
+    floats(&mut s, "displacement", 3, VECTOR, frame.u.iter().flatten().copied());
+    floats(&mut s, "velocity", 3, VECTOR, frame.v.iter().flatten().copied());
+    floats(&mut s, "contact_pressure", 1, &[], frame.contact.iter().map(|c| c.pressure));
+    floats(&mut s, "compliance_pressure", 1, &[], frame.contact.iter().map(|c| c.q));
+    floats(&mut s, "lambda", 1, &[], frame.contact.iter().map(|c| c.lambda));
+    floats(&mut s, "friction", 3, VECTOR, frame.contact.iter().flat_map(|c| c.friction));
+    let status: Vec<u8> = frame.contact.iter().flat_map(|c| c.status.to_le_bytes()).collect();
+    array(&mut s, "Int32", "contact_status", 1, &[], &status);
     s.push_str("</PointData>\n<CellData>\n");
-    let (stress, comps, connectivity, nv, vtk_type) = match mesh {
+    let (stress, connectivity, nv, vtk_type) = match mesh {
         Geometry::Plane(m) => {
-            // stress (σ_xx, σ_yy, σ_xy, σ_zz) per triangle, from (P.1)
-            let mut stress = Vec::with_capacity(4 * nc);
+            // (P.1) stress per triangle: material.stress gives (σ_xx, σ_yy, σ_xy, σ_zz)
+            let mut stress = Vec::with_capacity(6 * nc);
             for tri in &m.cells {
                 let x = [m.nodes[tri[0]], m.nodes[tri[1]], m.nodes[tri[2]]];
                 let (grad, _) = element::gradients(x);
@@ -84,12 +113,14 @@ pub fn vtu(frame: &Snapshot) -> String {
                     }
                     e
                 };
-                stress.extend(frame.material.stress(strain(frame.u), strain(frame.v)));
+                let [sxx, syy, sxy, szz] = frame.material.stress(strain(frame.u), strain(frame.v));
+                stress.extend([sxx, syy, szz, sxy, 0.0, 0.0]);
             }
-            (stress, 4, m.cells.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 3, 5u8)
+            (stress, m.cells.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 3, 5u8)
         }
         Geometry::Solid(m) => {
-            // stress (σ_xx, σ_yy, σ_zz, σ_yz, σ_xz, σ_xy) per tetrahedron, from (P.1)
+            // (P.1) stress per tetrahedron: the Voigt order (σ_xx, σ_yy, σ_zz, σ_yz, σ_xz, σ_xy)
+            // of tet::strain_matrix, written in VTK's order XX, YY, ZZ, XY, YZ, XZ
             let (b, a) = (frame.material.elasticity_3d(), frame.material.viscosity_3d());
             let mut stress = Vec::with_capacity(6 * nc);
             for t in &m.cells {
@@ -100,18 +131,18 @@ pub fn vtu(frame: &Snapshot) -> String {
                 let sm = tet::strain_matrix(&grad);
                 let nodal = |f: &[[f64; 3]]| nalgebra::SVector::<f64, 12>::from_iterator(t.iter().flat_map(|&v| f[v]));
                 let sigma = b * (sm * nodal(frame.u)) + a * (sm * nodal(frame.v));
-                stress.extend(sigma.iter().copied());
+                stress.extend([sigma[0], sigma[1], sigma[2], sigma[5], sigma[3], sigma[4]]);
             }
-            (stress, 6, m.cells.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 4, 10u8)
+            (stress, m.cells.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 4, 10u8)
         }
     };
-    floats(&mut s, "stress", comps, stress.into_iter());
+    floats(&mut s, "stress", 6, SYMMETRIC_TENSOR, stress.into_iter());
     s.push_str("</CellData>\n<Points>\n");
-    floats(&mut s, "Points", 3, (0..np).flat_map(|i| mesh.point(i)));
+    floats(&mut s, "Points", 3, &[], (0..np).flat_map(|i| mesh.point(i)));
     s.push_str("</Points>\n<Cells>\n");
-    ints(&mut s, "connectivity", 1, connectivity.into_iter());
-    ints(&mut s, "offsets", 1, (1..=nc).map(|k| (nv * k) as i64));
-    array(&mut s, "UInt8", "types", 1, &vec![vtk_type; nc]);
+    ints(&mut s, "connectivity", connectivity.into_iter());
+    ints(&mut s, "offsets", (1..=nc).map(|k| (nv * k) as i64));
+    array(&mut s, "UInt8", "types", 1, &[], &vec![vtk_type; nc]);
     s.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
     s
 }

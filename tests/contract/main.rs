@@ -1,5 +1,5 @@
 //! The public contract from the outside: the command line, scenes and their errors, generated bad
-//! input, hostile run folders, Gmsh meshes, sweeps and overrides, the ε-study, the charts, and
+//! input, hostile run folders, Gmsh meshes, sweeps and overrides, the ε-study, the charts, the VTU frames, and
 //! memory known before it is spent.
 //! Each module is one of its files; `cargo xtask verify` ties a test to its file.
 
@@ -16,3 +16,4 @@ mod resources;
 mod scenes;
 mod study;
 mod sweep;
+mod vtu;

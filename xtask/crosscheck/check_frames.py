@@ -1,16 +1,21 @@
-"""Readability check of a `dyncontact run` output folder with meshio (the README, "Outputs").
+"""Readability check of a `dyncontact run` output folder with meshio and VTK (the README, "Outputs").
 
 usage: python check_frames.py DIR
 
 Parses DIR/series.pvd with ElementTree, reads every frame it lists with meshio and checks:
 the PVD lists exactly the files in DIR/frames, timesteps strictly increase from t >= 0, every
-frame has the same points and triangles, point data displacement and velocity (N x 3, z = 0),
-contact_pressure, friction, contact_status (one value per node), cell data stress (one 4-vector
-per triangle; in 3-D tetrahedra, points off z = 0 and a 6-vector of stress per tetrahedron), all
-finite. The first frame is the initial state of the cross-check scene
+frame has the same points and triangles, point data displacement, velocity and friction (N x 3,
+z = 0 in 2-D), contact_pressure, contact_status (one value per node), cell data stress (one
+6-component symmetric tensor per cell, triangles in 2-D, tetrahedra in 3-D with points off
+z = 0), all finite. The first frame is the initial state of the cross-check scene
 (u0 = 0, so its displacement must be exactly 0) and the last one must have moved (the loads are
-not zero). These are structural checks: no numerical tolerance is involved, since the VTU
-writer prints shortest round-trip floats and meshio reads back the exact f64 values.
+not zero).
+
+The last frame is also read with VTK's own reader (vtkXMLUnstructuredGridReader, the one
+ParaView uses): its stress array must have 6 components named XX, YY, ZZ, XY, YZ, XZ (VTK's
+symmetric-tensor order), displacement, velocity and friction 3 components named x, y, z, and
+every array VTK reads must equal meshio's. These are structural checks: no numerical tolerance
+is involved, since the arrays are inline binary f64 and both readers get the exact values back.
 """
 import sys
 import xml.etree.ElementTree as ET
@@ -18,6 +23,49 @@ from pathlib import Path
 
 import meshio
 import numpy as np
+
+TENSOR = ["XX", "YY", "ZZ", "XY", "YZ", "XZ"]
+VECTOR = ["x", "y", "z"]
+
+
+def vtk_read_back(path, m, check, where):
+    """Read one frame with VTK's XML reader and compare its arrays with meshio's `m`."""
+    try:
+        import vtk
+        from vtk.util.numpy_support import vtk_to_numpy
+    except ImportError as e:
+        check(False, f"{where}: VTK's Python module is missing ({e}); pip install -r requirements.txt")
+        return
+    reader = vtk.vtkXMLUnstructuredGridReader()
+    reader.SetFileName(str(path))
+    reader.Update()
+    grid = reader.GetOutput()
+    if not check(grid is not None and grid.GetNumberOfPoints() == m.points.shape[0],
+                 f"{where}: VTK reads {grid.GetNumberOfPoints() if grid else 0} points, meshio {m.points.shape[0]}"):
+        return
+    check(np.array_equal(vtk_to_numpy(grid.GetPoints().GetData()), m.points), f"{where}: VTK's points differ from meshio's")
+
+    def names(a):
+        return [a.GetComponentName(k) for k in range(a.GetNumberOfComponents())]
+
+    stress = grid.GetCellData().GetArray("stress")
+    if check(stress is not None, f"{where}: VTK finds no cell array 'stress'"):
+        check(stress.GetNumberOfComponents() == 6, f"{where}: VTK reads {stress.GetNumberOfComponents()} stress components, expected 6")
+        check(names(stress) == TENSOR, f"{where}: VTK's stress component names {names(stress)}, expected {TENSOR}")
+        check(np.array_equal(vtk_to_numpy(stress), m.cell_data["stress"][0]), f"{where}: VTK's stress differs from meshio's")
+    pd = grid.GetPointData()
+    for name in ["displacement", "velocity", "friction", "contact_pressure", "compliance_pressure", "lambda",
+                 "contact_status"]:
+        a = pd.GetArray(name)
+        if not check(a is not None, f"{where}: VTK finds no point array {name!r}"):
+            continue
+        if name in ("displacement", "velocity", "friction"):
+            check(names(a) == VECTOR, f"{where}: VTK's {name} component names {names(a)}, expected {VECTOR}")
+        ours = m.point_data.get(name)
+        check(ours is not None and np.array_equal(vtk_to_numpy(a).reshape(ours.shape), ours),
+              f"{where}: VTK's {name} differs from meshio's")
+    print(f"vtk {vtk.vtkVersion.GetVTKVersion()}: {where} stress {names(stress) if stress else None}, "
+          f"{grid.GetNumberOfCells()} cells, arrays equal to meshio's")
 
 
 def main():
@@ -61,7 +109,7 @@ def main():
         check(np.isfinite(m.points).all() and (solid or np.allclose(m.points[:, 2], 0.0)), f"{where}: bad points")
         pd = m.point_data
         for name, shape in [("displacement", (n, 3)), ("velocity", (n, 3)), ("contact_pressure", (n,)),
-                            ("friction", (n,)), ("contact_status", (n,))]:
+                            ("friction", (n, 3)), ("contact_status", (n,))]:
             if not check(name in pd, f"{where}: point_data has no {name!r} (has {sorted(pd)})"):
                 continue
             a = pd[name]
@@ -76,13 +124,16 @@ def main():
             check(np.issubdtype(s.dtype, np.integer), f"{where}: contact_status dtype {s.dtype} is not integer")
         stress = m.cell_data.get("stress")
         if check(stress is not None and len(stress) == 1, f"{where}: cell_data has no stress block (has {sorted(m.cell_data)})"):
-            comps = 6 if solid else 4
-            check(stress[0].shape == (nc, comps), f"{where}: stress shape {stress[0].shape}, expected ({nc}, {comps})")
+            check(stress[0].shape == (nc, 6), f"{where}: stress shape {stress[0].shape}, expected ({nc}, 6)")
             check(np.isfinite(stress[0]).all(), f"{where}: stress not finite")
+            if not solid and stress[0].shape == (nc, 6):
+                check(np.all(stress[0][:, 4:] == 0.0), f"{where}: a 2-D stress has non-zero YZ or XZ")
         if k == 0 and "displacement" in pd:
             check(np.all(pd["displacement"] == 0.0), f"{where}: initial displacement is not 0 (u0 = 0 in the scene)")
         if k == len(files) - 1 and "displacement" in pd:
             check(np.abs(pd["displacement"]).max() > 0.0, f"{where}: final displacement is 0 although loads act")
+        if k == len(files) - 1:
+            vtk_read_back(d / f, m, check, where)
 
     for p in problems:
         print(f"FAIL {p}")

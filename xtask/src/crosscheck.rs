@@ -16,7 +16,7 @@
 //!    Gmsh mesh fixtures/meshes/holed_block.msh with scikit-fem into
 //!    `fixtures/reference/{box3d,holed_block}_*.mtx` (tests/verification/crosscheck.rs compares dyncontact's);
 //! 4. short `dyncontact run`s of [`RUN_SCENES`] (2-D and 3-D), whose `series.pvd` and frames
-//!    `check_frames.py` reads with meshio;
+//!    `check_frames.py` reads with meshio (the last frame also with VTK's XML reader);
 //! 5. the GetFEM dynamic-contact checks (`getfem/*.py`: every GetFEM step converged, a bound at
 //!    each refinement level), and the sweeps' Snakemake path (src/workflow.rs).
 //!
@@ -30,7 +30,7 @@ use std::time::Instant;
 
 use crate::process::{exec, fresh_dir, rel, spawn};
 
-/// The scenes whose `run` output is read back with meshio (short runs, see the scene files): a
+/// The scenes whose `run` output is read back with meshio and VTK (short runs, see the scene files): a
 /// 2-D one and a 3-D one.
 const RUN_SCENES: [&str; 2] = ["crosscheck_strain", "cantilever3d"];
 /// Marker in the venv: hash of the requirements text last installed successfully.
