@@ -86,18 +86,7 @@ impl Checkpoint {
             v: bits(&s.v),
             lambda: bits(&s.lambda),
             t_fric: bits(&s.t_fric),
-            energy: [
-                e.kinetic,
-                e.elastic,
-                e.compliance,
-                e.external_work,
-                e.viscous_dissipation,
-                e.friction_dissipation,
-                e.constraint_dissipation,
-                e.persistency_dissipation,
-                e.residual,
-            ]
-            .map(f64::to_bits),
+            energy: e.to_array().map(f64::to_bits),
             energy_scale: s.energy_scale.to_bits(),
             active: s.active.clone(),
             stick: s.stick.clone(),
@@ -130,24 +119,13 @@ impl Checkpoint {
     }
 
     pub fn state(&self) -> State {
-        let e = self.energy.map(f64::from_bits);
         State {
             n: self.step,
             u: unbits(&self.u),
             v: unbits(&self.v),
             lambda: unbits(&self.lambda),
             t_fric: unbits(&self.t_fric),
-            energy: EnergyTerms {
-                kinetic: e[0],
-                elastic: e[1],
-                compliance: e[2],
-                external_work: e[3],
-                viscous_dissipation: e[4],
-                friction_dissipation: e[5],
-                constraint_dissipation: e[6],
-                persistency_dissipation: e[7],
-                residual: e[8],
-            },
+            energy: EnergyTerms::from_array(self.energy.map(f64::from_bits)),
             energy_scale: f64::from_bits(self.energy_scale),
             active: self.active.clone(),
             stick: self.stick.clone(),

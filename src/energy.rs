@@ -74,6 +74,38 @@ pub fn increment(a: &SpMat, x: &[f64], x_new: &[f64]) -> f64 {
 }
 
 impl EnergyTerms {
+    /// The terms in their one fixed order — kinetic, elastic, compliance, external work, viscous,
+    /// friction, constraint and persistency dissipation, residual — the order of history.csv's
+    /// columns and of a checkpoint's `energy`.
+    pub fn to_array(&self) -> [f64; 9] {
+        [
+            self.kinetic,
+            self.elastic,
+            self.compliance,
+            self.external_work,
+            self.viscous_dissipation,
+            self.friction_dissipation,
+            self.constraint_dissipation,
+            self.persistency_dissipation,
+            self.residual,
+        ]
+    }
+
+    /// The terms from [`EnergyTerms::to_array`]'s order.
+    pub fn from_array(e: [f64; 9]) -> EnergyTerms {
+        EnergyTerms {
+            kinetic: e[0],
+            elastic: e[1],
+            compliance: e[2],
+            external_work: e[3],
+            viscous_dissipation: e[4],
+            friction_dissipation: e[5],
+            constraint_dissipation: e[6],
+            persistency_dissipation: e[7],
+            residual: e[8],
+        }
+    }
+
     /// Add a step's increments to the totals.
     pub fn advance(&self, s: &StepEnergy) -> EnergyTerms {
         EnergyTerms {

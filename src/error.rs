@@ -130,11 +130,6 @@ impl Error {
     pub fn folder(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
         Error::Folder { path: path.into(), message: message.into() }
     }
-    /// True for failures of the numerical method (exit code 2), false for bad input.
-    pub fn is_solver_failure(&self) -> bool {
-        matches!(self, Error::Solver(_) | Error::LinearAlgebra(_))
-    }
-
     /// The exit code of the command line for this error ([`exit`]); an interruption exits as
     /// its signal asks (the caller knows which signal it was).
     pub fn exit_code(&self) -> u8 {

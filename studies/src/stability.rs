@@ -517,19 +517,7 @@ fn simulate(scene: &Scene, m: &mut Measured) -> (Option<Error>, bool) {
             }
         };
         let e = rec.energy;
-        let terms = [
-            e.kinetic,
-            e.elastic,
-            e.compliance,
-            e.external_work,
-            e.viscous_dissipation,
-            e.friction_dissipation,
-            e.constraint_dissipation,
-            e.persistency_dissipation,
-            e.residual,
-            rec.energy_scale,
-        ];
-        if terms.iter().any(|x| !x.is_finite()) {
+        if e.to_array().iter().chain([&rec.energy_scale]).any(|x| !x.is_finite()) {
             out.1 = true;
             break;
         }
@@ -820,17 +808,7 @@ pub fn measure_point(pd: &Path, energy_conserving: bool) -> Result<Measured> {
         .collect::<Result<_>>()?;
         let (fp, converged, newton) =
             (col("fixed_point_iterations")?, col("fixed_point_converged")?, col("newton_iterations")?);
-        let energy = |r: usize| EnergyTerms {
-            kinetic: terms[0][r],
-            elastic: terms[1][r],
-            compliance: terms[2][r],
-            external_work: terms[3][r],
-            viscous_dissipation: terms[4][r],
-            friction_dissipation: terms[5][r],
-            constraint_dissipation: terms[6][r],
-            persistency_dissipation: terms[7][r],
-            residual: terms[8][r],
-        };
+        let energy = |r: usize| EnergyTerms::from_array(std::array::from_fn(|j| terms[j][r]));
         if !h.rows.is_empty() {
             let mut tally = Tally::new(stored(&energy(0)));
             m.final_energy = energy(0);
