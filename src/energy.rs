@@ -74,9 +74,9 @@ pub fn increment(a: &SpMat, x: &[f64], x_new: &[f64]) -> f64 {
 }
 
 impl EnergyTerms {
-    /// The terms in their one fixed order — kinetic, elastic, compliance, external work, viscous,
-    /// friction, constraint and persistency dissipation, residual — the order of history.csv's
-    /// columns and of a checkpoint's `energy`.
+    /// The terms in one fixed order — kinetic, elastic, compliance, external work, viscous,
+    /// friction, constraint and persistency dissipation, residual — the order of a checkpoint's
+    /// `energy` (history.csv places its columns differently: see output::HISTORY).
     pub fn to_array(&self) -> [f64; 9] {
         [
             self.kinetic,
