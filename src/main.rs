@@ -300,6 +300,12 @@ fn cmd_run(
         checkpoint_every,
         resume: resume.is_some(),
         scene_text: Some(effective),
+        origin: dyncontact::run::Origin {
+            scene_file: Some(
+                scene.or(kept.as_deref()).map_or("<embedded academic scene>".to_string(), |p| p.display().to_string()),
+            ),
+            overrides: set.to_vec(),
+        },
         stop_after,
         interrupt: Some(Arc::clone(stop)),
     };

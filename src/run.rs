@@ -39,10 +39,21 @@ pub struct RunOptions {
     /// reads back; None: the folder's scene.toml is not the run's to write (a sweep's point,
     /// whose scene.toml the sweep wrote)
     pub scene_text: Option<String>,
+    /// where the scene came from, for summary.json: the file as given and the `--set` overrides
+    pub origin: Origin,
     /// stop cleanly (as if interrupted) after this step — for tests and batch control
     pub stop_after: Option<usize>,
     /// set by a signal handler to stop cleanly at the end of the current step
     pub interrupt: Option<Arc<AtomicBool>>,
+}
+
+/// Where a run's scene came from, recorded in summary.json (`scene_file`, `overrides`).
+#[derive(Debug, Clone, Default)]
+pub struct Origin {
+    /// the scene file as the user gave it (`<embedded academic scene>` for the default scene)
+    pub scene_file: Option<String>,
+    /// the `--set` overrides in the order given, as typed
+    pub overrides: Vec<String>,
 }
 
 /// Run a problem to its end time, writing every output. On a solver failure the files written
@@ -124,12 +135,16 @@ fn new_run_id(out: &Path) -> String {
 }
 
 /// The summary of a run that is starting.
-fn new_summary(problem: &Problem, sim: &Simulation, start: Instant, run_id: String) -> Summary {
+fn new_summary(problem: &Problem, sim: &Simulation, opts: &RunOptions, start: Instant, run_id: String) -> Summary {
     let info = ModelInfo::of(problem);
     let t = sim.setup_timing;
     let details = RunDetails {
         description: problem.model.description.clone(),
         run_id,
+        scene_file: opts.origin.scene_file.clone(),
+        overrides: opts.origin.overrides.clone(),
+        effective_scene: (opts.scene_text.is_some() || opts.out.join("scene.toml").is_file())
+            .then(|| "scene.toml".to_string()),
         inputs_fingerprint: problem.inputs_fingerprint.clone(),
         warnings: info.warnings(),
         model: info,
@@ -349,7 +364,7 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
         }
     };
     let run_id = checkpoint.as_ref().map_or_else(|| new_run_id(&opts.out), |cp| cp.run_id.clone());
-    let mut summary = new_summary(problem, &sim, start, run_id);
+    let mut summary = new_summary(problem, &sim, opts, start, run_id);
     let mut first_cap: Option<usize> = None;
     let mut writer = match &checkpoint {
         Some(cp) => start_resumed(problem, &mut sim, opts, cp, &mut summary, &mut first_cap)?,

@@ -1,6 +1,15 @@
 //! CSV text: fields quoted as RFC 4180 asks, tables of formatted rows (history.csv, sweep.csv and
 //! the studies' tables all go through here).
 
+/// A real number as CSV text: the shortest form that reads back to the same f64 (Rust's
+/// shortest round-trip digits), plain for 1e-5 ≤ |x| < 1e16 and with an exponent outside, so a
+/// value like 4.7e-39 is 9 characters instead of 44 zeros (the rule of Python's `repr`).
+/// Every CSV reader (Python's float, numpy, pandas, Rust's parse) reads both forms.
+pub fn real(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() || (1e-5..1e16).contains(&a) { format!("{x}") } else { format!("{x:e}") }
+}
+
 /// A CSV field: one line, quoted (RFC 4180) when it holds a comma or a quote.
 pub fn csv_field(s: &str) -> String {
     let one_line = s.replace(['\n', '\r'], " ");

@@ -33,7 +33,8 @@ use crate::simulation::{NodeRecord, State, StepRecord};
 pub use crate::files::{AppendFile, write_atomic, write_files};
 pub use summary::{ModelInfo, Summary};
 
-/// A history.csv value: a real or a count (written with Rust's shortest round-trip format).
+/// A history.csv value: a real (written by [`csv::real`]: shortest round-trip, exponent outside
+/// 1e-5 ≤ |x| < 1e16) or a count.
 #[derive(Debug, Clone, Copy)]
 pub enum Cell {
     Real(f64),
@@ -43,7 +44,7 @@ pub enum Cell {
 impl std::fmt::Display for Cell {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Cell::Real(x) => write!(f, "{x}"),
+            Cell::Real(x) => f.write_str(&csv::real(*x)),
             Cell::Count(n) => write!(f, "{n}"),
         }
     }
@@ -248,14 +249,14 @@ impl Writer {
                 // the columns of contact_columns(d): z after y in 3-D, the global components
                 // of v̄ and of the friction before friction_bound
                 let dim = c.dim;
-                let mut row: Vec<String> = vec![rec.step.to_string(), rec.t.to_string(), node.to_string()];
-                row.extend(x[..dim].iter().map(f64::to_string));
-                row.extend([nr.u_n, nr.u_t, nr.v_t, nr.p, nr.lambda, nr.friction].map(|v| v.to_string()));
+                let mut row: Vec<String> = vec![rec.step.to_string(), csv::real(rec.t), node.to_string()];
+                row.extend(x[..dim].iter().map(|&v| csv::real(v)));
+                row.extend([nr.u_n, nr.u_t, nr.v_t, nr.p, nr.lambda, nr.friction].map(csv::real));
                 row.push(nr.status.as_str().to_string());
                 if dim == 3 {
-                    row.extend(nr.v_t_vec.iter().chain(&nr.friction_vec).map(f64::to_string));
+                    row.extend(nr.v_t_vec.iter().chain(&nr.friction_vec).map(|&v| csv::real(v)));
                 }
-                row.push(nr.bound.to_string());
+                row.push(csv::real(nr.bound));
                 rows.push_str(&row.join(","));
                 rows.push('\n');
             }

@@ -396,6 +396,17 @@ pub struct RunDetails {
     /// this run's identity: a fresh run makes a new one, a resumed run keeps it, and its
     /// checkpoint carries it (resume refuses a checkpoint of another run)
     pub run_id: String,
+    /// the scene file as given (`<embedded academic scene>` for the default scene; a sweep
+    /// point's own scene.toml); absent when the run was started from a library call without one
+    #[serde(default)]
+    pub scene_file: Option<String>,
+    /// the `--set` overrides applied to it, in order, as typed
+    #[serde(default)]
+    pub overrides: Vec<String>,
+    /// the effective scene (overrides applied) in the run folder: `scene.toml`, which
+    /// `run --resume DIR` reads back
+    #[serde(default)]
+    pub effective_scene: Option<String>,
     /// the fingerprint of everything the run read: the scene as validated and the bytes of
     /// its mesh file (crate::fingerprint::inputs)
     pub inputs_fingerprint: String,

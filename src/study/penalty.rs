@@ -210,7 +210,9 @@ impl PenaltyStudy {
     pub fn csv(&self) -> String {
         csv_table(
             "eps,e_V,e_H,delta,wall_time_s",
-            self.rows.iter().map(|r| [r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s].map(|x| x.to_string()).to_vec()),
+            self.rows
+                .iter()
+                .map(|r| [r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s].map(crate::output::csv::real).to_vec()),
         )
     }
 

@@ -218,6 +218,10 @@ fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> 
         checkpoint_every: None,
         resume: false,
         scene_text: None,
+        origin: crate::run::Origin {
+            scene_file: Some(pd.join("scene.toml").display().to_string()),
+            overrides: Vec::new(),
+        },
         stop_after: None,
         interrupt,
     };

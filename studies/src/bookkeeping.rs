@@ -69,6 +69,7 @@ pub fn run_part(plan: &BookkeepingPlan, out: &Path) -> Result<Vec<BookkeepingRow
         checkpoint_every: None,
         resume: false,
         scene_text: None,
+        origin: Default::default(),
         stop_after: None,
         interrupt: None,
     };

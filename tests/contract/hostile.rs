@@ -802,6 +802,13 @@ fn resume_needs_only_the_run_folder() {
     assert_eq!(run_into(&a, &[&["--stop-after", "50"][..], &SMALL[..]].concat()).status.code(), Some(130));
     let summary = std::fs::read_to_string(a.join("summary.json")).expect("summary");
     assert!(summary.contains(&format!("continue with --resume {}", a.display())), "{summary}");
+    // (issue 24, item 5) the summary says where the scene came from and what changed it
+    let s: serde_json::Value = serde_json::from_str(&summary).expect("json");
+    assert_eq!(s["scene_file"], "<embedded academic scene>");
+    let given: Vec<&str> = SMALL.chunks(2).map(|p| p[1]).collect();
+    assert_eq!(s["overrides"], serde_json::json!(given), "the --set arguments in order, as typed");
+    assert_eq!(s["effective_scene"], "scene.toml");
+    assert_eq!(s["version"], env!("CARGO_PKG_VERSION"));
     let o = cli(&["run", "--resume", a.to_str().expect("path")]);
     assert!(o.status.success(), "{}", err(&o));
     assert!(run_into(&b, &SMALL).status.success());

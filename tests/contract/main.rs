@@ -12,6 +12,7 @@ mod example;
 mod fuzz_inputs;
 mod gmsh;
 mod hostile;
+mod numbers;
 mod resources;
 mod scenes;
 mod study;

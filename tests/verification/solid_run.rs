@@ -583,6 +583,7 @@ fn outputs_3d_have_the_contract_columns_and_charts() {
         checkpoint_every: None,
         resume: false,
         scene_text: None,
+        origin: Default::default(),
         stop_after: None,
         interrupt: None,
     };
