@@ -121,6 +121,11 @@ impl Units {
     pub fn history_unit(&self, column: &str) -> Option<&str> {
         self.history.values().find(|f| f.columns.iter().any(|c| c == column)).map(|f| f.unit.as_str())
     }
+
+    /// The unit of contact.csv column `column`, if it has one here (`status` has none).
+    pub fn contact_unit(&self, column: &str) -> Option<&str> {
+        self.contact.values().find(|f| f.columns.iter().any(|c| c == column)).map(|f| f.unit.as_str())
+    }
 }
 
 #[cfg(test)]

@@ -51,6 +51,17 @@ fn cli_run_default_scene_writes_outputs() {
     // the only warning allowed is the (C.k) note of decision 6 (k = 5e-4 exceeds the corner limit)
     let warnings = summary["warnings"].as_array().expect("warnings");
     assert!(warnings.iter().all(|w| w.as_str().unwrap_or("").contains("(C.k)")), "unexpected warnings: {warnings:?}");
+    // (issue 24, item 10) the README's figures of this run are this run's: "(E.1) defect 2e-16",
+    // "6.2 convex solves per step … (22 at most" (rounded as printed there)
+    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).expect("README");
+    let steps = summary["steps_completed"].as_f64().expect("steps");
+    let per_step = summary["fixed_point_iterations_total"].as_f64().expect("total") / steps;
+    let quoted = format!(
+        "(E.1) defect {:.0e} of the energy scale, {per_step:.1} convex\nsolves per step in the fixed point on average ({} at most",
+        summary["max_relative_energy_residual"].as_f64().expect("residual"),
+        summary["fixed_point_iterations_max"]
+    );
+    assert!(readme.contains(&quoted), "the README's academic figures are not this run's: {quoted}");
     let pvd = std::fs::read_to_string(out.join("series.pvd")).expect("pvd");
     let listed: Vec<&str> =
         pvd.lines().filter_map(|l| l.split("file=\"").nth(1)).map(|s| s.trim_end_matches("\"/>")).collect();

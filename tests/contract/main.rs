@@ -13,6 +13,7 @@ mod fuzz_inputs;
 mod gmsh;
 mod hostile;
 mod numbers;
+mod readme;
 mod resources;
 mod scenes;
 mod study;
