@@ -120,6 +120,13 @@ pub const PCG_FROM: usize = 300;
 /// components) is taken when a trial solve with W⁻¹ alone reaches 1e-10 within this many
 /// iterations at setup (a well-conditioned W: 16 on academic3d at 24×12×8 cells) …
 pub const VELOCITY_FORM_TRIAL: usize = 40;
+/// The near field of W⁻¹ that preconditions the velocity form: the node pairs (i, j) with
+/// max_ab |W⁻¹_ab| / √(W⁻¹_aa W⁻¹_bb) ≥ this over their d × d block. W⁻¹ (the Schur complement
+/// of A_k on the contact unknowns, a discrete Dirichlet-to-Neumann map) is local: on academic3d
+/// at 32×16×12 cells 1e-3 keeps 1.2% of its entries (the 8 neighbours of a node), and conjugate
+/// gradients to 1e-10 take 4 iterations with their sparse Cholesky factor against 19 with node
+/// blocks (1e-4 keeps 2.5% and takes 3).
+pub const NEAR_FIELD_TOLERANCE: f64 = 1e-3;
 /// … and a direction falls back to the force form when its solve needs more than this many.
 pub const VELOCITY_FORM_MAX_ITERATIONS: usize = 60;
 

@@ -1,9 +1,12 @@
 //! W⁻¹ for the Newton directions in velocity form: the operator (W⁻¹)_FF + Ĝ_F on the free
-//! components and its node-block preconditioner.
+//! components and its preconditioners — the sparse Cholesky factor of its near field, or node
+//! blocks where that factor cannot be had.
 
 use faer::dyn_stack::{MemStack, StackReq};
-use faer::linalg::solvers::DenseSolveCore;
+use faer::linalg::solvers::{DenseSolveCore, Solve};
 use faer::matrix_free::{LinOp, Precond};
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, MatMut, MatRef, Par, Side};
 
 use super::Delassus;
@@ -26,6 +29,9 @@ pub struct InverseDelassus {
     pub dim: usize,
     /// iterations of the trial solve at setup
     pub trial_iterations: usize,
+    /// the near field of W⁻¹ (its pattern, analysed once for Cholesky), or None when it could
+    /// not be built (the solves then use node blocks)
+    near: Option<NearField>,
 }
 
 impl InverseDelassus {
@@ -37,7 +43,8 @@ impl InverseDelassus {
             return None;
         }
         let winv = w.llt(Side::Lower).ok()?.inverse();
-        let mut inv = InverseDelassus { winv, dim, trial_iterations: 0 };
+        let near = NearField::new(&winv, dim, crate::defaults::NEAR_FIELD_TOLERANCE);
+        let mut inv = InverseDelassus { winv, dim, trial_iterations: 0, near };
         // the trial: every component free, no stiffness, a pseudo-random right-hand side
         let b: Vec<f64> = (0..m).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
         let free: Vec<usize> = (0..m).collect();
@@ -57,8 +64,23 @@ impl InverseDelassus {
         out
     }
 
-    /// Solve [(W⁻¹)_FF + Ĝ_F] x_F = b_F by conjugate gradients preconditioned with the node
-    /// blocks, to the relative residual `tolerance` within `max_iterations`. F: the free
+    /// The same W⁻¹ with node blocks as the only preconditioner (the form before the near
+    /// field; kept for the comparisons of the tests and the bench).
+    pub fn without_near_field(mut self) -> InverseDelassus {
+        self.near = None;
+        self
+    }
+
+    /// The share of W⁻¹'s entries its near field keeps (0 without one).
+    pub fn near_field_density(&self) -> f64 {
+        self.near
+            .as_ref()
+            .map_or(0.0, |n| (2 * n.entries.len() - self.winv.nrows()) as f64 / (self.winv.nrows() as f64).powi(2))
+    }
+
+    /// Solve [(W⁻¹)_FF + Ĝ_F] x_F = b_F by conjugate gradients preconditioned with the
+    /// Cholesky factor of the same matrix's near field (node blocks where that factor fails:
+    /// the near field of a matrix that is not positive definite), to the relative residual `tolerance` within `max_iterations`. F: the free
     /// components (`free_list`; x and b are full-length, zero off F); Ĝ: `diag` per component
     /// plus, per node, an optional 2 × 2 block on its tangential pair (3-D slip; it replaces the
     /// diagonal there). The iterations, or None when the matrix showed a non-positive curvature
@@ -80,8 +102,11 @@ impl InverseDelassus {
             is_free[l] = true;
         }
         let op = VelocityMatrix { inverse: self, is_free: &is_free, free_list, diag, blocks };
-        let prec = NodeBlocks::new(self, &is_free, diag, blocks)?;
         x.iter_mut().for_each(|v| *v = 0.0);
+        if let Some(prec) = self.near.as_ref().and_then(|n| n.factor(self, &is_free, diag, blocks)) {
+            return conjugate_gradients(&op, &prec, b, x, tolerance, max_iterations);
+        }
+        let prec = NodeBlocks::new(self, &is_free, diag, blocks)?;
         conjugate_gradients(&op, &prec, b, x, tolerance, max_iterations)
     }
 }
@@ -91,6 +116,124 @@ impl std::fmt::Debug for InverseDelassus {
         write!(f, "InverseDelassus({} × {}, {} per node)", self.winv.nrows(), self.winv.ncols(), self.dim)
     }
 }
+
+/// The near field of W⁻¹: the node blocks (i, j) whose largest entry relative to the diagonal,
+/// |W⁻¹_ab| / √(W⁻¹_aa W⁻¹_bb), is at least the tolerance — W⁻¹ is the Schur complement of A_k
+/// on the contact unknowns (a discrete Dirichlet-to-Neumann map, local where W is not), so these
+/// are a node's few neighbours. The lower triangle's pattern is analysed for Cholesky once; each
+/// solve factors the values of (W⁻¹)_FF + Ĝ_F on it (identity rows for the prescribed
+/// components).
+struct NearField {
+    /// the lower triangle's (row, column) of each stored value, column by column
+    entries: Vec<(usize, usize)>,
+    pattern: SymbolicSparseColMat<usize>,
+    symbolic: SymbolicLlt<usize>,
+}
+
+impl NearField {
+    fn new(winv: &Mat<f64>, dim: usize, tolerance: f64) -> Option<NearField> {
+        let (m, n) = (winv.nrows(), winv.nrows() / dim);
+        let scale: Vec<f64> = (0..m).map(|l| winv[(l, l)].abs().sqrt()).collect();
+        let near = |i: usize, j: usize| {
+            (0..dim).any(|a| {
+                (0..dim).any(|b| {
+                    let (p, q) = (dim * i + a, dim * j + b);
+                    winv[(p, q)].abs() >= tolerance * scale[p] * scale[q]
+                })
+            })
+        };
+        let mut col_ptr = vec![0usize];
+        let mut row_idx = Vec::new();
+        let mut entries = Vec::new();
+        for j in 0..n {
+            let rows: Vec<usize> = (j..n).filter(|&i| i == j || near(i, j)).collect();
+            for b in 0..dim {
+                let q = dim * j + b;
+                for &i in &rows {
+                    for a in 0..dim {
+                        let p = dim * i + a;
+                        if p >= q {
+                            row_idx.push(p);
+                            entries.push((p, q));
+                        }
+                    }
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        let pattern = SymbolicSparseColMat::new_checked(m, m, col_ptr, None, row_idx);
+        let symbolic = SymbolicLlt::try_new(pattern.as_ref(), Side::Lower).ok()?;
+        Some(NearField { entries, pattern, symbolic })
+    }
+
+    /// The Cholesky factor of the near field of (W⁻¹)_FF + Ĝ_F (Ĝ as in
+    /// [`InverseDelassus::solve`]), identity on the prescribed components; None when that matrix
+    /// is not positive definite.
+    fn factor(
+        &self,
+        inverse: &InverseDelassus,
+        is_free: &[bool],
+        diag: &[f64],
+        blocks: &[Option<[[f64; 2]; 2]>],
+    ) -> Option<NearPreconditioner> {
+        let d = inverse.dim;
+        let values: Vec<f64> = self
+            .entries
+            .iter()
+            .map(|&(p, q)| {
+                if !is_free[p] || !is_free[q] {
+                    return if p == q { 1.0 } else { 0.0 };
+                }
+                let mut v = inverse.winv[(p, q)] + if p == q { diag[p] } else { 0.0 };
+                let i = p / d;
+                if let (true, Some(g)) = (q / d == i, blocks[i])
+                    && p > d * i
+                    && q > d * i
+                {
+                    // the block replaces the diagonal on the tangential pair
+                    v += g[p - d * i - 1][q - d * i - 1] - if p == q { diag[p] } else { 0.0 };
+                }
+                v
+            })
+            .collect();
+        let mat = SparseColMat::new(self.pattern.clone(), values);
+        let llt = Llt::try_new_with_symbolic(self.symbolic.clone(), mat.as_ref(), Side::Lower).ok()?;
+        Some(NearPreconditioner { llt, m: is_free.len() })
+    }
+}
+
+/// The near field's factor as the preconditioner of [`VelocityMatrix`].
+struct NearPreconditioner {
+    llt: Llt<usize, f64>,
+    m: usize,
+}
+
+impl std::fmt::Debug for NearPreconditioner {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "NearPreconditioner({} × {})", self.m, self.m)
+    }
+}
+
+impl LinOp<f64> for NearPreconditioner {
+    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
+        StackReq::EMPTY
+    }
+    fn nrows(&self) -> usize {
+        self.m
+    }
+    fn ncols(&self) -> usize {
+        self.m
+    }
+    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _stack: &mut MemStack) {
+        out.copy_from(rhs);
+        self.llt.solve_in_place(out.as_mut());
+    }
+    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
+        self.apply(out, rhs, par, stack)
+    }
+}
+
+impl Precond<f64> for NearPreconditioner {}
 
 /// (W⁻¹)_FF + Ĝ_F as an operator on all m components (zero off F).
 #[derive(Debug)]
