@@ -675,10 +675,10 @@ fn velocity_direction(
     for &l in &free {
         dy[l] = x[l];
     }
-    // the prescribed components' force changes
-    let u1 = inverse.apply(&x);
-    for l in (0..m).filter(|&l| prescribed[l]) {
-        dm[l] = (-(u0[l] + u1[l]) - r_k[l]) / omega(l);
+    // the prescribed components' force changes (W⁻¹ x on those rows alone)
+    let rows: Vec<usize> = (0..m).filter(|&l| prescribed[l]).collect();
+    for (&l, u1) in rows.iter().zip(inverse.apply_at(&x, &rows)) {
+        dm[l] = (-(u0[l] + u1) - r_k[l]) / omega(l);
     }
     // the free tangential components' force changes beyond the known part: Ĝ Δy (normals keep
     // Δλ; their compliance force follows y through q)

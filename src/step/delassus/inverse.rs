@@ -64,6 +64,13 @@ impl InverseDelassus {
         out
     }
 
+    /// (W⁻¹ x)_l for the components l of `rows` alone (W⁻¹ is symmetric: row l is read as the
+    /// contiguous column l), in the order of `rows`.
+    pub fn apply_at(&self, x: &[f64], rows: &[usize]) -> Vec<f64> {
+        let xv = faer::ColRef::from_slice(x);
+        rows.iter().map(|&l| self.winv.col(l).transpose() * xv).collect()
+    }
+
     /// The same W⁻¹ with node blocks as the only preconditioner (the form before the near
     /// field; kept for the comparisons of the tests and the bench).
     pub fn without_near_field(mut self) -> InverseDelassus {
