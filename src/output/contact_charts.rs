@@ -9,8 +9,9 @@ use plotters::prelude::*;
 
 use super::ChartRow;
 use super::plots::{self, Options, Series, SeriesLabelPosition};
+use super::style::{self, font, status};
 use super::units;
-use crate::mesh::PlaneMesh;
+use crate::mesh::{PlaneMesh, SolidMesh};
 use crate::model::contact::ContactModel;
 use crate::model::kinds::Bound;
 use crate::simulation::NodeRecord;
@@ -159,14 +160,13 @@ impl Category {
 
     fn color(self) -> RGBColor {
         match self {
-            // light enough for a cell, dark enough for a line on white
-            Category::Separated => RGBColor(200, 200, 200),
-            Category::ComplianceStick => RGBColor(158, 202, 225),
-            Category::ComplianceSlip => RGBColor(33, 113, 181),
-            Category::ConstraintStick => RGBColor(253, 174, 107),
-            Category::ConstraintSlip => RGBColor(217, 72, 1),
-            Category::Compliance => RGBColor(116, 196, 118),
-            Category::Constraint => RGBColor(0, 109, 44),
+            Category::Separated => status::SEPARATED,
+            Category::ComplianceStick => status::COMPLIANCE_STICK,
+            Category::ComplianceSlip => status::COMPLIANCE_SLIP,
+            Category::ConstraintStick => status::CONSTRAINT_STICK,
+            Category::ConstraintSlip => status::CONSTRAINT_SLIP,
+            Category::Compliance => status::COMPLIANCE,
+            Category::Constraint => status::CONSTRAINT,
         }
     }
 }
@@ -258,7 +258,7 @@ fn draw_status_legend(
     nodes: usize,
     frames: usize,
 ) -> Result<(), DrawingAreaErrorKind<std::io::Error>> {
-    let font = ("sans-serif", 14);
+    let font = font(style::LEGEND);
     area.draw(&Text::new("status (cells)", (10, 60), font))?;
     for (k, cat) in shown.iter().enumerate() {
         let y = 90 + 26 * k as i32;
@@ -286,16 +286,16 @@ pub fn contact_status(frames: &[ContactFrame], along: &Along, friction: bool) ->
     let mut counts = [0usize; Category::ALL.len()];
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (1100, 600)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, style::STATUS_MAP).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let (left, legend) = root.split_horizontally(800);
+        let (left, legend) = root.split_horizontally(style::STATUS_MAP_WIDTH);
         let title = if stride > 1 {
             format!("Contact status along Γ3 (one frame in {stride})")
         } else {
             "Contact status along Γ3".to_string()
         };
         let mut chart = ChartBuilder::on(&left)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, font(style::CAPTION))
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(70)
@@ -345,7 +345,7 @@ fn deformed_frame<'a, 'b>(
     y: std::ops::Range<f64>,
 ) -> Result<Chart2d<'a, 'b>, String> {
     ChartBuilder::on(area)
-        .caption(title, ("sans-serif", 18))
+        .caption(title, font(style::SUBCAPTION))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
@@ -445,7 +445,8 @@ pub fn deformed(mesh: &PlaneMesh, u: &[[f64; 2]], t: f64, foundation: Option<&Fo
     let (xs, ys): (Vec<f64>, Vec<f64>) = pts.unzip();
     let ((mut x0, mut x1), (mut y0, mut y1)) = (plots::range(xs.into_iter()), plots::range(ys.into_iter()));
     // equal scales on both axes: widen the narrower range to the plotting area's aspect
-    let (w, h) = (960u32, ((960.0 * (y1 - y0) / (x1 - x0)) as u32).clamp(360, 900));
+    let w = style::DEFORMED_WIDTH;
+    let h = ((f64::from(w) * (y1 - y0) / (x1 - x0)) as u32).clamp(360, 900);
     let title = format!(
         "Deformed mesh at t = {} s, displacement × {scale:.3} (largest |u| = {u_max:.3e} m); grey: undeformed outline",
         plots::number(t)
@@ -476,12 +477,12 @@ pub fn deformed(mesh: &PlaneMesh, u: &[[f64; 2]], t: f64, foundation: Option<&Fo
             .y_label_formatter(&|v| plots::tick_label(*v, y0, y1))
             .draw()
             .map_err(|e| e.to_string())?;
-        let grey = RGBColor(160, 160, 160).stroke_width(2);
+        let grey = style::OUTLINE.stroke_width(2);
         let node = |v: usize| (mesh.nodes[v][0], mesh.nodes[v][1]);
         chart
             .draw_series(outline.iter().map(|&(a, b)| PathElement::new(vec![node(a), node(b)], grey)))
             .map_err(|e| e.to_string())?;
-        let blue = plots::PALETTE[0].stroke_width(1);
+        let blue = style::PALETTE[0].stroke_width(1);
         let drawn = unique.iter().filter_map(|&(a, b)| Some(PathElement::new(vec![moved[a]?, moved[b]?], blue)));
         chart.draw_series(drawn).map_err(|e| e.to_string())?;
         let mut legend = false;
@@ -495,7 +496,7 @@ pub fn deformed(mesh: &PlaneMesh, u: &[[f64; 2]], t: f64, foundation: Option<&Fo
             legend = true;
         }
         if bound.len() >= 2 {
-            let red = plots::PALETTE[3].stroke_width(1);
+            let red = style::PALETTE[3].stroke_width(1);
             chart
                 .draw_series([PathElement::new(bound, red)])
                 .map_err(|e| e.to_string())?
@@ -544,62 +545,228 @@ pub fn status_fractions(frames: &[ContactFrame], friction: bool) -> Result<Strin
     )
 }
 
-/// Maps of the contact status on a 2-D Γ3 (a surface of a 3-D body) at four frames spread over
-/// the run: each node a square at its in-plane coordinates `xy` (along the tangents of the first
-/// contact node's frame), coloured by its category (`friction`: the run has a friction law).
-pub fn status_maps(frames: &[ContactFrame], xy: &[[f64; 2]], friction: bool) -> Result<String, String> {
-    let with_nodes: Vec<&ContactFrame> = frames.iter().filter(|f| !f.2.is_empty() && f.1.is_finite()).collect();
-    let picks: Vec<&ContactFrame> = match with_nodes.len() {
-        0 => Vec::new(),
-        n => {
-            let mut idx: Vec<usize> = (0..4).map(|k| k * (n - 1) / 3).collect();
-            idx.dedup();
-            idx.into_iter().map(|i| with_nodes[i]).collect()
+/// A 2-D Γ3 (a surface of a 3-D body) laid flat for the status maps: each contact node's
+/// in-plane position, Γ3's triangles in the same coordinates with the contact node (if any) at
+/// each vertex, and the names of the two axes.
+#[derive(Debug, Clone)]
+pub struct FlatSurface {
+    /// in-plane position of contact node i
+    pub xy: Vec<[f64; 2]>,
+    /// Γ3's faces: each vertex's in-plane position and its contact-node index (None: a vertex
+    /// that is no contact node, e.g. on the Dirichlet boundary)
+    pub faces: Vec<[([f64; 2], Option<usize>); 3]>,
+    /// horizontal and vertical axis descriptions, with units
+    pub axes: [String; 2],
+}
+
+impl FlatSurface {
+    /// Γ3 of `c` on `mesh` (`sides`: the Γ3 side names) in the plane of its mean normal
+    /// n̄ = Σ ω ν: when n̄ is a coordinate axis (a face with normal ±z, or a cap symmetric about
+    /// z) the global coordinates (x horizontal, y vertical; for ±x or ±y the other two in order),
+    /// else the tangents of n̄, the longer in-plane extent horizontal.
+    pub fn of(mesh: &SolidMesh, c: &ContactModel, sides: &[String]) -> FlatSurface {
+        let mut n = [0.0; 3];
+        for (f, w) in c.frames.iter().zip(&c.omega) {
+            (0..3).for_each(|k| n[k] += w * f.normal[k]);
         }
+        let norm = n.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let dot = |x: [f64; 3], e: [f64; 3]| x[0] * e[0] + x[1] * e[1] + x[2] * e[2];
+        let axis = (0..3).find(|&k| norm > 0.0 && n[k].abs() >= (1.0 - 1e-9) * norm);
+        let names = ["x", "y", "z"];
+        let (mut e, mut axes) = match axis {
+            Some(k) => {
+                let (a, b) = match k {
+                    0 => (1, 2),
+                    1 => (0, 2),
+                    _ => (0, 1),
+                };
+                let unit = |i: usize| {
+                    let mut u = [0.0; 3];
+                    u[i] = 1.0;
+                    u
+                };
+                ([unit(a), unit(b)], [format!("{} [m]", names[a]), format!("{} [m]", names[b])])
+            }
+            None => {
+                let f = if norm > 0.0 {
+                    crate::model::contact::Frame::spatial([n[0] / norm, n[1] / norm, n[2] / norm])
+                } else {
+                    c.frames.first().copied().unwrap_or(crate::model::contact::Frame::spatial([0.0, 0.0, 1.0]))
+                };
+                (f.tangents, ["along τ1 [m]".to_string(), "along τ2 [m]".to_string()])
+            }
+        };
+        let extent = |e: [f64; 3]| {
+            let v = c.nodes.iter().map(|&i| dot(mesh.nodes[i], e));
+            let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+            hi - lo
+        };
+        if axis.is_none() && extent(e[1]) > extent(e[0]) {
+            e.swap(0, 1);
+            axes.swap(0, 1);
+        }
+        let flat = |x: [f64; 3]| [dot(x, e[0]), dot(x, e[1])];
+        let xy = c.nodes.iter().map(|&v| flat(mesh.nodes[v])).collect();
+        let mut index = vec![None; mesh.nodes.len()];
+        for (i, &v) in c.nodes.iter().enumerate() {
+            index[v] = Some(i);
+        }
+        let faces = sides
+            .iter()
+            .filter_map(|name| mesh.side(name))
+            .flat_map(|side| side.facets.iter())
+            .filter(|f| f.iter().all(|&v| v < mesh.nodes.len()))
+            .map(|f| f.map(|v| (flat(mesh.nodes[v]), index[v])))
+            .collect();
+        FlatSurface { xy, faces, axes }
+    }
+}
+
+/// Each vertex's share of a triangle: for vertex k the quadrilateral (vertex, midpoint of the
+/// edge to the next vertex, centroid, midpoint of the edge to the previous vertex). The three
+/// tile the triangle without overlap, so over Γ3's faces a node's shares tile its own region
+/// of the surface (whatever the mesh) and have a third of each face's area each.
+pub fn node_regions(t: [[f64; 2]; 3]) -> [[[f64; 2]; 4]; 3] {
+    let mid = |a: [f64; 2], b: [f64; 2]| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+    let g = [(t[0][0] + t[1][0] + t[2][0]) / 3.0, (t[0][1] + t[1][1] + t[2][1]) / 3.0];
+    std::array::from_fn(|k| {
+        let (v, next, prev) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+        [v, mid(v, next), g, mid(v, prev)]
+    })
+}
+
+/// The frames the 3-D status maps show (indices into `frames`): four spread over the frames
+/// from the first where some node carries load (q + λ > 0) to the last such frame (a map of an
+/// unloaded surface shows nothing); with no loaded frame, four spread over all frames with nodes.
+pub fn map_frames(frames: &[ContactFrame]) -> Vec<usize> {
+    let usable = |f: &ContactFrame| !f.2.is_empty() && f.1.is_finite();
+    let loaded = |f: &ContactFrame| usable(f) && f.2.iter().any(|r| r.p + r.lambda > 0.0);
+    let pool: Vec<usize> = match (frames.iter().position(loaded), frames.iter().rposition(loaded)) {
+        (Some(a), Some(b)) => (a..=b).filter(|&i| usable(&frames[i])).collect(),
+        _ => (0..frames.len()).filter(|&i| usable(&frames[i])).collect(),
     };
-    let span = |c: usize| {
-        let (lo, hi) = xy.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[c]), b.max(p[c])));
-        if lo < hi { (lo, hi) } else { (lo - 0.5, lo + 0.5) }
+    let mut picks: Vec<usize> = match pool.len() {
+        0 => Vec::new(),
+        n => (0..4).map(|k| pool[k * (n - 1) / 3]).collect(),
     };
-    let ((x0, x1), (y0, y1)) = (span(0), span(1));
-    // the square of a node: a share of the patch's size per node along each axis
-    let side = (((x1 - x0) * (y1 - y0)) / xy.len().max(1) as f64).sqrt().max(1e-12);
-    let (x0, x1, y0, y1) = (x0 - 0.5 * side, x1 + 0.5 * side, y0 - 0.5 * side, y1 + 0.5 * side);
+    picks.dedup();
+    picks
+}
+
+/// The plotting area (width, height) in pixels of a map of a patch `span` = (width, height)
+/// in metres, at equal scale on both axes, as large as fits in `room` pixels.
+pub fn map_extent(span: (f64, f64), room: (f64, f64)) -> (f64, f64) {
+    let (sx, sy) = span;
+    if !(sx > 0.0 && sy > 0.0 && sx.is_finite() && sy.is_finite()) {
+        return room;
+    }
+    let per_px = (sx / room.0).max(sy / room.1);
+    (sx / per_px, sy / per_px)
+}
+
+/// The axes of one map (built twice: once to measure the room its labels take).
+fn map_frame<'a, 'b>(
+    area: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    title: String,
+    x: std::ops::Range<f64>,
+    y: std::ops::Range<f64>,
+) -> Result<Chart2d<'a, 'b>, String> {
+    ChartBuilder::on(area)
+        .caption(title, font(style::PANEL_CAPTION))
+        .margin(8)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(x, y)
+        .map_err(|e| e.to_string())
+}
+
+/// Maps of the contact status on a 2-D Γ3 (a surface of a 3-D body) at four frames of the
+/// contact phase ([`map_frames`]): each node's own region of Γ3 ([`node_regions`] over the faces
+/// of `surface`) coloured by its category (`friction`: the run has a friction law), each map at
+/// the patch's aspect ratio (equal scales), axes in metres.
+pub fn status_maps(frames: &[ContactFrame], surface: &FlatSurface, friction: bool) -> Result<String, String> {
+    let picks: Vec<&ContactFrame> = map_frames(frames).into_iter().map(|i| &frames[i]).collect();
+    let pts = surface.xy.iter().chain(surface.faces.iter().flat_map(|f| f.iter().map(|v| &v.0)));
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in pts.filter(|p| p[0].is_finite() && p[1].is_finite()) {
+        (0..2).for_each(|c| (lo[c], hi[c]) = (lo[c].min(p[c]), hi[c].max(p[c])));
+    }
+    if !(lo[0] < hi[0]) || !(lo[1] < hi[1]) {
+        // a single node or a degenerate patch: a unit square around it
+        let c = [if lo[0].is_finite() { lo[0] } else { 0.0 }, if lo[1].is_finite() { lo[1] } else { 0.0 }];
+        (lo, hi) = ([c[0] - 0.5, c[1] - 0.5], [c[0] + 0.5, c[1] + 0.5]);
+    }
+    // the square of a node when Γ3 has no faces: a share of the patch per node
+    let side = (((hi[0] - lo[0]) * (hi[1] - lo[1])) / surface.xy.len().max(1) as f64).sqrt();
+    let pad = if surface.faces.is_empty() { 0.5 * side } else { 0.03 * (hi[0] - lo[0]).max(hi[1] - lo[1]) };
+    let (x0, x1, y0, y1) = (lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad);
+    // one column of four maps for a long patch, else two by two
+    let cols: u32 = if x1 - x0 > 2.0 * (y1 - y0) { 1 } else { 2 };
+    let rows = 4 / cols;
+    let cell_w = style::STATUS_MAP_WIDTH / cols;
+    let caption = |t: f64| format!("Γ3 at t = {} s", plots::number(t));
+    // the room the caption and axis labels take around the plotting area
+    let (dx, dy) = {
+        let mut scratch = String::new();
+        let area = SVGBackend::with_string(&mut scratch, (cell_w, 400)).into_drawing_area();
+        let d = map_frame(&area, caption(0.0), 0.0..1.0, 0.0..1.0)?.plotting_area().dim_in_pixel();
+        (cell_w.saturating_sub(d.0), 400u32.saturating_sub(d.1))
+    };
+    let max_h = if cols == 1 { 200.0 } else { 420.0 };
+    let (pw, ph) = map_extent((x1 - x0, y1 - y0), (f64::from(cell_w - dx), max_h));
+    let (pw, ph) = ((pw.round() as u32).max(1), (ph.round() as u32).max(1));
+    let cell_h = ph + dy;
+    let height = (rows * cell_h).max(style::STATUS_MAP.1 / 2 + 100);
+    // exactly equal scales after rounding the area to whole pixels
+    let per_px = ((x1 - x0) / f64::from(pw)).max((y1 - y0) / f64::from(ph));
+    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    let (hx, hy) = (0.5 * per_px * f64::from(pw), 0.5 * per_px * f64::from(ph));
+    let (x0, x1, y0, y1) = (cx - hx, cx + hx, cy - hy, cy + hy);
     let mut counts = [0usize; Category::ALL.len()];
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (1100, 820)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (style::STATUS_MAP.0, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let (left, legend) = root.split_horizontally(800);
-        let panels = left.split_evenly((2, 2));
-        for (panel, (_, t, recs)) in panels.iter().zip(&picks) {
-            let mut chart = ChartBuilder::on(panel)
-                .caption(format!("Γ3 at t = {}", plots::tick_label(*t, 0.0, *t)), ("sans-serif", 16))
-                .margin(8)
-                .x_label_area_size(30)
-                .y_label_area_size(50)
-                .build_cartesian_2d(x0..x1, y0..y1)
-                .map_err(|e| e.to_string())?;
+        let (left, legend) = root.split_horizontally(style::STATUS_MAP_WIDTH);
+        for (k, (_, t, recs)) in picks.iter().enumerate() {
+            let (col, row) = (k as u32 % cols, k as u32 / cols);
+            let (cw, ch) = (cell_w * col, cell_h * row);
+            let panel = left.clone().shrink((cw, ch), (pw + dx, cell_h));
+            let mut chart = map_frame(&panel, caption(*t), x0..x1, y0..y1)?;
             chart
                 .configure_mesh()
                 .disable_mesh()
-                .x_desc("along τ1")
-                .y_desc("along τ2")
+                .x_desc(surface.axes[0].as_str())
+                .y_desc(surface.axes[1].as_str())
                 .x_label_formatter(&|v| plots::tick_label(*v, x0, x1))
                 .y_label_formatter(&|v| plots::tick_label(*v, y0, y1))
                 .draw()
                 .map_err(|e| e.to_string())?;
-            let squares = recs.iter().zip(xy).map(|(r, p)| {
-                let cat = Category::of(r);
-                counts[cat as usize] += 1;
-                Rectangle::new(
-                    [(p[0] - 0.45 * side, p[1] - 0.45 * side), (p[0] + 0.45 * side, p[1] + 0.45 * side)],
-                    cat.color().filled(),
-                )
-            });
-            chart.draw_series(squares.collect::<Vec<_>>()).map_err(|e| e.to_string())?;
+            let cat = |i: usize| recs.get(i).map(Category::of);
+            for c in recs.iter().map(Category::of) {
+                counts[c as usize] += 1;
+            }
+            if surface.faces.is_empty() {
+                let squares = surface.xy.iter().enumerate().filter_map(|(i, p)| {
+                    let h = 0.45 * side;
+                    Some(Rectangle::new([(p[0] - h, p[1] - h), (p[0] + h, p[1] + h)], cat(i)?.color().filled()))
+                });
+                chart.draw_series(squares.collect::<Vec<_>>()).map_err(|e| e.to_string())?;
+            } else {
+                let regions = surface.faces.iter().flat_map(|f| {
+                    let quads = node_regions([f[0].0, f[1].0, f[2].0]);
+                    (0..3).filter_map(move |k| {
+                        let c = cat(f[k].1?)?;
+                        Some(Polygon::new(
+                            quads[k].iter().map(|p| (p[0], p[1])).collect::<Vec<_>>(),
+                            c.color().filled(),
+                        ))
+                    })
+                });
+                chart.draw_series(regions.collect::<Vec<_>>()).map_err(|e| e.to_string())?;
+            }
         }
-        draw_status_legend(&legend, Category::of_run(friction), &counts, xy.len(), picks.len())
+        draw_status_legend(&legend, Category::of_run(friction), &counts, surface.xy.len(), picks.len())
             .map_err(|e| e.to_string())?;
         root.present().map_err(|e| e.to_string())?;
     }

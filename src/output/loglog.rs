@@ -1,6 +1,7 @@
 //! Log–log helpers shared by the ε-study and the developer studies: least-squares slopes, padded
 //! log ranges and the error charts (one line with markers per series).
 
+use super::style::{self, font};
 use crate::error::{Error, Result};
 
 /// Least-squares slope of log10(y) against log10(x) over the positive pairs (NaN with fewer
@@ -36,7 +37,8 @@ pub struct LogSeries {
     pub points: Vec<(f64, f64)>,
 }
 
-/// A log–log line chart with markers (the studies' error charts): `pad` widens the axes by that
+/// A log–log line chart with markers (the studies' error charts), its legend below the axes so
+/// it covers no line: `pad` widens the axes by that
 /// factor on each side of the data. An error names `file` when no point is positive.
 pub fn loglog_chart(
     file: &'static str,
@@ -56,10 +58,14 @@ pub fn loglog_chart(
     }
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (900, 560)).into_drawing_area();
+        // the legend below the plotting page, one row per series: inside, it hid lines (scaling.svg)
+        let (w, h) = style::LOGLOG_CHART;
+        let key_h = (style::LEGEND_ROW * series.len() as i32 + 16) as u32;
+        let root = SVGBackend::with_string(&mut svg, (w, h + key_h)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
+        let (top, key) = root.split_vertically(h);
+        let mut chart = ChartBuilder::on(&top)
+            .caption(title, font(style::CAPTION))
             .margin(12)
             .x_label_area_size(45)
             .y_label_area_size(80)
@@ -69,27 +75,24 @@ pub fn loglog_chart(
             .configure_mesh()
             .x_desc(x_desc)
             .y_desc(y_desc)
-            .x_label_formatter(&|v| format!("{v:.0e}"))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .x_label_formatter(&|v| style::log_tick_label(*v))
+            .y_label_formatter(&|v| style::log_tick_label(*v))
             .draw()
             .map_err(|e| err(&e))?;
         for (k, s) in series.iter().enumerate() {
-            let color = super::plots::PALETTE[k % super::plots::PALETTE.len()];
+            let color = style::PALETTE[k % style::PALETTE.len()];
             let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(pos).collect();
             chart
                 .draw_series(LineSeries::new(pts.clone(), ShapeStyle::from(&color).stroke_width(2)))
-                .map_err(|e| err(&e))?
-                .label(s.name.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+                .map_err(|e| err(&e))?;
             chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 4, color.filled()))).map_err(|e| err(&e))?;
+            let y = 8 + style::LEGEND_ROW * k as i32 + style::LEGEND_ROW / 2;
+            key.draw(&PathElement::new(vec![(92, y), (122, y)], ShapeStyle::from(&color).stroke_width(2)))
+                .map_err(|e| err(&e))?;
+            key.draw(&Circle::new((107, y), 4, color.filled())).map_err(|e| err(&e))?;
+            key.draw(&Text::new(s.name.clone(), (132, y - style::LEGEND / 2 - 1), font(style::LEGEND)))
+                .map_err(|e| err(&e))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| err(&e))?;
         root.present().map_err(|e| err(&e))?;
     }
     Ok(svg)

@@ -16,6 +16,7 @@ pub mod folder;
 pub mod loglog;
 pub mod plots;
 pub mod resume;
+pub mod style;
 pub mod summary;
 pub mod trajectory;
 pub mod units;
@@ -380,18 +381,10 @@ impl Writer {
         save("forces.svg", contact_charts::forces(&self.rows, p_g.map(|q| q * gamma3), dim, friction))?;
         save("status_fractions.svg", contact_charts::status_fractions(&self.contact_frames, friction))?;
         let Some(mesh) = p.mesh.plane() else {
-            // 3-D: maps of Γ3 in the tangent plane of its first node
-            let f0 = c.frames.first().copied().unwrap_or(crate::model::contact::Frame::spatial([0.0, 0.0, 1.0]));
-            let xy: Vec<[f64; 2]> = c
-                .nodes
-                .iter()
-                .map(|&v| {
-                    let x = p.mesh.point(v);
-                    let dot = |e: [f64; 3]| x[0] * e[0] + x[1] * e[1] + x[2] * e[2];
-                    [dot(f0.tangents[0]), dot(f0.tangents[1])]
-                })
-                .collect();
-            return save("contact_status.svg", contact_charts::status_maps(&self.contact_frames, &xy, friction));
+            // 3-D: maps of Γ3 laid flat, each node's share of Γ3's faces coloured
+            let Some(solid) = p.mesh.solid() else { return Ok(()) };
+            let surface = contact_charts::FlatSurface::of(solid, c, &p.model.contact_sides);
+            return save("contact_status.svg", contact_charts::status_maps(&self.contact_frames, &surface, friction));
         };
         let along = contact_charts::Along::of(mesh, c, &p.model.contact_sides);
         save("contact_status.svg", contact_charts::contact_status(&self.contact_frames, &along, friction))?;

@@ -22,7 +22,7 @@ pub struct Options {
     /// extra room above the data, as a fraction of the primary range (keeps a legend placed
     /// at the top off the lines)
     pub headroom: f64,
-    /// the colour of each series in order (empty: [`PALETTE`]); a chart whose series are
+    /// the colour of each series in order (empty: [`style::PALETTE`]); a chart whose series are
     /// categories drawn elsewhere too passes the categories' colours, so a status has one colour
     pub colors: Vec<RGBColor>,
 }
@@ -33,92 +33,8 @@ impl Default for Options {
     }
 }
 
-/// The colours of successive series (matplotlib's tab10).
-pub const PALETTE: [RGBColor; 8] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-];
-
-/// A padded range of the finite values (0..1 when there are none; a span that would overflow
-/// is left unpadded and clamped so the chart still draws).
-pub fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for v in vals.filter(|v| v.is_finite()) {
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    if !lo.is_finite() {
-        return (0.0, 1.0);
-    }
-    if hi - lo <= 1e-300 + 1e-12 * hi.abs() {
-        let pad = if hi.abs() > 0.0 { 0.1 * hi.abs() } else { 1.0 };
-        return (lo - pad, hi + pad);
-    }
-    let pad = 0.05 * (hi - lo);
-    if !pad.is_finite() || !(lo - pad).is_finite() || !(hi + pad).is_finite() {
-        return (lo.max(-f64::MAX / 4.0), hi.min(f64::MAX / 4.0));
-    }
-    (lo - pad, hi + pad)
-}
-
-/// A tick label for an axis spanning [lo, hi]: a plain number with the decimals that tell
-/// ticks apart (60, 2.5, 0.125: four significant digits of the span, trailing zeros dropped),
-/// or scientific notation when the axis reaches values ≥ 1e5 or lies entirely below 1e-3.
-pub fn tick_label(v: f64, lo: f64, hi: f64) -> String {
-    // a tick at zero computed as lo + k·step carries the rounding of the sum (−2.5e-32)
-    if v.abs() <= 1e-9 * (hi - lo).abs() {
-        return "0".into();
-    }
-    let big = lo.abs().max(hi.abs());
-    if big >= 1e5 || (big < 1e-3 && big > 0.0) {
-        return format!("{v:.1e}");
-    }
-    let span = (hi - lo).abs();
-    let decimals = if span > 0.0 { (4.0 - span.log10().floor()).clamp(0.0, 10.0) as usize } else { 0 };
-    let s = format!("{v:.decimals$}");
-    let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s };
-    if s == "-0" { "0".into() } else { s }
-}
-
-/// A linear axis range widened to whole multiples of a round step (1, 2 or 5 × 10^n, about an
-/// eighth of the span), so both ends are labelled ticks — a force reaching −15 gets a −20 tick.
-pub fn nice_bounds(lo: f64, hi: f64) -> (f64, f64) {
-    let span = hi - lo;
-    if !(span > 0.0) || !span.is_finite() {
-        return (lo, hi);
-    }
-    let raw = span / 8.0;
-    let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * mag).find(|s| *s >= raw).unwrap_or(10.0 * mag);
-    let (mut a, mut b) = ((lo / step).floor() * step, (hi / step).ceil() * step);
-    // an end that is only the 5% padding past zero stays where it is (non-negative data keep
-    // their axis at 0, not at −step)
-    if lo < 0.0 && lo >= -0.06 * span {
-        a = lo;
-    }
-    if hi > 0.0 && hi <= 0.06 * span {
-        b = hi;
-    }
-    if a.is_finite() && b.is_finite() { (a, b) } else { (lo, hi) }
-}
-
-/// A number in a chart's label: at most four decimals with trailing zeros dropped (39.375, 20,
-/// 0.2, 39.1667), or scientific notation outside [1e-3, 1e5) (1.0e-5).
-pub fn number(v: f64) -> String {
-    let a = v.abs();
-    if a != 0.0 && !(1e-3..1e5).contains(&a) {
-        return format!("{v:.1e}");
-    }
-    let s = format!("{v:.4}");
-    let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
-    if s == "-0" { "0".into() } else { s }
-}
+use super::style::{self, font, log_tick_label};
+pub use super::style::{PALETTE, nice_bounds, number, range, tick_label};
 
 /// One panel of a chart: title, axis names, series and labelled horizontal lines, and which
 /// axes are logarithmic (x, y: the values' log10 is drawn and the ticks read as powers of ten;
@@ -161,11 +77,11 @@ pub fn stacked_chart(panels: &[(Panel, f64)], opts: &Options) -> Result<String, 
     let mut svg = String::new();
     {
         let height = match panels.len() {
-            0 | 1 => 540,
-            2 => 720,
-            n => 260 * n as u32,
+            0 | 1 => style::LINE_CHART.1,
+            2 => style::TWO_PANELS_HEIGHT,
+            n => style::PANEL_HEIGHT * n as u32,
         };
-        let root = SVGBackend::with_string(&mut svg, (960, height)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (style::LINE_CHART.0, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let total: f64 = panels.iter().map(|p| p.1).sum();
         let mut rest = root;
@@ -219,18 +135,22 @@ fn draw_panel<DB: DrawingBackend>(
         (y0, y1) = nice_bounds(y0, y1);
     }
     let mut chart = ChartBuilder::on(area)
-        .caption(p.title, ("sans-serif", 20))
+        .caption(p.title, font(style::CAPTION))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(80)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(|e| e.to_string())?;
+    // plotters places the light grid lines of an axis near 1e-16 (the (E.1) residual) outside
+    // the plotting area, across the caption: such an axis keeps its labelled lines only
+    let tiny = y0.abs().max(y1.abs()) < 1e-10;
     chart
         .configure_mesh()
+        .y_max_light_lines(if tiny { 0 } else { 10 })
         .x_desc(p.x_desc)
         .y_desc(p.y_desc)
-        .x_label_formatter(&|v| if p.log.0 { format!("{:.0e}", 10f64.powf(*v)) } else { tick_label(*v, x0, x1) })
-        .y_label_formatter(&|v| if p.log.1 { format!("{:.0e}", 10f64.powf(*v)) } else { tick_label(*v, y0, y1) })
+        .x_label_formatter(&|v| if p.log.0 { log_tick_label(10f64.powf(*v)) } else { tick_label(*v, x0, x1) })
+        .y_label_formatter(&|v| if p.log.1 { log_tick_label(10f64.powf(*v)) } else { tick_label(*v, y0, y1) })
         .draw()
         .map_err(|e| e.to_string())?;
     for (k, s) in drawn.iter().enumerate() {

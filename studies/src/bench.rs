@@ -39,7 +39,7 @@ use dyncontact::error::{Error, Result};
 use dyncontact::failure::ContactFailure;
 use dyncontact::model::Model;
 use dyncontact::model::kinds::{self, InnerSolver, MassKind, SchemeKind};
-use dyncontact::output::plots::PALETTE;
+use dyncontact::output::style::{self, PALETTE, font};
 use dyncontact::output::{ModelInfo, write_atomic};
 use dyncontact::problem::Problem;
 use dyncontact::scene::Scene;
@@ -335,7 +335,7 @@ fn work_panel(
     let (x0, x1) = log_range(ok.iter().map(|r| r.stats.wall_time_s));
     let (y0, y1) = log_range(ok.iter().map(|r| error(r)));
     let mut chart = ChartBuilder::on(area)
-        .caption(y_desc, ("sans-serif", 18))
+        .caption(y_desc, font(style::SUBCAPTION))
         .margin(10)
         .x_label_area_size(45)
         .y_label_area_size(70)
@@ -378,7 +378,7 @@ fn work_panel(
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::LowerLeft)
-            .label_font(("sans-serif", 12))
+            .label_font(font(style::SMALL))
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .draw()
@@ -396,7 +396,7 @@ fn work_svg(rows: &[WorkRow], title: &str) -> Result<String> {
     {
         let root = SVGBackend::with_string(&mut svg, (1950, 640)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
-        let root = root.titled(title, ("sans-serif", 20)).map_err(|e| err(&e))?;
+        let root = root.titled(title, font(style::CAPTION)).map_err(|e| err(&e))?;
         let panels = root.split_evenly((1, 3));
         work_panel(
             &panels[0],
@@ -633,7 +633,7 @@ fn race_panel(
     let y1 = rows.iter().map(value).filter(|v| v.is_finite()).fold(0.0f64, f64::max).max(1e-12) * 1.15;
     let n = labels.len();
     let mut chart = ChartBuilder::on(area)
-        .caption(y_desc, ("sans-serif", 18))
+        .caption(y_desc, font(style::SUBCAPTION))
         .margin(10)
         .x_label_area_size(40)
         .y_label_area_size(70)
@@ -652,7 +652,7 @@ fn race_panel(
         .disable_x_mesh()
         .x_labels(n.max(1))
         .x_label_formatter(&fmt)
-        .x_label_style(("sans-serif", 11))
+        .x_label_style(font(style::TINY))
         .y_desc(y_desc)
         .draw()
         .map_err(|e| err(&e))?;
@@ -693,7 +693,7 @@ fn race_svg(rows: &[RaceRow], title: &str) -> Result<String> {
     {
         let root = SVGBackend::with_string(&mut svg, (1400, 560)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
-        let root = root.titled(title, ("sans-serif", 20)).map_err(|e| err(&e))?;
+        let root = root.titled(title, font(style::CAPTION)).map_err(|e| err(&e))?;
         let panels = root.split_evenly((1, 2));
         race_panel(&panels[0], rows, |r| 1e3 * r.per_step(r.stats.contact_time_s), "contact solve per step [ms]")?;
         race_panel(&panels[1], rows, |r| r.per_step(r.stats.newton_iterations as f64), "Newton iterations per step")?;

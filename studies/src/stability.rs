@@ -38,6 +38,7 @@ use dyncontact::simulation::Simulation;
 
 use dyncontact::output::csv::{csv_field, csv_table};
 use dyncontact::output::loglog::chart_error;
+use dyncontact::output::style;
 use dyncontact::sweep::runner::{self, RunnerOptions};
 use dyncontact::sweep::{Base, Plan, SweepFile};
 
@@ -136,13 +137,13 @@ impl RunClass {
 
     fn color(self) -> RGBColor {
         match self {
-            RunClass::Converged => RGBColor(44, 160, 44),
-            RunClass::EnergyDefect => RGBColor(188, 189, 34),
-            RunClass::FixedPointCapped => RGBColor(255, 127, 14),
-            RunClass::EnergyGrew => RGBColor(214, 39, 40),
-            RunClass::NewtonFailed => RGBColor(148, 103, 189),
-            RunClass::ClearError => RGBColor(127, 127, 127),
-            RunClass::NonFinite => RGBColor(0, 0, 0),
+            RunClass::Converged => style::PALETTE[2],
+            RunClass::EnergyDefect => style::OLIVE,
+            RunClass::FixedPointCapped => style::PALETTE[1],
+            RunClass::EnergyGrew => style::PALETTE[3],
+            RunClass::NewtonFailed => style::PALETTE[4],
+            RunClass::ClearError => style::PALETTE[7],
+            RunClass::NonFinite => BLACK,
         }
     }
 }
@@ -915,7 +916,7 @@ pub fn svg(rows: &[RunResult]) -> Result<String> {
         let root = SVGBackend::with_string(&mut out, (w as u32, h as u32)).into_drawing_area();
         let err = chart_error("stability.svg");
         root.fill(&WHITE).map_err(|e| err(&e))?;
-        let font = |size: i32| ("sans-serif", size).into_font();
+        let font = |size: i32| style::font(size).into_font();
         let centered = |size: i32| TextStyle::from(font(size)).pos(Pos::new(HPos::Center, VPos::Center));
         let right = |size: i32| TextStyle::from(font(size)).pos(Pos::new(HPos::Right, VPos::Center));
         root.draw(&Text::new(

@@ -5,7 +5,7 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use dyncontact::output::contact_charts::{self, Along, Category};
+use dyncontact::output::contact_charts::{self, Along, Category, FlatSurface};
 use dyncontact::output::{ChartRow, plots};
 use dyncontact::problem::Problem;
 use dyncontact::run::{RunOptions, run};
@@ -504,6 +504,12 @@ fn charts_accept_empty_and_non_finite_data() {
         v_t_vec: [0.0; 3],
         friction_vec: [0.0; 3],
     };
+    // three nodes on a unit triangle (one face, or none: squares), one of them at NaN
+    let flat = |faces: bool| FlatSurface {
+        xy: vec![[0.0, 0.0], [1.0, 0.0], [nan, 1.0]],
+        faces: if faces { vec![[([0.0, 0.0], Some(0)), ([1.0, 0.0], Some(1)), ([0.0, 1.0], None)]] } else { vec![] },
+        axes: ["x [m]".into(), "y [m]".into()],
+    };
     let frames = vec![
         (
             0,
@@ -530,6 +536,9 @@ fn charts_accept_empty_and_non_finite_data() {
         contact_charts::normal_stress(&[], &along, None),
         contact_charts::normal_stress(&frames, &along, Some(nan)),
         plots::line_chart("empty", "x", "y", &[], &[]),
+        contact_charts::status_maps(&frames, &flat(false), true),
+        contact_charts::status_maps(&frames, &flat(true), false),
+        contact_charts::status_maps(&[], &flat(true), false),
     ];
     for (k, o) in outputs.into_iter().enumerate() {
         let text = o.unwrap_or_else(|e| panic!("chart {k} failed: {e}"));
@@ -576,4 +585,137 @@ fn tick_labels_are_plain_numbers_unless_the_axis_spans_decades() {
     assert_eq!(tick_label(0.0, -1.0, 1.0), "0");
     assert_eq!(tick_label(2.0e-4, 0.0, 5.0e-4), "2.0e-4");
     assert_eq!(tick_label(3.0e6, 0.0, 1.0e7), "3.0e6");
+}
+
+/// A node record with contact stress p + λ and status.
+fn record(p: f64, lambda: f64, status: NodeStatus) -> NodeRecord {
+    NodeRecord {
+        u_n: 0.0,
+        u_t: 0.0,
+        v_t: 0.0,
+        p,
+        lambda,
+        friction: 0.0,
+        bound: 0.0,
+        status,
+        v_t_vec: [0.0; 3],
+        friction_vec: [0.0; 3],
+    }
+}
+
+/// Requirement: each 3-D status map has the patch's aspect ratio (equal scales on both axes),
+/// for wide, tall and square patches, in any room.
+#[test]
+fn status_maps_keep_the_patch_aspect_ratio() {
+    for (span, room) in [((2.0, 1.0), (324.0, 420.0)), ((1.0, 3.0), (324.0, 420.0)), ((4.0, 4.0), (724.0, 200.0))] {
+        let (w, h) = contact_charts::map_extent(span, room);
+        // 1e-12 relative: one division and one multiplication of numbers near 1
+        assert!(((w / h) / (span.0 / span.1) - 1.0).abs() < 1e-12, "{span:?} in {room:?}: {w} × {h}");
+        assert!(w <= room.0 * (1.0 + 1e-12) && h <= room.1 * (1.0 + 1e-12), "{span:?}: {w} × {h} exceeds {room:?}");
+        // one side fills the room (the map is as large as fits); same round-off as above
+        assert!((w / room.0 - 1.0).abs() < 1e-12 || (h / room.1 - 1.0).abs() < 1e-12, "{span:?}: {w} × {h}");
+    }
+}
+
+/// Requirement: the 3-D maps show frames with load from the first one on: an all-separated
+/// t = 0 frame (and an unloaded t = 0.1) is skipped, the last loaded frame is the last map.
+#[test]
+fn status_maps_start_at_the_first_loaded_frame() {
+    let sep = || vec![record(0.0, 0.0, NodeStatus::Separated); 3];
+    let touching = || {
+        vec![
+            record(0.0, 0.0, NodeStatus::Separated),
+            record(2.0, 0.0, NodeStatus::Stick),
+            record(0.0, 0.0, NodeStatus::Separated),
+        ]
+    };
+    let mut frames = vec![(0, 0.0, sep()), (1, 0.1, sep())];
+    frames.extend((2..12).map(|k| (k, 0.1 * k as f64, touching())));
+    frames.push((12, 1.2, sep()));
+    let picks = contact_charts::map_frames(&frames);
+    assert_eq!(picks, vec![2, 5, 8, 11], "frames shown");
+    // nothing ever loaded: spread over all frames, as before
+    assert_eq!(contact_charts::map_frames(&frames[..2]), vec![0, 1]);
+}
+
+/// Requirement: on the Gmsh 3-D mesh the nodes' regions of the maps tile Γ3 without overlap:
+/// each face's three regions have a third of its area each and they sum to Γ3's area; the
+/// axes are the global x and y in metres (Γ3 is the bottom face, normal −z), and the written
+/// map's first panel is a frame with contact.
+#[test]
+fn status_map_regions_tile_the_gmsh_contact_surface() {
+    let scene = Scene::from_file(&scene_dir().join("gmsh_block3d.toml")).expect("scene");
+    let problem = Problem::from_scene(&scene, &scene_dir()).expect("problem");
+    let c = problem.contact.as_ref().expect("contact");
+    let solid = problem.mesh.solid().expect("a 3-D mesh");
+    let surface = FlatSurface::of(solid, c, &problem.model.contact_sides);
+    assert_eq!(surface.axes, ["x [m]".to_string(), "y [m]".to_string()]);
+    let area = |p: &[[f64; 2]]| {
+        0.5 * (0..p.len())
+            .map(|k| {
+                let (a, b) = (p[k], p[(k + 1) % p.len()]);
+                a[0] * b[1] - a[1] * b[0]
+            })
+            .sum::<f64>()
+    };
+    let (mut faces_area, mut regions_area) = (0.0, 0.0);
+    for f in &surface.faces {
+        let t = [f[0].0, f[1].0, f[2].0];
+        let a_t = area(&t).abs();
+        assert!(a_t > 0.0, "a degenerate face in the plane of Γ3: {t:?}");
+        faces_area += a_t;
+        for q in contact_charts::node_regions(t) {
+            let a_q = area(&q);
+            // same orientation as the face, a third of it (1e-12 relative: a few products of
+            // coordinates of size 1, summed)
+            assert!(a_q * area(&t) > 0.0 && (a_q.abs() / (a_t / 3.0) - 1.0).abs() < 1e-12, "{q:?} in {t:?}");
+            regions_area += a_q.abs();
+        }
+    }
+    println!("Γ3: {} faces, area {faces_area}, regions {regions_area}", surface.faces.len());
+    assert!(surface.faces.len() > 50, "Γ3 has its faces");
+    // 1e-12 relative: the sum of a few hundred areas of size 1e-3 each exact to 1e-16 relative
+    assert!((regions_area / faces_area - 1.0).abs() < 1e-12, "{regions_area} vs {faces_area}");
+    // the bottom of the 1 × 0.5 block less its hole (the faces cover a box of that size)
+    assert!(faces_area > 0.3 && faces_area <= 0.5 * (1.0 + 1e-12), "{faces_area}");
+
+    let (out, _) = run_scene("gmsh_block3d", None, 20);
+    let map = svg(&out, "contact_status.svg");
+    let labels = texts(&map);
+    assert!(labels.iter().any(|t| t == "x [m]") && labels.iter().any(|t| t == "y [m]"), "axes in metres: {labels:?}");
+    let first = labels.iter().find(|t| t.starts_with("Γ3 at t = ")).expect("a panel caption");
+    assert_ne!(first, "Γ3 at t = 0 s", "the first map is a frame with contact");
+    let contact = read(&out.join("contact.csv"));
+    let header: Vec<&str> = contact.lines().next().expect("header").split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("{name} in {header:?}"));
+    let (t_col, p_col, l_col) = (col("t"), col("p"), col("lambda"));
+    let t_first: f64 = first["Γ3 at t = ".len()..].trim_end_matches(" s").parse().expect("t");
+    let loaded = contact.lines().skip(1).map(|l| l.split(',').collect::<Vec<_>>()).any(|f| {
+        let v = |k: usize| f[k].parse::<f64>().expect("number");
+        // 1e-9 relative: the caption prints t to four decimals; frame times are multiples of 0.01
+        (v(t_col) - t_first).abs() <= 1e-9 * t_first.max(1.0) && v(p_col) + v(l_col) > 0.0
+    });
+    assert!(loaded, "a node carries load at t = {t_first}");
+}
+
+/// Requirement: every chart takes its font from style.rs: no literal font family in
+/// src/output or studies/src outside style.rs.
+#[test]
+fn every_chart_uses_the_chart_style() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut offenders = Vec::new();
+    for dir in ["src/output", "studies/src"] {
+        for entry in std::fs::read_dir(root.join(dir)).expect("dir") {
+            let path = entry.expect("entry").path();
+            if path.extension().is_some_and(|e| e == "rs") && !path.ends_with("style.rs") {
+                let text = read(&path);
+                for family in ["\"sans-serif\"", "\"serif\"", "\"monospace\""] {
+                    if text.contains(family) {
+                        offenders.push(format!("{}: {family}", path.display()));
+                    }
+                }
+            }
+        }
+    }
+    assert!(offenders.is_empty(), "literal fonts outside style.rs: {offenders:?}");
 }

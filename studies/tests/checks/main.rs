@@ -7,5 +7,6 @@ mod common;
 
 mod bench_smoke;
 mod bound_at;
+mod charts;
 mod convergence;
 mod stability;
