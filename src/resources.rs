@@ -93,13 +93,22 @@ impl Estimate {
         BASELINE + (self.mesh_bytes + self.assembly_bytes).max(self.solve_bytes())
     }
 
-    /// Floating-point work of one step: two triangular-solve pairs on the factor, and at most
-    /// one dense Cholesky of the contact Newton matrix per Newton iteration (an upper bound: the
-    /// factor is reused while the contact sets do not change, and the sparse form costs less).
+    /// Floating-point work of one step: two triangular-solve pairs on the factor, and per
+    /// Newton iteration of the contact solve at most one dense Cholesky of the Newton matrix
+    /// (m³/3: an upper bound, the factor is reused while the contact sets do not change, and the
+    /// sparse form costs less) or, in the velocity form (3-D, from GEMV_FROM unknowns), about
+    /// [`VELOCITY_PRODUCTS`] products with the dense W or W⁻¹ (2m² each).
     pub fn flops_per_step(&self) -> (f64, f64) {
         let factor_entries = self.factor_bytes / SPARSE_ENTRY;
         let m = (self.dim * self.contact_nodes) as f64;
-        (2.0 * 2.0 * 2.0 * factor_entries, m * m * m / 3.0)
+        let newton = if self.velocity_form() { VELOCITY_PRODUCTS * 2.0 * m * m } else { m * m * m / 3.0 };
+        (2.0 * 2.0 * 2.0 * factor_entries, newton)
+    }
+
+    /// Whether the contact solve may run in the velocity form (3-D, a dense W of at least
+    /// GEMV_FROM unknowns).
+    fn velocity_form(&self) -> bool {
+        self.dim == 3 && self.dim * self.contact_nodes >= crate::defaults::GEMV_FROM
     }
 
     /// Human-readable lines for `dyncontact check`.
@@ -130,9 +139,15 @@ impl Estimate {
                 }
             ),
             format!(
-                "cost per step  : {:.2e} flop in the free and recovery solves; at most {:.2e} flop per Newton iteration of the contact solve (dense Cholesky on {} unknowns; reused while the contact sets hold, less with the sparse form)",
+                "cost per step  : {:.2e} flop in the free and recovery solves; {} {:.2e} flop per Newton iteration of the contact solve ({} on {} unknowns)",
                 solve,
+                if self.velocity_form() { "about" } else { "at most" },
                 lu,
+                if self.velocity_form() {
+                    "velocity form: ~6 products with the dense W or W⁻¹, a sparse near-field factor"
+                } else {
+                    "dense Cholesky; reused while the contact sets hold, less with the sparse form"
+                },
                 self.dim * self.contact_nodes
             ),
         ]
@@ -150,6 +165,11 @@ pub fn gib(bytes: f64) -> String {
         format!("{:.1} MiB", bytes / k.powi(2))
     }
 }
+
+/// The dense products with W or W⁻¹ of one Newton iteration in velocity form: W⁻¹ on the right-hand
+/// side, the conjugate gradients with the near-field preconditioner (2.5 per direction on
+/// academic3d at 48×24×16), the prescribed rows, and W in the line search's residual.
+pub const VELOCITY_PRODUCTS: f64 = 6.0;
 
 /// The estimate of a model; a Gmsh mesh is read (its size is the file's), a rectangle is not built.
 pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
@@ -231,6 +251,7 @@ pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
         factor_bytes: factor_entries * SPARSE_ENTRY,
         // the dense W and one Newton matrix, W⁻¹ where the velocity form may keep it (from
         // GEMV_FROM unknowns), and the responses G = A_k⁻¹ Hᵀ where they are kept
+        // (the near field of W⁻¹ and its factor: a few node blocks per node, below 1% of these)
         contact_bytes: (if m >= crate::defaults::GEMV_FROM as f64 { 3.0 } else { 2.0 }) * m * m * 8.0
             + Some(8.0 * n * m).filter(|g| *g <= crate::defaults::RESPONSES_BYTES).unwrap_or(0.0),
         assembly_bytes: ASSEMBLY_ENTRY * element_entries * triangles as f64,

@@ -14,3 +14,4 @@ pub mod bound_at;
 pub mod convergence;
 pub mod scaling;
 pub mod stability;
+pub mod thick;

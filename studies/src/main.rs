@@ -33,6 +33,12 @@ enum Study {
         /// only the bookkeeping part (the (E.1) terms and outputs at 66k unknowns; bookkeeping.csv)
         #[arg(long)]
         bookkeeping_only: bool,
+        /// only the thick 3-D boxes (thick.csv, thick.svg)
+        #[arg(long)]
+        thick_only: bool,
+        /// the thick boxes also at 64×32×24 (158,400 unknowns: minutes of setup and GBs of memory)
+        #[arg(long)]
+        thick_largest: bool,
     },
     /// Stability map: sweeps of k, ε, the friction decay, the impact speed and θ per scheme,
     /// each run classified (converged, fixed point failed, Newton failed, energy grew, error).
@@ -71,9 +77,15 @@ fn main() -> ExitCode {
     };
     let out = |o: &Option<PathBuf>, default: &str| o.clone().unwrap_or_else(|| PathBuf::from(default));
     let report = match &cli.study {
-        Study::Bench { out: o, quick, floor_only, bookkeeping_only } => bench::run(
+        Study::Bench { out: o, quick, floor_only, bookkeeping_only, thick_only, thick_largest } => bench::run(
             &out(o, "target/bench"),
-            &bench::BenchOptions { quick: *quick, floor_only: *floor_only, bookkeeping_only: *bookkeeping_only },
+            &bench::BenchOptions {
+                quick: *quick,
+                floor_only: *floor_only,
+                bookkeeping_only: *bookkeeping_only,
+                thick_only: *thick_only,
+                thick_largest: *thick_largest,
+            },
         ),
         Study::Stability { out: o, quick, jobs } => stability::run(
             &out(o, "target/stability"),

@@ -116,3 +116,31 @@ fn memory_estimate_is_within_30_percent_of_the_measured_peak() {
         );
     }
 }
+
+/// (issue 25) `check` states the contact solve's cost in the form the run takes: on academic3d
+/// (3-D, ~940 contact unknowns: the velocity form) about VELOCITY_PRODUCTS dense products of 2m²
+/// flop per Newton iteration, not a dense Cholesky's m³/3; on the 2-D academic scene the
+/// Cholesky bound.
+#[test]
+fn check_states_the_velocity_form_cost() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let o = Command::new(BIN).arg("check").arg(root.join("fixtures/scenes/academic3d.toml")).output().expect("check");
+    let text = String::from_utf8_lossy(&o.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("cost per step"))
+        .unwrap_or_else(|| panic!("no cost line: {text}"));
+    let scene = Scene::from_file(&root.join("fixtures/scenes/academic3d.toml")).expect("scene");
+    let e = estimate(&scene.validate().expect("valid"), &root.join("fixtures/scenes")).expect("estimate");
+    let m = (3 * e.contact_nodes) as f64;
+    let flops = dyncontact::resources::VELOCITY_PRODUCTS * 2.0 * m * m;
+    assert_eq!(e.flops_per_step().1, flops, "the velocity form's work");
+    assert!(line.contains("velocity form") && line.contains(&format!("about {flops:.2e} flop")), "{line}");
+    let o = Command::new(BIN).arg("check").arg(root.join("fixtures/scenes/academic.toml")).output().expect("check");
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.lines().any(|l| l.trim_start().starts_with("cost per step")
+            && l.contains("at most")
+            && l.contains("dense Cholesky"))
+    );
+}

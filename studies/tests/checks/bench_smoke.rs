@@ -48,9 +48,24 @@ fn number(row: &std::collections::HashMap<String, String>, col: &str) -> f64 {
 #[test]
 fn quick_bench_writes_its_files() {
     let dir = std::env::temp_dir().join(format!("dyncontact-bench-smoke-{}", std::process::id()));
-    let report = bench::run(&dir, &BenchOptions { quick: true, floor_only: false, bookkeeping_only: false })
-        .expect("the quick benchmark runs");
+    let report =
+        bench::run(&dir, &BenchOptions { quick: true, ..BenchOptions::default() }).expect("the quick benchmark runs");
     assert!(report.contains("work–precision") && report.contains("race"), "{report}");
+
+    // the thick 3-D boxes: both preconditioners on every box, in velocity form (a near field
+    // keeping a small share of W⁻¹ in the near-field rows, none in the node-block rows)
+    let (_, rows) = read_csv(&dir.join("thick.csv"));
+    assert_eq!(rows.len(), 2 * 2, "two boxes × two preconditioners");
+    for r in &rows {
+        let density = number(r, "near_density");
+        match r["form"].as_str() {
+            "near field" => assert!(density > 0.0 && density < 0.5, "{r:?}"),
+            "node blocks" => assert_eq!(density, 0.0, "{r:?}"),
+            other => panic!("form {other}"),
+        }
+        assert!(number(r, "cg_iterations") > 0.0 && number(r, "contact_median_s") > 0.0, "{r:?}");
+    }
+    assert!(dir.join("thick.svg").is_file());
 
     let (header, rows) = read_csv(&dir.join("work_precision.csv"));
     for c in WORK_COLUMNS {
