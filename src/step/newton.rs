@@ -616,8 +616,9 @@ fn direction(
 /// (N.1) rows Δy + W Δr = −F_y gives
 ///   [(W⁻¹)_FF + ω Ĝ_F] Δy_F = −(W⁻¹ (F_y + Δy_P))_F − r_k,F,   ω Δm_P = −(W⁻¹ (F_y + Δy))_P − r_k,P,
 /// r_k the known force change (ω dm on F, the compliance part ω g Δy on P). The matrix is
-/// symmetric and, when the step problem is convex, positive definite: conjugate gradients with
-/// node blocks, to the relative residual `forcing`. None (another form is used) when they do
+/// symmetric and, when the step problem is convex, positive definite: conjugate gradients
+/// preconditioned by the near field of W⁻¹ to round-off (PCG_TOLERANCE), or by node blocks to
+/// the relative residual `forcing`. None (another form is used) when they do
 /// not converge or meet a non-positive curvature.
 #[allow(clippy::too_many_arguments)]
 fn velocity_direction(
@@ -667,7 +668,14 @@ fn velocity_direction(
         &diag,
         &blocks,
         &b,
-        forcing.max(crate::defaults::PCG_TOLERANCE),
+        // with the near field a direction to round-off costs a few more iterations and keeps
+        // Newton's finite termination on fixed sets (exact complementarity: d ≤ g to round-off,
+        // so the constraint dissipation never decreases); node blocks stop at the forcing
+        if inverse.has_near_field() {
+            crate::defaults::PCG_TOLERANCE
+        } else {
+            forcing.max(crate::defaults::PCG_TOLERANCE)
+        },
         crate::defaults::VELOCITY_FORM_MAX_ITERATIONS,
         &mut x,
     )?;

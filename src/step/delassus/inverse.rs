@@ -78,6 +78,11 @@ impl InverseDelassus {
         self
     }
 
+    /// Whether the solves are preconditioned by the near field (else by node blocks).
+    pub fn has_near_field(&self) -> bool {
+        self.near.is_some()
+    }
+
     /// The share of W⁻¹'s entries its near field keeps (0 without one).
     pub fn near_field_density(&self) -> f64 {
         self.near
