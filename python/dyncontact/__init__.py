@@ -77,8 +77,9 @@ class Result:
             ``normal_force``, ``kinetic``, ..., counts as floats), one value per step from t = 0.
         contact: contact.csv as a dict of numpy arrays (``step`` and ``node`` int64, ``status``
             str, the rest float64): one row per Γ3 node of every stored frame.
-        summary: summary.json as a dict (``status``, ``steps_completed``, ``run``: timings,
-            iteration totals, the largest (E.1) residual, warnings, ...).
+        summary: summary.json as a dict (``status``, ``steps_completed``, ``model``,
+            ``timing``, iteration totals, ``max_abs_energy_residual``, ``warnings``, ...; a run
+            with ``out=None`` has no ``run_id``-based folder: ``effective_scene`` is None).
         out: the run folder, or None for a run that wrote nothing.
         frames: the stored frames as (step, t) pairs (every ``output.every`` steps and the last).
     """
@@ -120,11 +121,11 @@ class Result:
         return {
             "u": np.ascontiguousarray(p["displacement"][:, :d]),
             "v": np.ascontiguousarray(p["velocity"][:, :d]),
-            "contact_pressure": p["contact_pressure"],
-            "compliance_pressure": p["compliance_pressure"],
-            "lambda": p["lambda"],
+            "contact_pressure": p["contact_pressure"].reshape(-1),
+            "compliance_pressure": p["compliance_pressure"].reshape(-1),
+            "lambda": p["lambda"].reshape(-1),
             "friction": np.ascontiguousarray(p["friction"][:, :d]),
-            "contact_status": p["contact_status"],
+            "contact_status": p["contact_status"].reshape(-1),
             "stress": m.cell_data["stress"][0],
         }
 
