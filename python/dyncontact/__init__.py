@@ -85,14 +85,29 @@ class Result:
     """
 
     def __init__(self, history, contact, summary, mesh, frames, out=None, frame_fields=None):
-        self.history: Dict[str, np.ndarray] = history
-        self.contact: Dict[str, np.ndarray] = contact
+        # a run with a folder reads history.csv and contact.csv when first asked for
+        self._history = history
+        self._contact = contact
         self.summary: Dict[str, Any] = summary
         self.out: Optional[Path] = out
         self.frames: List[Tuple[int, float]] = frames
         self._mesh = mesh
         self._frame_fields = frame_fields
         self._dim = int(mesh["dimension"])
+
+    @property
+    def history(self) -> Dict[str, np.ndarray]:
+        """history.csv as a dict of float64 arrays, one per column (see the class)."""
+        if callable(self._history):
+            self._history = self._history()
+        return self._history
+
+    @property
+    def contact(self) -> Dict[str, np.ndarray]:
+        """contact.csv as a dict of numpy arrays (see the class)."""
+        if callable(self._contact):
+            self._contact = self._contact()
+        return self._contact
 
     @property
     def mesh(self):
@@ -207,11 +222,20 @@ def run(
     return _read_folder(out, r["mesh"])
 
 
-def _read_folder(out: Path, mesh) -> Result:
+def _read_history(out: Path) -> Dict[str, np.ndarray]:
+    # float() of the shortest round-trip text gives back the f64 the run wrote
     header, rows = _read_csv(out / "history.csv")
-    history = {name: np.array([float(r[j]) for r in rows], dtype=np.float64) for j, name in enumerate(header)}
+    return {name: np.array([float(r[j]) for r in rows], dtype=np.float64) for j, name in enumerate(header)}
+
+
+def _read_contact(out: Path) -> Dict[str, np.ndarray]:
     header, rows = _read_csv(out / "contact.csv")
-    contact = _contact_table({name: [r[j] for r in rows] for j, name in enumerate(header)})
+    return _contact_table({name: [r[j] for r in rows] for j, name in enumerate(header)})
+
+
+def _read_folder(out: Path, mesh) -> Result:
+    history = lambda: _read_history(out)  # noqa: E731
+    contact = lambda: _read_contact(out)  # noqa: E731
     summary = json.loads((out / "summary.json").read_text())
     frames = []
     pvd = out / "series.pvd"
