@@ -197,5 +197,6 @@ def test_the_gil_is_released_while_the_solver_runs():
         done.set()
         thread.join()
     during = [t for t in ticks if start < t < end]
-    # a thread holding the GIL for the whole run would leave none
-    assert len(during) >= 0.5 * (end - start) / 0.005 * 0.5, (len(during), end - start)
+    # a call holding the GIL for the whole run would leave the thread at most one tick; one
+    # releasing it leaves about one per 5 ms (fewer on a loaded machine)
+    assert end - start > 0.1 and len(during) >= 10, (len(during), end - start)
