@@ -32,6 +32,7 @@ from ._errors import SceneError, SolverError
 
 __all__ = [
     "DEFAULT_SCENE",
+    "DyncontactWarning",
     "Result",
     "Scene",
     "SceneError",
@@ -39,6 +40,7 @@ __all__ = [
     "SolverError",
     "StepRecord",
     "history_columns",
+    "resume",
     "run",
     "sweep",
     "__version__",
@@ -183,6 +185,7 @@ def run(
     out: Optional[PathLike] = None,
     progress: bool = False,
     checkpoint_every: Optional[int] = None,
+    _stop_after: Optional[int] = None,
 ) -> Result:
     """Run a scene to its end time and return a :class:`Result` (history, contact, summary,
     mesh, frames).
@@ -195,6 +198,9 @@ def run(
             results back from it.
         progress: show a progress bar (on a terminal).
         checkpoint_every: with ``out``, write OUT/checkpoint.json every N steps.
+
+    The run's warnings (summary.json's ``warnings``, which the CLI prints) are issued as
+    :class:`DyncontactWarning`.
 
     Returns:
         Result: ``.history`` (dict of float64 arrays per history.csv column), ``.contact``,
@@ -209,6 +215,12 @@ def run(
 
     The GIL is released while the solver runs. The history equals the CLI's bit for bit.
     """
+    result = _run(scene, out, progress, checkpoint_every, _stop_after)
+    _warn(result.summary)
+    return result
+
+
+def _run(scene, out, progress, checkpoint_every, _stop_after) -> Result:
     s = _scene(scene)
     if out is None:
         r = _native.run_memory(s, progress)
@@ -218,8 +230,47 @@ def run(
             frame_fields=r["frames"],
         )
     out = Path(out)
-    r = _native.run_folder(s, os.fspath(out), progress, checkpoint_every)
+    r = _native.run_folder(s, os.fspath(out), progress, checkpoint_every, False, _stop_after)
     return _read_folder(out, r["mesh"])
+
+
+def resume(
+    out: PathLike,
+    set: Optional[Dict[str, Any]] = None,
+    progress: bool = False,
+    checkpoint_every: Optional[int] = None,
+) -> Result:
+    """Continue the run in folder ``out`` from its checkpoint.json, as ``dyncontact run --resume
+    OUT`` does: its scene is OUT/scene.toml (the effective scene the run wrote); ``set``
+    ({"time.end": T} with a later T) extends a finished run. Returns the :class:`Result` of the
+    whole run (its files hold every step from t = 0).
+
+    Raises:
+        OSError: the folder cannot be resumed (no checkpoint, files that do not belong
+            together, other inputs, a completed run without a later time.end); nothing in it
+            changed.
+        and as :func:`run`.
+    """
+    out = Path(out)
+    scene = Scene.from_file(os.fspath(out / "scene.toml"))
+    if set:
+        scene = scene.with_set(set)
+    r = _native.run_folder(scene, os.fspath(out), progress, checkpoint_every, True, None)
+    result = _read_folder(out, r["mesh"])
+    _warn(result.summary)
+    return result
+
+
+class DyncontactWarning(UserWarning):
+    """A warning of a run (summary.json's ``warnings``: what the CLI prints as ``warning: ...``),
+    e.g. a time step beyond the (C.k) limit or fixed-point cap hits."""
+
+
+def _warn(summary: Dict[str, Any]) -> None:
+    import warnings
+
+    for w in summary.get("warnings") or []:
+        warnings.warn(w, DyncontactWarning, stacklevel=3)
 
 
 def _read_history(out: Path) -> Dict[str, np.ndarray]:

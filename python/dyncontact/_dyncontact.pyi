@@ -103,9 +103,15 @@ def run_memory(scene: Scene, progress: bool = False) -> Dict[str, Any]:
     """Run writing nothing (`dyncontact.run(scene)` wraps it)."""
 
 def run_folder(
-    scene: Scene, out: Union[str, PathLike[str]], progress: bool = False, checkpoint_every: Optional[int] = None
+    scene: Scene,
+    out: Union[str, PathLike[str]],
+    progress: bool = False,
+    checkpoint_every: Optional[int] = None,
+    resume: bool = False,
+    stop_after: Optional[int] = None,
 ) -> Dict[str, Any]:
-    """Run into a run folder (`dyncontact.run(scene, out=...)` wraps it)."""
+    """Run into a run folder, or resume it (`dyncontact.run(scene, out=...)` and
+    `dyncontact.resume(out)` wrap it)."""
 
 def run_sweep(
     sweep: Union[str, PathLike[str], Mapping[str, Any]],

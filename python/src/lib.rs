@@ -136,23 +136,27 @@ fn run_memory<'py>(py: Python<'py>, scene: &PyScene, progress: bool) -> PyResult
 }
 
 /// Run `scene` into the folder `out` as `dyncontact run SCENE --out OUT` does (history.csv,
-/// contact.csv, frames, summary.json, charts, scene.toml; a checkpoint when stopped). Returns
-/// {"mesh": ...}; the Python layer reads the files.
+/// contact.csv, frames, summary.json, charts, scene.toml; a checkpoint when stopped), or with
+/// `resume` continue the run in `out` from its checkpoint as `dyncontact run --resume OUT`
+/// does; `stop_after` is the CLI's hidden `--stop-after N` (tests). Returns {"mesh": ...}; the
+/// Python layer reads the files.
 #[pyfunction]
-#[pyo3(signature = (scene, out, progress = false, checkpoint_every = None))]
+#[pyo3(signature = (scene, out, progress = false, checkpoint_every = None, resume = false, stop_after = None))]
 fn run_folder<'py>(
     py: Python<'py>,
     scene: &PyScene,
     out: PathBuf,
     progress: bool,
     checkpoint_every: Option<usize>,
+    resume: bool,
+    stop_after: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (result, signal) = interruptible(py, |flag| {
-        let problem = match scene.problem(Some(&out)) {
+        let problem = match scene.problem((!resume).then_some(out.as_path())) {
             Ok(p) => p,
             Err(e) => {
                 // in a folder that exists (a sweep's point) summary.json says why nothing ran
-                if out.is_dir() {
+                if out.is_dir() && !resume {
                     dyncontact::run::write_failed_start(&out, &scene.name, &e)?;
                 }
                 return Err(e);
@@ -162,10 +166,10 @@ fn run_folder<'py>(
             out: out.clone(),
             progress,
             checkpoint_every,
-            resume: false,
+            resume,
             scene_text: Some(scene.effective.clone()),
             origin: origin(scene),
-            stop_after: None,
+            stop_after,
             interrupt: Some(flag),
         };
         dyncontact::run::run(&problem, &opts).map(|_| problem)

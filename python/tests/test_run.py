@@ -200,3 +200,24 @@ def test_the_gil_is_released_while_the_solver_runs():
     # a call holding the GIL for the whole run would leave the thread at most one tick; one
     # releasing it leaves about one per 5 ms (fewer on a loaded machine)
     assert end - start > 0.1 and len(during) >= 10, (len(during), end - start)
+
+
+def test_stop_and_resume_equal_a_straight_run(tmp_path):
+    scene = dc.Scene.default().with_set(SHORT)
+    with pytest.raises(KeyboardInterrupt):
+        dc.run(scene, out=tmp_path / "r", _stop_after=40)  # the CLI's --stop-after, as a Ctrl-C after step 40
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and summary["steps_completed"] == 40
+    res = dc.resume(tmp_path / "r")
+    assert res.summary["status"] == "completed" and res.history["step"][-1] == 100
+    dc.run(scene, out=tmp_path / "s")
+    for name in ("history.csv", "contact.csv"):
+        assert (tmp_path / "r" / name).read_bytes() == (tmp_path / "s" / name).read_bytes(), name
+    with pytest.raises(OSError, match="checkpoint"):
+        dc.resume(tmp_path / "s")  # completed without a checkpoint: nothing to resume
+
+
+def test_run_warnings_are_python_warnings():
+    with pytest.warns(dc.DyncontactWarning, match=r"\(C\.k\) limit"):
+        res = dc.run(dc.Scene.default().with_set({"time.end": 0.005}))
+    assert any("(C.k) limit" in w for w in res.summary["warnings"])
