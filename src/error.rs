@@ -14,9 +14,11 @@ pub enum Error {
 
     /// The scene file is not valid TOML or does not match the schema. `message` is one line
     /// (summary.json, sweep.csv); `diagram` holds TOML's lines that quote the source with a caret
-    /// under the place (empty when there is none), which the command line prints under it.
+    /// under the place (empty when there is none), which the command line prints under it;
+    /// `path` is the key path the error is at (empty for a syntax error), also at the start of
+    /// `message`.
     #[error("{file}: {message}")]
-    SceneSyntax { file: String, message: String, diagram: String },
+    SceneSyntax { file: String, message: String, diagram: String, path: String },
 
     /// A mesh file or a mesh entity is wrong.
     #[error("mesh {file}: {message}")]
@@ -130,6 +132,17 @@ impl Error {
     pub fn folder(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
         Error::Folder { path: path.into(), message: message.into() }
     }
+    /// The scene key path this error names (`contact.friction.decay`), if it names one: the
+    /// `key` of the Python package's `SceneError`.
+    pub fn key(&self) -> Option<&str> {
+        match self {
+            Error::Scene { path, .. } | Error::Expression { path, .. } | Error::SceneSyntax { path, .. } => {
+                (!path.is_empty() && path != ".").then_some(path.as_str())
+            }
+            _ => None,
+        }
+    }
+
     /// The exit code of the command line for this error ([`exit`]); an interruption exits as
     /// its signal asks (the caller knows which signal it was).
     pub fn exit_code(&self) -> u8 {

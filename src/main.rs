@@ -155,7 +155,7 @@ macro_rules! esay {
 
 /// The scene (the embedded default when `scene` is None) with the `--set` overrides, the
 /// folder relative paths in it are read from, and the effective scene's text (what a run
-/// writes to its folder as scene.toml: see [`dyncontact::scene::parse::effective_text`]).
+/// writes to its folder as scene.toml), read by [`dyncontact::scene::parse::load`].
 fn load(scene: Option<&Path>, set: &[String]) -> Result<(Scene, PathBuf, String), Error> {
     let overrides = set.iter().map(|a| Override::parse(a)).collect::<Result<Vec<_>, Error>>()?;
     let (text, file, dir) = match scene {
@@ -168,10 +168,7 @@ fn load(scene: Option<&Path>, set: &[String]) -> Result<(Scene, PathBuf, String)
             p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")),
         ),
     };
-    // read first as written (its errors name the user's lines), then as the run folder keeps it
-    Scene::from_toml_with(&text, &file, &overrides)?;
-    let effective = dyncontact::scene::parse::effective_text(&text, &file, &overrides, &dir)?;
-    let s = Scene::from_toml(&effective, &file)?;
+    let (s, effective) = dyncontact::scene::parse::load(&text, &file, &overrides, &dir)?;
     Ok((s, dir, effective))
 }
 

@@ -62,6 +62,54 @@ pub fn run(problem: &Problem, opts: &RunOptions) -> Result<Summary> {
     run_with(problem, Settings::from_problem(problem), opts)
 }
 
+/// A run that writes nothing: the same time loop, summary (as summary.json would say it: the
+/// status, iteration totals, (E.1) residuals, warnings) and failures as [`run`], with every
+/// record handed to `each` with the state after it — the initial record (t = 0) first. The
+/// Python package's `dc.run(scene, out=None)` is this. `interrupt` stops it at the end of the
+/// current step with [`Error::Interrupted`] (no checkpoint: there is no folder).
+pub fn run_in_memory(
+    problem: &Problem,
+    origin: &Origin,
+    interrupt: Option<&AtomicBool>,
+    mut each: impl FnMut(&StepRecord, &Simulation),
+) -> Result<Summary> {
+    let start = Instant::now();
+    let mut sim = Simulation::new(problem)?;
+    let opts = RunOptions { origin: origin.clone(), ..RunOptions::default() };
+    let mut summary = new_summary(problem, &sim, &opts, start, String::new());
+    summary.details().effective_scene = None;
+    let mut first_cap: Option<usize> = None;
+    each(&sim.initial_record(), &sim);
+    let mut steps = sim.steps();
+    let ended = loop {
+        if interrupt.is_some_and(|f| f.load(Ordering::SeqCst)) && steps.simulation().state.n < problem.steps {
+            let n = steps.simulation().state.n;
+            break Err(Error::Interrupted { step: n, time: problem.time(n) });
+        }
+        let Some(rec) = steps.next() else { break Ok(()) };
+        match rec {
+            Ok(rec) => {
+                tally(&mut summary, &mut first_cap, &rec);
+                each(&rec, steps.simulation());
+            }
+            Err(e) => break Err(e),
+        }
+    };
+    let counts = sim.delassus_factors.all_counts();
+    let details = summary.details();
+    (details.contact_factorizations, details.contact_factor_reuses) = (counts.factorizations, counts.reuses);
+    (details.contact_pcg_solves, details.contact_pcg_iterations) = (counts.pcg_solves, counts.pcg_iterations);
+    (details.contact_velocity_solves, details.contact_velocity_iterations) =
+        (counts.velocity_solves, counts.velocity_iterations);
+    details.wall_time_s = start.elapsed().as_secs_f64();
+    details.timing.total_s = details.wall_time_s;
+    details.peak_memory_mb = crate::resources::peak_memory().map(|b| b / 1e6);
+    ended?;
+    finish_warnings(problem, summary.details(), first_cap);
+    summary.status = RunStatus::Completed;
+    Ok(summary)
+}
+
 /// summary.json of a run that could not start — its scene, mesh or operators were refused —
 /// in an output folder that holds no earlier run (a sweep's point folder, or a new folder):
 /// `"status": "failed"` with the reason and its kind, so every point of a sweep is read the same

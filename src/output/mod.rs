@@ -240,13 +240,7 @@ impl Writer {
             for (i, nr) in rec.nodes.iter().enumerate() {
                 let node = c.nodes[i];
                 let x = p.mesh.point(node);
-                contact[node] = vtu::NodeContact {
-                    pressure: nr.p + nr.lambda,
-                    q: nr.p,
-                    lambda: nr.lambda,
-                    friction: nr.friction_vec,
-                    status: nr.status.code(),
-                };
+                contact[node] = vtu::NodeContact::of(nr);
                 // the columns of contact_columns(d): z after y in 3-D, the global components
                 // of v̄ and of the friction before friction_bound
                 let dim = c.dim;

@@ -42,6 +42,17 @@ pub struct NodeContact {
 impl NodeContact {
     /// A node off the contact boundary Γ3: zero fields, status −1.
     pub const OFF: NodeContact = NodeContact { pressure: 0.0, q: 0.0, lambda: 0.0, friction: [0.0; 3], status: -1 };
+
+    /// The fields of a Γ3 node from its step record.
+    pub fn of(nr: &crate::simulation::NodeRecord) -> NodeContact {
+        NodeContact {
+            pressure: nr.p + nr.lambda,
+            q: nr.p,
+            lambda: nr.lambda,
+            friction: nr.friction_vec,
+            status: nr.status.code(),
+        }
+    }
 }
 
 /// Names of the components of a 3-vector (`ComponentName0..2`).
@@ -96,7 +107,29 @@ pub fn vtu(frame: &Snapshot) -> String {
     let status: Vec<u8> = frame.contact.iter().flat_map(|c| c.status.to_le_bytes()).collect();
     array(&mut s, "Int32", "contact_status", 1, &[], &status);
     s.push_str("</PointData>\n<CellData>\n");
-    let (stress, connectivity, nv, vtk_type) = match mesh {
+    let stress = stress(frame);
+    let (connectivity, nv, vtk_type) = match mesh {
+        Geometry::Plane(m) => (m.cells.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 3, 5u8),
+        Geometry::Solid(m) => (m.cells.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 4, 10u8),
+    };
+    floats(&mut s, "stress", 6, SYMMETRIC_TENSOR, stress.into_iter());
+    s.push_str("</CellData>\n<Points>\n");
+    floats(&mut s, "Points", 3, &[], (0..np).flat_map(|i| mesh.point(i)));
+    s.push_str("</Points>\n<Cells>\n");
+    ints(&mut s, "connectivity", connectivity.into_iter());
+    ints(&mut s, "offsets", (1..=nc).map(|k| (nv * k) as i64));
+    array(&mut s, "UInt8", "types", 1, &[], &vec![vtk_type; nc]);
+    s.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+    s
+}
+
+/// (P.1) The stress of every cell of a frame, 6 values per cell in VTK's order (σ_xx, σ_yy,
+/// σ_zz, σ_xy, σ_yz, σ_xz): the frames' `stress` cell field (in 2-D σ_yz = σ_xz = 0 and σ_zz
+/// the out-of-plane stress, 0 in plane stress). The Python package's `fields(i)` reads it too.
+pub fn stress(frame: &Snapshot) -> Vec<f64> {
+    let mesh = frame.mesh;
+    let nc = mesh.n_cells();
+    match mesh {
         Geometry::Plane(m) => {
             // (P.1) stress per triangle: material.stress gives (σ_xx, σ_yy, σ_xy, σ_zz)
             let mut stress = Vec::with_capacity(6 * nc);
@@ -116,7 +149,7 @@ pub fn vtu(frame: &Snapshot) -> String {
                 let [sxx, syy, sxy, szz] = frame.material.stress(strain(frame.u), strain(frame.v));
                 stress.extend([sxx, syy, szz, sxy, 0.0, 0.0]);
             }
-            (stress, m.cells.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 3, 5u8)
+            stress
         }
         Geometry::Solid(m) => {
             // (P.1) stress per tetrahedron: the Voigt order (σ_xx, σ_yy, σ_zz, σ_yz, σ_xz, σ_xy)
@@ -133,18 +166,9 @@ pub fn vtu(frame: &Snapshot) -> String {
                 let sigma = b * (sm * nodal(frame.u)) + a * (sm * nodal(frame.v));
                 stress.extend([sigma[0], sigma[1], sigma[2], sigma[5], sigma[3], sigma[4]]);
             }
-            (stress, m.cells.iter().flatten().map(|&i| i as i64).collect::<Vec<_>>(), 4, 10u8)
+            stress
         }
-    };
-    floats(&mut s, "stress", 6, SYMMETRIC_TENSOR, stress.into_iter());
-    s.push_str("</CellData>\n<Points>\n");
-    floats(&mut s, "Points", 3, &[], (0..np).flat_map(|i| mesh.point(i)));
-    s.push_str("</Points>\n<Cells>\n");
-    ints(&mut s, "connectivity", connectivity.into_iter());
-    ints(&mut s, "offsets", (1..=nc).map(|k| (nv * k) as i64));
-    array(&mut s, "UInt8", "types", 1, &[], &vec![vtk_type; nc]);
-    s.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
-    s
+    }
 }
 
 /// The PVD collection listing (time, file) pairs.

@@ -29,7 +29,8 @@ pub fn syntax_error(file: &str, path: &str, e: &toml::de::Error) -> Error {
         what
     };
     let message = if path.is_empty() || path == "." { inner } else { format!("{path}: {inner}") };
-    Error::SceneSyntax { file: file.to_string(), message, diagram: diagram.join("\n") }
+    let path = if path == "." { String::new() } else { path.to_string() };
+    Error::SceneSyntax { file: file.to_string(), message, diagram: diagram.join("\n"), path }
 }
 
 /// The scene text with `overrides` applied to its table (TOML again).
@@ -40,6 +41,7 @@ pub fn overridden_text(text: &str, file: &str, overrides: &[Override]) -> Result
         file: file.to_string(),
         message: one_paragraph(&e.to_string()),
         diagram: String::new(),
+        path: String::new(),
     })
 }
 
@@ -69,7 +71,20 @@ pub fn effective_text(text: &str, file: &str, overrides: &[Override], dir: &std:
         file: file.to_string(),
         message: one_paragraph(&e.to_string()),
         diagram: String::new(),
+        path: String::new(),
     })
+}
+
+/// A scene as the command line reads it (`run`, `check`, and the Python package's `Scene`): the
+/// text with its `--set` overrides read first as written (so its errors name the user's lines
+/// and keys), then the effective text ([`effective_text`]: what a run keeps as scene.toml) read
+/// as the scene. `file` names the source in messages, `dir` is the folder relative paths in it
+/// are read from. Returns the scene and its effective text.
+pub fn load(text: &str, file: &str, overrides: &[Override], dir: &std::path::Path) -> Result<(Scene, String)> {
+    Scene::from_toml_with(text, file, overrides)?;
+    let effective = effective_text(text, file, overrides, dir)?;
+    let scene = Scene::from_toml(&effective, file)?;
+    Ok((scene, effective))
 }
 
 /// Read TOML text as a scene; Err: the key path serde reached (empty for a syntax error) and
@@ -121,7 +136,7 @@ impl Scene {
                 o.key,
                 one_paragraph(&o.value.to_string())
             );
-            return Err(Error::SceneSyntax { file: file.to_string(), message, diagram: String::new() });
+            return Err(Error::SceneSyntax { file: file.to_string(), message, diagram: String::new(), path });
         }
         // not a value an override set: the file's own error, at its line (when the file alone
         // shows it; otherwise the message without a diagram of a text nobody wrote)
@@ -133,7 +148,8 @@ impl Scene {
                 } else {
                     format!("{path}: {}", one_paragraph(e.message()))
                 };
-                Err(Error::SceneSyntax { file: format!("{file} with --set"), message, diagram: String::new() })
+                let file = format!("{file} with --set");
+                Err(Error::SceneSyntax { file, message, diagram: String::new(), path })
             }
         }
     }

@@ -18,7 +18,9 @@
 //! 4. short `dyncontact run`s of [`RUN_SCENES`] (2-D and 3-D), whose `series.pvd` and frames
 //!    `check_frames.py` reads with meshio (the last frame also with VTK's XML reader);
 //! 5. the GetFEM dynamic-contact checks (`getfem/*.py`: every GetFEM step converged, a bound at
-//!    each refinement level), and the sweeps' Snakemake path (src/workflow.rs).
+//!    each refinement level), and the sweeps' Snakemake path (src/workflow.rs);
+//! 6. the Python package (src/python.rs): its wheel built with maturin and installed in the venv,
+//!    `pytest python/tests`, `examples/python/*.py`.
 //!
 //! The solver is the `dyncontact` binary of the test build (`cargo test -p dyncontact --no-run`,
 //! which `verify` has just run): never a binary left over from an earlier build.
@@ -166,6 +168,20 @@ pub fn run(root: &Path, target: &Path, bin: &Path, prepared: &Prepared) -> Resul
     );
     record(&mut report, &mut failures, "sweeps with Snakemake", result);
 
+    // the Python package: the wheel, its tests and examples in this venv (src/python.rs)
+    let t = Instant::now();
+    let result = super::python::check(root, target, bin, python);
+    let _ = writeln!(report, "  Python package: wheel, pytest, examples ({:.1} s)", t.elapsed().as_secs_f64());
+    match result {
+        Ok((ok, text)) => {
+            report.push_str(&text);
+            if !ok {
+                failures.push("Python package: check failed (see above)".to_string());
+            }
+        }
+        Err(e) => failures.push(format!("Python package: {e}")),
+    }
+
     let refs = rel(root, &reference);
     let _ = writeln!(report, "  scikit-fem reference operators written to {refs}/<scene>_{{M,K,C}}.mtx, <scene>_f.txt");
     let total = start.elapsed().as_secs_f64();
@@ -173,7 +189,7 @@ pub fn run(root: &Path, target: &Path, bin: &Path, prepared: &Prepared) -> Resul
         let n = scenes.len();
         let _ = write!(
             report,
-            "crosscheck OK: {n} scenes, tolerance 1e-12 relative, frames readable, GetFEM dynamic contact agrees with and without friction, Snakemake runs the sweep as in-process ({total:.1} s)"
+            "crosscheck OK: {n} scenes, tolerance 1e-12 relative, frames readable, GetFEM dynamic contact agrees with and without friction, Snakemake runs the sweep as in-process, the Python package's tests and examples pass ({total:.1} s)"
         );
         Ok(report)
     } else {

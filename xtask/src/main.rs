@@ -21,6 +21,7 @@
 mod crosscheck;
 mod cycles;
 mod process;
+mod python;
 mod source;
 mod workflow;
 

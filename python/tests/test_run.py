@@ -1,0 +1,223 @@
+"""dc.run, dc.Simulation: the results' contents, bit-identical histories against the CLI (2-D and
+3-D), a solver failure as SolverError, Ctrl-C as KeyboardInterrupt after the checkpoint, and the
+GIL released while the solver runs."""
+import csv
+import json
+import os
+import signal
+import threading
+import time
+
+import meshio
+import numpy as np
+import pytest
+
+import dyncontact as dc
+
+SHORT = {"time.end": 0.05}
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], rows[1:]
+
+
+def test_run_in_memory_has_every_item():
+    scene = dc.Scene.default().with_set(SHORT)
+    res = dc.run(scene, out=None, progress=False)
+    assert res.out is None
+    assert list(res.history) == dc.history_columns()
+    for name, col in res.history.items():
+        assert col.dtype == np.float64 and col.shape == (101,), name
+    assert res.history["t"][0] == 0.0 and res.history["t"][-1] == pytest.approx(0.05)
+    assert res.history["normal_force"].max() > 0
+    assert res.summary["status"] == "completed" and res.summary["steps_completed"] == 100
+    assert res.summary["scene_file"] == "<embedded academic scene>" and res.summary["overrides"] == ["time.end=0.05"]
+    # contact.csv: one row per Γ3 node of every stored frame (every 10 steps: 11 frames)
+    assert [s for s, _ in res.frames] == list(range(0, 101, 10))
+    assert res.contact["node"].dtype == np.int64 and res.contact["status"].dtype.kind == "U"
+    assert len(res.contact["step"]) == 11 * 32 and set(res.contact["status"]) <= {"separated", "stick", "slip"}
+    mesh = res.mesh
+    assert isinstance(mesh, meshio.Mesh) and mesh.points.shape == (561, 3) and mesh.cells[0].type == "triangle"
+    f = res.fields(-1)
+    assert f["u"].shape == (561, 2) and f["v"].shape == (561, 2) and f["stress"].shape == (1024, 6)
+    assert f["contact_status"].shape == (561,) and np.abs(f["u"]).max() > 0
+    assert res.fields(0)["u"].max() == 0.0
+    assert isinstance(res.frame(-1), meshio.Mesh)
+
+
+def test_run_with_out_writes_the_clis_folder(tmp_path, cli):
+    scene = dc.Scene.default().with_set(SHORT)
+    res = dc.run(scene, out=tmp_path / "py")
+    p = cli("run", "--set", "time.end=0.05", "--out", tmp_path / "cli")
+    assert p.returncode == 0, p.stderr
+    for name in ("history.csv", "contact.csv", "scene.toml"):
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    ref = dc.run(scene)
+    for name, col in ref.history.items():
+        assert res.history[name].tobytes() == col.tobytes(), name
+    for name, col in ref.contact.items():
+        assert np.array_equal(res.contact[name], col), name
+    assert res.frames == ref.frames
+    for i in (0, -1):
+        a, b = res.fields(i), ref.fields(i)
+        assert a.keys() == b.keys()
+        for k in a:
+            assert np.array_equal(a[k], b[k]), (i, k)
+    assert res.summary["status"] == "completed" and res.summary["effective_scene"] == "scene.toml"
+
+
+@pytest.mark.parametrize(
+    "scene,end", [("fixtures/scenes/academic.toml", 0.05), ("fixtures/scenes/academic3d.toml", 0.01)], ids=["2d", "3d"]
+)
+def test_history_equals_the_clis_bit_for_bit(root, cli, tmp_path, monkeypatch, scene, end):
+    monkeypatch.chdir(root)
+    p = cli("run", scene, "--set", f"time.end={end}", "--out", tmp_path / "cli")
+    assert p.returncode == 0, p.stderr
+    header, rows = read_csv(tmp_path / "cli" / "history.csv")
+    res = dc.run(dc.Scene.from_file(scene).with_set({"time.end": end}))
+    assert list(res.history) == header
+    for j, name in enumerate(header):
+        expected = np.array([float(r[j]) for r in rows], dtype=np.float64)
+        assert res.history[name].tobytes() == expected.tobytes(), name
+    header, rows = read_csv(tmp_path / "cli" / "contact.csv")
+    assert list(res.contact) == header
+    for j, name in enumerate(header):
+        got = res.contact[name]
+        expected = [r[j] for r in rows]
+        if name == "status":
+            assert list(got) == expected
+        else:
+            assert np.array_equal(got, np.array([float(x) for x in expected]).astype(got.dtype)), name
+
+
+def test_simulation_steps_are_the_run(root):
+    scene = dc.Scene.default().with_set({"time.end": 0.02})
+    ref = dc.run(scene)
+    sim = dc.Simulation(scene)
+    assert sim.n_steps == 40 and sim.step_index == 0 and sim.dimension == 2
+    first = sim.initial_record()
+    assert first.t == 0.0 and first.u.shape == (561, 2)
+    records = list(sim.steps())
+    assert [r.step for r in records] == list(range(1, 41))
+    assert sim.step_index == 40 and sim.step() is None
+    t = np.array([first.t] + [r.t for r in records])
+    force = np.array([first.normal_force] + [r.normal_force for r in records])
+    assert t.tobytes() == ref.history["t"].tobytes()
+    assert force.tobytes() == ref.history["normal_force"].tobytes()
+    last = records[-1]
+    assert last.u.shape == (561, 2) and last.v.shape == (561, 2)
+    assert np.array_equal(last.u, ref.fields(-1)["u"]) and np.array_equal(last.v, ref.fields(-1)["v"])
+    for name, x in last.history.items():
+        assert x == ref.history[name][-1], name
+    assert set(last.energy) >= {"kinetic", "elastic", "energy_residual"}
+
+
+FAILING = {"time.end": 0.05, "solver.max_newton_iterations": 1}
+
+
+def test_solver_failure_is_a_solver_error(cli, tmp_path):
+    p = cli("run", "--set", "time.end=0.05", "--set", "solver.max_newton_iterations=1", "--out", tmp_path / "cli")
+    assert p.returncode == 2
+    scene = dc.Scene.default().with_set(FAILING)
+    with pytest.raises(dc.SolverError) as e:
+        dc.run(scene)
+    err = e.value
+    assert isinstance(err, RuntimeError)
+    assert "error: " + str(err) == p.stderr.splitlines()[0]
+    assert err.step == 2 and err.time == pytest.approx(1e-3)
+    r = err.residuals
+    assert r["kind"] == "solver" and r["solver"] == "newton" and r["iterations"] == 1 and r["inner_residual"] > 0
+    # with a folder: the files of the steps before stay, summary.json says failed
+    with pytest.raises(dc.SolverError):
+        dc.run(scene, out=tmp_path / "py")
+    summary = json.loads((tmp_path / "py" / "summary.json").read_text())
+    assert summary["status"] == "failed" and summary["steps_completed"] == 1
+    # the time loop raises at the same step and ends
+    sim = dc.Simulation(scene)
+    steps = sim.steps()
+    assert next(steps).step == 1
+    with pytest.raises(dc.SolverError) as e:
+        next(steps)
+    assert e.value.step == 2
+    with pytest.raises(StopIteration):
+        next(steps)
+
+
+def test_energy_guard_failure():
+    scene = dc.Scene.default().with_set(
+        {"time.end": 0.01, "solver.energy_residual_limit": 1e-30, "solver.energy_residual_action": "fail"}
+    )
+    with pytest.raises(dc.SolverError) as e:
+        dc.run(scene)
+    assert e.value.step == 1 and e.value.residuals["energy_residual_limit"] == 1e-30
+
+
+def test_ctrl_c_raises_keyboard_interrupt_after_the_checkpoint(tmp_path):
+    scene = dc.Scene.default().with_set({"time.end": 100.0})  # far longer than the test waits
+    out = tmp_path / "run"
+    timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    start = time.monotonic()
+    with pytest.raises(KeyboardInterrupt) as e:
+        dc.run(scene, out=out)
+    timer.cancel()
+    assert time.monotonic() - start < 30
+    assert "checkpoint.json holds it" in str(e.value)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted"
+    checkpoint = json.loads((out / "checkpoint.json").read_text())
+    assert checkpoint["step"] == summary["steps_completed"] > 0
+    # in memory: the same stop, without a folder
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        dc.run(scene)
+    timer.cancel()
+
+
+def test_the_gil_is_released_while_the_solver_runs():
+    scene = dc.Scene.default().with_set({"time.end": 0.25})
+    ticks = []
+    done = threading.Event()
+
+    def count():
+        while not done.is_set():
+            ticks.append(time.monotonic())
+            time.sleep(0.005)
+
+    thread = threading.Thread(target=count)
+    thread.start()
+    start = time.monotonic()
+    try:
+        dc.run(scene)
+    finally:
+        end = time.monotonic()
+        done.set()
+        thread.join()
+    during = [t for t in ticks if start < t < end]
+    # a call holding the GIL for the whole run would leave the thread at most one tick; one
+    # releasing it leaves about one per 5 ms (fewer on a loaded machine)
+    assert end - start > 0.1 and len(during) >= 10, (len(during), end - start)
+
+
+def test_stop_and_resume_equal_a_straight_run(tmp_path):
+    scene = dc.Scene.default().with_set(SHORT)
+    with pytest.raises(KeyboardInterrupt):
+        dc.run(scene, out=tmp_path / "r", _stop_after=40)  # the CLI's --stop-after, as a Ctrl-C after step 40
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and summary["steps_completed"] == 40
+    res = dc.resume(tmp_path / "r")
+    assert res.summary["status"] == "completed" and res.history["step"][-1] == 100
+    dc.run(scene, out=tmp_path / "s")
+    for name in ("history.csv", "contact.csv"):
+        assert (tmp_path / "r" / name).read_bytes() == (tmp_path / "s" / name).read_bytes(), name
+    with pytest.raises(OSError, match="checkpoint"):
+        dc.resume(tmp_path / "s")  # completed without a checkpoint: nothing to resume
+
+
+def test_run_warnings_are_python_warnings():
+    with pytest.warns(dc.DyncontactWarning, match=r"\(C\.k\) limit"):
+        res = dc.run(dc.Scene.default().with_set({"time.end": 0.005}))
+    assert any("(C.k) limit" in w for w in res.summary["warnings"])

@@ -1,0 +1,88 @@
+"""dc.Scene: the constructors, with_set by --set's rules, check, and bad scenes raising
+SceneError with the key and the command line's message."""
+import pytest
+
+import dyncontact as dc
+
+ACADEMIC = "fixtures/scenes/academic.toml"
+
+
+def test_default_and_from_file(root, monkeypatch):
+    monkeypatch.chdir(root)
+    s = dc.Scene.default()
+    assert s.name == "academic" and s.source == "<embedded academic scene>" and s.overrides == []
+    f = dc.Scene.from_file(ACADEMIC)
+    assert f.source == ACADEMIC
+    assert dc.Scene.from_file(root / "fixtures/scenes/academic3d.toml").check()["dimension"] == 3
+
+
+def test_from_toml_and_from_dict_equal_the_default():
+    a = dc.Scene.from_toml(dc.DEFAULT_SCENE)
+    assert a.to_toml() == dc.DEFAULT_SCENE
+    tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
+    d = dc.Scene.from_dict(tomllib.loads(dc.DEFAULT_SCENE)).with_set({"time.end": 0.01})
+    ref = dc.run(dc.Scene.default().with_set({"time.end": 0.01}))
+    assert d.source == "<dict>"
+    for name, column in dc.run(d).history.items():
+        assert column.tobytes() == ref.history[name].tobytes(), name
+
+
+def test_with_set_follows_set(root, cli):
+    s = dc.Scene.default().with_set({"contact.compliance": 2000.0, "time.end": 0.3})
+    assert s.overrides == ["contact.compliance=2000.0", "time.end=0.3"]
+    assert "compliance = 2000.0" in s.to_toml()
+    # a str value is the text after `=`: TOML when it reads as TOML, else a string
+    t = dc.Scene.default().with_set({"domain.cells": "[8, 4]", "time.scheme": "trapezoid"})
+    assert t.check()["nodes"] == 9 * 5 and 'scheme = "trapezoid"' in t.to_toml()
+    assert dc.Scene.default().with_set(["domain.cells=[8,4]"]).check()["nodes"] == 45
+    # with_set returns a new scene
+    assert dc.Scene.default().overrides == []
+
+
+def test_check_reports_sizes_and_limit():
+    info = dc.Scene.default().check()
+    assert info["dimension"] == 2 and info["nodes"] == 561 and info["triangles"] == 1024
+    assert info["fits"] is True
+    assert info["ck_step_limit"] == pytest.approx(3.4722e-4, rel=1e-4)
+    assert info["memory_estimate_bytes"] > 0 and any("memory" in line for line in info["lines"])
+
+
+BAD = [
+    {"contact.compliancee": 1.0},          # an unknown key
+    {"material.young": -1.0},              # a value out of range
+    {"time.end": "soon"},                  # a wrong type (a string where a number goes)
+    {"contact.friction.law": "magic"},     # an unknown variant
+    {"domain.cells": [8]},                 # a wrong length
+    {"contact..compliance": 1.0},          # not a key path
+]
+
+
+@pytest.mark.parametrize("values", BAD, ids=[next(iter(b)) for b in BAD])
+def test_with_set_errors_are_the_clis(root, cli, monkeypatch, values):
+    monkeypatch.chdir(root)
+    ((key, value),) = values.items()
+    text = value if isinstance(value, str) else repr(value).replace("'", '"')
+    p = cli("check", ACADEMIC, "--set", f"{key}={text}")
+    assert p.returncode == 1, p.stderr
+    expected = p.stderr.splitlines()[0]
+    assert expected.startswith("error: ")
+    with pytest.raises(dc.SceneError) as e:
+        dc.Scene.from_file(ACADEMIC).with_set(values)
+    assert isinstance(e.value, ValueError)
+    assert "error: " + str(e.value) == expected
+    if key != "contact..compliance":
+        assert e.value.key is not None and e.value.key.startswith(key.split(".")[0])
+    else:
+        assert e.value.key == key
+
+
+def test_bad_scene_file_names_the_key(tmp_path):
+    bad = dc.DEFAULT_SCENE.replace("[material]", "[material]\nyoungg = 3.0", 1)
+    with pytest.raises(dc.SceneError) as e:
+        dc.Scene.from_toml(bad, name="bad.toml")
+    assert e.value.key == "material.youngg" and "unknown field `youngg`" in str(e.value)
+    with pytest.raises(dc.SceneError) as e:
+        dc.Scene.from_toml("[domain\n", name="broken.toml")
+    assert e.value.key is None and str(e.value).startswith("broken.toml: TOML parse error")
+    with pytest.raises(dc.SceneError):
+        dc.Scene.from_file(tmp_path / "missing.toml")

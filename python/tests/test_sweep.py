@@ -1,0 +1,53 @@
+"""dc.sweep: a sweep file and a dict, returning sweep.csv's rows, as `dyncontact sweep` does."""
+import csv
+
+import pytest
+
+import dyncontact as dc
+
+TIMING = {"wall_time_s"}
+
+
+def test_sweep_file_equals_the_clis(root, cli, tmp_path, monkeypatch):
+    monkeypatch.chdir(root)
+    rows = dc.sweep("fixtures/sweeps/penalty.toml", out=tmp_path / "py", jobs=1, set={"time.end": 0.01})
+    p = cli("sweep", "fixtures/sweeps/penalty.toml", "--out", tmp_path / "cli", "--jobs", "1", "--set", "time.end=0.01")
+    assert p.returncode == 0, p.stderr
+    with open(tmp_path / "cli" / "sweep.csv", newline="") as f:
+        expected = list(csv.DictReader(f))
+    assert len(rows) == len(expected) == 7
+    for got, want in zip(rows, expected):
+        assert got.keys() == want.keys()
+        assert got["status"] == "completed"
+        for k in got:
+            if k not in TIMING:
+                w = want[k]
+                assert got[k] == (None if w == "" else float(w) if _is_number(w) else w), k
+
+
+def _is_number(text):
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
+
+
+def test_sweep_dict_and_errors(tmp_path):
+    spec = {
+        "name": "eps",
+        "base": "default",
+        "mode": "grid",
+        "axis": [{"key": "contact.penalty", "values": [1e-3, 1e-4]}],
+        "set": {"contact.enforcement": "penalty", "time.end": 0.01},
+    }
+    rows = dc.sweep(spec, out=tmp_path / "sw", jobs=1)
+    assert [r["contact.penalty"] for r in rows] == [1e-3, 1e-4]
+    assert all(r["status"] == "completed" and r["max_penetration"] is not None for r in rows)
+    # a second call skips the completed points and returns the same figures
+    again = dc.sweep(spec, out=tmp_path / "sw", jobs=1)
+    assert [r["max_penetration"] for r in again] == [r["max_penetration"] for r in rows]
+    bad = dict(spec, axis=[{"key": "contact.penaltyy", "values": [1e-3]}])
+    with pytest.raises(dc.SceneError) as e:
+        dc.sweep(bad, out=tmp_path / "bad", jobs=1)
+    assert "penaltyy" in str(e.value)
