@@ -425,7 +425,8 @@ pub fn csv(table: &[RefineRow], levels: usize) -> String {
     s
 }
 
-/// plots/refine_<figure>.svg: the levels' values against h (or k) on a logarithmic axis, with
+/// plots/refine_<figure>.svg: the levels' values against h (or k; a logarithmic axis when they
+/// span a decade, else linear), with
 /// the extrapolated value and its band f_ext ± GCI·|f1| as horizontal lines. None when no level
 /// has a value.
 fn chart(row: &RefineRow, sizes: &[f64], size_name: &str) -> Result<Option<String>> {
@@ -450,6 +451,10 @@ fn chart(row: &RefineRow, sizes: &[f64], size_name: &str) -> Result<Option<Strin
         Some(p) => format!("{}: observed order {p:.3} (G.1), {flag}", row.figure),
         None => format!("{}: {flag}", row.figure),
     };
+    // a logarithmic axis where the levels span a decade (R^(N−1) ≥ 10); below that a log axis
+    // has no decade tick and its labels repeat, so the axis is linear
+    let (lo, hi) = points.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| (lo.min(p.0), hi.max(p.0)));
+    let log_x = lo > 0.0 && hi >= 10.0 * lo;
     let series = [Series { name: row.figure.clone(), points }];
     let panel = Panel {
         title: &title,
@@ -457,7 +462,7 @@ fn chart(row: &RefineRow, sizes: &[f64], size_name: &str) -> Result<Option<Strin
         y_desc: &row.figure,
         series: &series,
         hlines: &hlines,
-        log: (true, false),
+        log: (log_x, false),
     };
     let opts = Options { markers: true, ..Options::default() };
     stacked_chart(&[(panel, 1.0)], &opts)
