@@ -1,5 +1,5 @@
 //! The dyncontact command line (the README's contract): `run`, `check`, `sweep` (with `sweep
-//! collect` and `sweep point`), `study penalty`, and the hidden `export-operators` (the Python
+//! collect` and `sweep point`), `refine`, `study penalty`, and the hidden `export-operators` (the Python
 //! cross-check's operators). Thin: it calls the library.
 
 use std::io::IsTerminal;
@@ -89,6 +89,32 @@ enum Command {
         #[arg(long)]
         oversubscribe: bool,
         /// override a key of every point, after the sweep's own (repeatable)
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Solution verification: run the scene on N levels of refinement (domain.cells × R^ℓ and/or
+    /// time.step / R^ℓ) as a sweep into DIR, and write DIR/refine.csv (every figure with its
+    /// observed order (G.1), Richardson extrapolation (G.2), GCI (G.3) and whether the levels are
+    /// in the asymptotic range) and DIR/plots/refine_<figure>.svg. Resumable like a sweep.
+    Refine {
+        /// scene file (TOML); omitted: the embedded default scene `academic`
+        scene: Option<PathBuf>,
+        /// number of levels (at least 3; the estimates use the three finest)
+        #[arg(long, value_name = "N", default_value_t = dyncontact::sweep::refine::DEFAULT_LEVELS)]
+        levels: usize,
+        /// refinement ratio between consecutive levels
+        #[arg(long, value_name = "R", default_value_t = 2.0)]
+        ratio: f64,
+        /// what is refined: h (the cells), k (the step) or both together
+        #[arg(long, value_enum, default_value = "both")]
+        what: dyncontact::sweep::refine::What,
+        /// output folder (default: out/<scene name>-refine)
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// levels run at once (default: the number of cores)
+        #[arg(long, value_name = "N")]
+        jobs: Option<usize>,
+        /// override a scene key by its dotted path, the value in TOML (repeatable)
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
@@ -224,6 +250,10 @@ fn main() -> ExitCode {
             Ok(())
         }),
         Command::Check { scene, set } => cmd_check(scene, set),
+        Command::Refine { scene, levels, ratio, what, out, jobs, set } => {
+            let opts = dyncontact::sweep::refine::RefineOptions { levels: *levels, ratio: *ratio, what: *what };
+            cmd_refine(scene.as_deref(), &opts, out.as_deref(), *jobs, set, stop)
+        }
         Command::Sweep { action: Some(SweepAction::Collect { dir }), .. } => cmd_collect(dir),
         Command::Sweep { action: Some(SweepAction::Point { point }), .. } => {
             faer::set_global_parallelism(faer::Par::Seq);
@@ -427,6 +457,76 @@ fn cmd_sweep(
             .count();
         return Err(Error::SweepInterrupted { finished, total: rows.len() });
     }
+    refuse_corrupt(&dir, &rows)
+}
+
+/// `dyncontact refine`: the levels as a sweep (validated, laid out, run here skipping those
+/// completed with the same scene), then refine.csv and its charts; prints one line per figure.
+fn cmd_refine(
+    scene: Option<&Path>,
+    opts: &dyncontact::sweep::refine::RefineOptions,
+    out: Option<&Path>,
+    jobs: Option<usize>,
+    set: &[String],
+    stop: &Arc<AtomicBool>,
+) -> Result<(), Error> {
+    use dyncontact::sweep::{Base, refine, runner};
+    let extra = set.iter().map(|a| Override::parse(a)).collect::<Result<Vec<_>, Error>>()?;
+    // read as `run` reads it first: its errors name the user's lines
+    let (s, _, _) = load(scene, set)?;
+    let base = match scene {
+        None => Base {
+            text: dyncontact::scene::DEFAULT_SCENE.to_string(),
+            label: "<embedded academic scene>".into(),
+            dir: PathBuf::from("."),
+        },
+        Some(p) => Base {
+            text: std::fs::read_to_string(p).map_err(|e| Error::read(p, e))?,
+            label: p.display().to_string(),
+            dir: p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")),
+        },
+    };
+    let refinement = refine::plan(&base, &extra, &s.name, opts)?;
+    let dir = out.map(Path::to_path_buf).unwrap_or_else(|| refine::default_dir(&s.name));
+    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let jobs = jobs.unwrap_or(cores).max(1);
+    let _lock = dyncontact::sweep::lock(&dir)?;
+    say!(
+        "refine {}: {} levels at ratio {} ({:?}), folder {}",
+        s.name,
+        opts.levels,
+        opts.ratio,
+        opts.what,
+        dir.display()
+    );
+    let interrupt = Arc::clone(stop);
+    let ropts =
+        runner::RunnerOptions { jobs, progress: std::io::stdout().is_terminal(), interrupt: Some(interrupt.clone()) };
+    let (outcomes, table) = refinement.run(&dir, &ropts)?;
+    say!("{:<30} {:>10} {:>14} {:>10}  asymptotic", "figure", "order", "extrapolated", "gci");
+    let show = |x: Option<f64>, f: &dyn Fn(f64) -> String| x.map(f).unwrap_or_else(|| "-".into());
+    for row in &table {
+        let e = &row.estimate;
+        say!(
+            "{:<30} {:>10} {:>14} {:>10}  {}",
+            row.figure,
+            show(e.order, &|p| format!("{p:.3}")),
+            show(e.extrapolated, &|x| format!("{x:.6e}")),
+            show(e.gci, &|g| format!("{g:.2e}")),
+            e.asymptotic
+        );
+    }
+    let failed = outcomes.iter().filter(|o| matches!(o, runner::Outcome::Failed(_))).count();
+    if failed > 0 {
+        esay!("warning: {failed} of {} levels failed (sweep.csv: status and reason)", outcomes.len());
+    }
+    say!("written {}", dir.join("refine.csv").display());
+    if interrupt.load(Ordering::SeqCst) {
+        let finished =
+            outcomes.iter().filter(|o| !matches!(o, runner::Outcome::Interrupted | runner::Outcome::NotRun)).count();
+        return Err(Error::SweepInterrupted { finished, total: outcomes.len() });
+    }
+    let (_, rows) = dyncontact::sweep::collect::rows(&dir)?;
     refuse_corrupt(&dir, &rows)
 }
 

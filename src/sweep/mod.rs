@@ -33,6 +33,7 @@
 //! Snakemake jobs on a cluster (`dyncontact sweep collect DIR`).
 
 pub mod collect;
+pub mod refine;
 pub mod runner;
 pub mod snakemake;
 

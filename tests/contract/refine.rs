@@ -1,0 +1,239 @@
+//! `dyncontact refine` (SCENES.md, "Solution verification"): the formulas (G.1)–(G.3) on
+//! synthetic sequences, the flags of sequences they cannot fit, a refinement of the B.2
+//! compliant layer whose bands hold the closed form, and the scenes it refuses.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use dyncontact::sweep::refine::{Estimate, gci_fine, observed_order, richardson_extrapolation};
+
+use crate::common::measured;
+
+const BIN: &str = env!("CARGO_BIN_EXE_dyncontact");
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// (G.1)–(G.3) On f(h) = f* + C h^p the observed order is p, the extrapolation is f* and the
+/// GCI band holds f*, for several orders, ratios and signs of C.
+#[test]
+fn g1_g2_g3_recover_a_power_law_exactly() {
+    for &(f_star, c, p, r) in
+        &[(2.5, 1.0, 1.7, 2.0), (-0.3, 0.05, 1.0, 2.0), (1e-2, -3.0, 2.0, 1.5), (4.0, 0.7, 0.6, 3.0)]
+    {
+        let h1 = 0.05;
+        let f = |h: f64| f_star + c * f64::powf(h, p);
+        let (f1, f2, f3) = (f(h1), f(h1 * r), f(h1 * r * r));
+        let p_obs = observed_order(f1, f2, f3, r).expect("a monotone sequence has an order");
+        // the differences are ≥ 1e-3 of the values, so round-off in them is ≤ 1e-13 relative
+        assert!((p_obs - p).abs() < 1e-12, "p = {p}, observed {p_obs}");
+        let f_ext = richardson_extrapolation(f1, f2, r, p_obs);
+        // f_ext is f* up to the round-off of f1 and of the quotient: 1e-13 of the values
+        assert!((f_ext - f_star).abs() <= 1e-13 * f_star.abs().max(f1.abs()), "f* = {f_star}, f_ext = {f_ext}");
+        let gci = gci_fine(f1, f2, r, p_obs);
+        let half = gci * f1.abs();
+        // exact arithmetic: the band's half-width is 1.25 |f1 − f*|, a quarter more than the error
+        assert!((half - 1.25 * (f1 - f_star).abs()).abs() <= 1e-12 * half, "half-width {half}");
+        assert!((f_ext - half..=f_ext + half).contains(&f_star));
+        // the estimate with p in [p_e/2, 2 p_e] for p_e = 1 (0.6, 1, 1.7, 2 all are) is asymptotic
+        let e = Estimate::of(&[Some(f3), Some(f2), Some(f1)], r, 1.0);
+        assert!(e.asymptotic && e.note.is_empty(), "{e:?}");
+        assert_eq!((e.order, e.extrapolated, e.gci), (Some(p_obs), Some(f_ext), Some(gci)));
+    }
+}
+
+/// (G.1)/(G.3) Sequences the formulas cannot fit are flagged, never fitted: oscillatory,
+/// diverging, an order outside the band, f1 = 0 (GCI undefined), and equal levels (exact).
+#[test]
+fn g1_oscillatory_and_degenerate_levels_are_flagged() {
+    // oscillatory: the differences change sign
+    let e = Estimate::of(&[Some(1.0), Some(1.2), Some(1.1)], 2.0, 1.0);
+    assert!(!e.asymptotic && e.order.is_none() && e.gci.is_none() && e.extrapolated.is_none(), "{e:?}");
+    assert!(e.note.contains("oscillatory"), "{}", e.note);
+    // diverging: the differences grow
+    let e = Estimate::of(&[Some(1.0), Some(1.1), Some(1.3)], 2.0, 1.0);
+    assert!(!e.asymptotic && e.order.is_some_and(|p| p < 0.0) && e.extrapolated.is_none(), "{e:?}");
+    // converging at p = 4, outside [0.5, 2] for p_e = 1: reported with its estimate, flagged
+    let e = Estimate::of(&[Some(1.0 + 256.0), Some(1.0 + 16.0), Some(1.0 + 1.0)], 2.0, 1.0);
+    assert!(!e.asymptotic && e.gci.is_some() && e.note.contains("outside"), "{e:?}");
+    // the same levels are in the band of p_e = 2 (backward Euler is 1, midpoint 2 in k): [1, 4]
+    assert!(Estimate::of(&[Some(257.0), Some(17.0), Some(2.0)], 2.0, 2.0).asymptotic);
+    // f1 = 0: the order and extrapolation stand, the relative GCI does not
+    let e = Estimate::of(&[Some(3.0), Some(1.0), Some(0.0)], 3.0, 1.0);
+    assert!(e.order.is_some() && e.gci.is_none() && e.note.contains("f1 = 0"), "{e:?}");
+    // equal to round-off: exact, GCI 0
+    let x = 0.1 + 0.2;
+    let e = Estimate::of(&[Some(0.3), Some(x), Some(0.3)], 2.0, 1.0);
+    assert!(e.asymptotic && e.order.is_none() && e.gci == Some(0.0) && e.extrapolated == Some(0.3), "{e:?}");
+    // two finest equal, the third not: no order
+    let e = Estimate::of(&[Some(2.0), Some(1.0), Some(1.0)], 2.0, 1.0);
+    assert!(!e.asymptotic && e.order.is_none(), "{e:?}");
+    // a missing level
+    assert!(!Estimate::of(&[Some(2.0), None, Some(1.0)], 2.0, 1.0).asymptotic);
+}
+
+/// The closed form of B.2 (model.md §7.2) before the layer's depth is reached and before the
+/// reflected wave returns (t < t* = 0.0458, t < 2L/c = 0.2): τ = ρc/k_n,
+/// δ(t) = v0 τ (1 − e^{−t/τ}), the force k_n δ H, the layer's energy ½ k_n δ² H, the kinetic
+/// energy ½ ρ H v0² [cτ/2 (1 − e^{−2t/τ}) + L − ct] (the bar behind the front moves at the end's
+/// velocity of its retarded time), the elastic energy the rest of ½ ρ L H v0².
+fn compliant_layer_exact(t: f64) -> Vec<(&'static str, f64)> {
+    let (rho, young, v0, k_n, l, h) = (1.0, 100.0, 1.0, 200.0, 1.0, 0.05);
+    let c = f64::sqrt(young / rho);
+    let tau = rho * c / k_n;
+    let delta = v0 * tau * (1.0 - (-t / tau).exp());
+    let kinetic = 0.5 * rho * h * v0 * v0 * (c * tau / 2.0 * (1.0 - (-2.0 * t / tau).exp()) + l - c * t);
+    let compliance = 0.5 * k_n * delta * delta * h;
+    vec![
+        ("max_penetration", delta),
+        ("max_normal_force", k_n * delta * h),
+        ("final_kinetic", kinetic),
+        ("final_compliance", compliance),
+        ("final_elastic", 0.5 * rho * l * h * v0 * v0 - kinetic - compliance),
+        ("external_work", 0.0),
+        ("viscous_dissipation", 0.0),
+        ("friction_dissipation", 0.0),
+        ("constraint_dissipation", 0.0),
+        ("persistency_dissipation", 0.0),
+        ("max_tangential_force", 0.0),
+    ]
+}
+
+/// (G.1)–(G.3) `dyncontact refine` on the B.2 compliant layer (25, 50, 100 cells; k = 1e-3,
+/// 5e-4, 2.5e-4; t = 0.04) writes refine.csv with the contract's columns and a chart per
+/// figure, and the band f_ext ± GCI·|f1| of every asymptotic figure holds the closed form; a
+/// second run skips the completed levels and writes the same file.
+#[test]
+fn g1_g2_g3_refine_the_compliant_layer_bands_hold_the_closed_form() {
+    let out = tmp("refine-compliant-layer");
+    let t_end = 0.04;
+    let args = [
+        "refine".to_string(),
+        root().join("fixtures/scenes/compliant_layer.toml").display().to_string(),
+        "--set".into(),
+        "domain.cells=[25,1]".into(),
+        "--set".into(),
+        "time.step=1e-3".into(),
+        "--set".into(),
+        format!("time.end={t_end}"),
+        "--out".into(),
+        out.display().to_string(),
+        "--jobs".into(),
+        "2".into(),
+    ];
+    let run = Command::new(BIN).args(&args).output().expect("run refine");
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let text = std::fs::read_to_string(out.join("refine.csv")).expect("refine.csv");
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("figure,level_0,level_1,level_2,order,extrapolated,gci,asymptotic,note"));
+    let rows: Vec<Vec<String>> = lines.map(split_csv).collect();
+    let figures: Vec<&str> = rows.iter().map(|r| r[0].as_str()).collect();
+    assert_eq!(figures, dyncontact::sweep::refine::FIGURES.to_vec());
+    let num = |s: &str| s.parse::<f64>().ok();
+    let mut checked = 0;
+    for (figure, exact) in compliant_layer_exact(t_end) {
+        let r = rows.iter().find(|r| r[0] == figure).expect("a row per figure");
+        let (f1, order, f_ext, gci, asymptotic) = (num(&r[3]), num(&r[4]), num(&r[5]), num(&r[6]), r[7] == "true");
+        let test = "g1_g2_g3_refine_the_compliant_layer_bands_hold_the_closed_form";
+        if let Some(p) = order {
+            measured(test, &format!("{figure} observed order"), p, "1 (h and k refined together)");
+        }
+        if let (Some(f_ext), Some(gci), Some(f1)) = (f_ext, gci, f1) {
+            let half = gci * f1.abs();
+            let inside = (f_ext - half..=f_ext + half).contains(&exact);
+            measured(test, &format!("{figure} GCI"), gci, "band f_ext ± GCI·|f1| holds the closed form");
+            measured(
+                test,
+                &format!("{figure} |f_ext − exact| / (GCI·|f1|)"),
+                (f_ext - exact).abs() / half.max(f64::MIN_POSITIVE),
+                "≤ 1",
+            );
+            if asymptotic {
+                // the contract: an asymptotic figure's band holds the exact value (no tolerance)
+                assert!(inside, "{figure}: exact {exact} outside {f_ext} ± {half} (p {order:?}, gci {gci})");
+                checked += 1;
+            }
+        }
+    }
+    // B.2's penetration and force converge at order ≈ 1, the dissipations are exactly 0:
+    // at least these eight are asymptotic with the closed form in the band
+    assert!(checked >= 8, "only {checked} asymptotic figures with a closed form");
+    for f in ["max_penetration", "max_normal_force"] {
+        assert_eq!(rows.iter().find(|r| r[0] == f).map(|r| r[7].as_str()), Some("true"), "{f} asymptotic");
+        assert!(out.join(format!("plots/refine_{f}.svg")).is_file(), "chart of {f}");
+    }
+    assert!(out.join("sweep.csv").is_file() && out.join("Snakefile").is_file());
+    // resumable: the levels are not run again, the file is the same
+    let summary = out.join("points/p000/summary.json");
+    let before = std::fs::metadata(&summary).and_then(|m| m.modified()).expect("summary");
+    let again = Command::new(BIN).args(&args).output().expect("run refine again");
+    assert!(again.status.success(), "{}", String::from_utf8_lossy(&again.stderr));
+    assert_eq!(std::fs::metadata(&summary).and_then(|m| m.modified()).expect("summary"), before);
+    assert_eq!(std::fs::read_to_string(out.join("refine.csv")).expect("refine.csv"), text);
+}
+
+/// A line of refine.csv split at its commas (the note may be quoted).
+fn split_csv(line: &str) -> Vec<String> {
+    let (mut fields, mut cur, mut quoted) = (Vec::new(), String::new(), false);
+    for ch in line.chars() {
+        match ch {
+            '"' => quoted = !quoted,
+            ',' if !quoted => fields.push(std::mem::take(&mut cur)),
+            c => cur.push(c),
+        }
+    }
+    fields.push(cur);
+    fields
+}
+
+/// `refine` refuses, with the key named, a Gmsh mesh (domain.file), a step count that the ratio
+/// does not keep whole (time.step), cells it does not keep whole (domain.cells), and < 3 levels.
+#[test]
+fn refine_refuses_a_gmsh_mesh_and_fractional_steps_or_cells() {
+    let layer = root().join("fixtures/scenes/compliant_layer.toml").display().to_string();
+    let cases: [(Vec<String>, &str); 4] = [
+        (vec![root().join("fixtures/scenes/gmsh_square.toml").display().to_string()], "domain.file"),
+        (
+            vec![
+                layer.clone(),
+                "--what".into(),
+                "k".into(),
+                "--ratio".into(),
+                "1.5".into(),
+                "--set".into(),
+                "time.step=2e-3".into(),
+                "--set".into(),
+                "time.end=0.01".into(),
+            ],
+            "time.step",
+        ),
+        (
+            vec![
+                layer.clone(),
+                "--what".into(),
+                "h".into(),
+                "--ratio".into(),
+                "1.5".into(),
+                "--set".into(),
+                "domain.cells=[25,2]".into(),
+            ],
+            "domain.cells",
+        ),
+        (vec![layer, "--levels".into(), "2".into()], "--levels"),
+    ];
+    for (args, key) in cases {
+        let out = tmp("refine-refused");
+        let r = Command::new(BIN).arg("refine").args(&args).arg("--out").arg(&out).output().expect("run refine");
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{args:?} accepted");
+        assert!(err.contains(key), "{args:?}: the error names {key}: {err}");
+        assert!(!out.join("points").exists(), "{args:?}: nothing is laid out");
+    }
+}
