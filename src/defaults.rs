@@ -127,6 +127,12 @@ pub const VELOCITY_FORM_TRIAL: usize = 40;
 /// gradients to 1e-10 take 4 iterations with their sparse Cholesky factor against 19 with node
 /// blocks (1e-4 keeps 2.5% and takes 3).
 pub const NEAR_FIELD_TOLERANCE: f64 = 1e-3;
+/// The near field preconditions the velocity form from this many contact unknowns on (below,
+/// node blocks): with each direction solved to round-off it costs more iterations' worth of
+/// factorizations than it saves on small W. Measured (cargo xtask bench --thick-only, median
+/// contact solve per step, pressing phase): 936 unknowns (academic3d 24×12×8) 5.9 ms against 4.8
+/// with node blocks; 1,632 (32×16×12) 45.9 against 50.7; 3,600 (48×24×16) 252 against 385.
+pub const NEAR_FIELD_FROM: usize = 1200;
 /// … and a direction falls back to the force form when its solve needs more than this many.
 pub const VELOCITY_FORM_MAX_ITERATIONS: usize = 60;
 

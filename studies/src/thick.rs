@@ -87,9 +87,7 @@ fn measure(p: &Problem, cells: [i64; 3], near: bool) -> Result<ThickRow> {
     let clock = Instant::now();
     let mut sim = Simulation::new(p)?;
     let _setup = clock.elapsed();
-    if !near {
-        sim.inverse = sim.inverse.take().map(|i| i.without_near_field());
-    }
+    sim.inverse = sim.inverse.take().map(|i| if near { i.with_near_field() } else { i.without_near_field() });
     let near_density = sim.inverse.as_ref().map_or(0.0, |i| i.near_field_density());
     if sim.inverse.is_none() {
         return Err(Error::Study(format!("thick: {cells:?} does not run in velocity form")));

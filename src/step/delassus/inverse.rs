@@ -43,7 +43,9 @@ impl InverseDelassus {
             return None;
         }
         let winv = w.llt(Side::Lower).ok()?.inverse();
-        let near = NearField::new(&winv, dim, crate::defaults::NEAR_FIELD_TOLERANCE);
+        let near = (m >= crate::defaults::NEAR_FIELD_FROM)
+            .then(|| NearField::new(&winv, dim, crate::defaults::NEAR_FIELD_TOLERANCE))
+            .flatten();
         let mut inv = InverseDelassus { winv, dim, trial_iterations: 0, near };
         // the trial: every component free, no stiffness, a pseudo-random right-hand side
         let b: Vec<f64> = (0..m).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
@@ -69,6 +71,15 @@ impl InverseDelassus {
     pub fn apply_at(&self, x: &[f64], rows: &[usize]) -> Vec<f64> {
         let xv = faer::ColRef::from_slice(x);
         rows.iter().map(|&l| self.winv.col(l).transpose() * xv).collect()
+    }
+
+    /// The same W⁻¹ with the near-field preconditioner whatever its size (the tests and the
+    /// bench compare the two preconditioners below NEAR_FIELD_FROM too).
+    pub fn with_near_field(mut self) -> InverseDelassus {
+        if self.near.is_none() {
+            self.near = NearField::new(&self.winv, self.dim, crate::defaults::NEAR_FIELD_TOLERANCE);
+        }
+        self
     }
 
     /// The same W⁻¹ with node blocks as the only preconditioner (the form before the near
