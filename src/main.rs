@@ -492,11 +492,11 @@ fn cmd_refine(
     let jobs = jobs.unwrap_or(cores).max(1);
     let _lock = dyncontact::sweep::lock(&dir)?;
     say!(
-        "refine {}: {} levels at ratio {} ({:?}), folder {}",
+        "refine {}: {} levels at ratio {}, refining {}, folder {}",
         s.name,
         opts.levels,
         opts.ratio,
-        opts.what,
+        opts.what.words(),
         dir.display()
     );
     let interrupt = Arc::clone(stop);

@@ -143,8 +143,10 @@ impl Estimate {
                 solve,
                 if self.velocity_form() { "about" } else { "at most" },
                 lu,
-                if self.velocity_form() {
+                if self.velocity_form() && self.dim * self.contact_nodes >= crate::defaults::NEAR_FIELD_FROM {
                     "velocity form: ~9 products with the dense W or W⁻¹, a sparse near-field factor"
+                } else if self.velocity_form() {
+                    "velocity form: ~9 products with the dense W or W⁻¹, node-block preconditioner"
                 } else {
                     "dense Cholesky; reused while the contact sets hold, less with the sparse form"
                 },

@@ -74,6 +74,14 @@ pub enum What {
 }
 
 impl What {
+    /// What is refined, in words: "h", "k", or "h and k".
+    pub fn words(self) -> &'static str {
+        match self {
+            What::H => "h (domain.cells)",
+            What::K => "k (time.step)",
+            What::Both => "h and k together",
+        }
+    }
     fn refines_h(self) -> bool {
         self != What::K
     }
