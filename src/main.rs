@@ -108,6 +108,10 @@ enum Command {
         /// what is refined: h (the cells), k (the step) or both together
         #[arg(long, value_enum, default_value = "both")]
         what: dyncontact::sweep::refine::What,
+        /// the impulses of the contact force are estimated over the whole run and over this many
+        /// equal windows of it (1: the whole run only); it must divide the coarsest level's steps
+        #[arg(long, value_name = "W", default_value_t = dyncontact::sweep::refine::DEFAULT_WINDOWS)]
+        windows: usize,
         /// output folder (default: out/<scene name>-refine)
         #[arg(long)]
         out: Option<PathBuf>,
@@ -250,8 +254,13 @@ fn main() -> ExitCode {
             Ok(())
         }),
         Command::Check { scene, set } => cmd_check(scene, set),
-        Command::Refine { scene, levels, ratio, what, out, jobs, set } => {
-            let opts = dyncontact::sweep::refine::RefineOptions { levels: *levels, ratio: *ratio, what: *what };
+        Command::Refine { scene, levels, ratio, what, windows, out, jobs, set } => {
+            let opts = dyncontact::sweep::refine::RefineOptions {
+                levels: *levels,
+                ratio: *ratio,
+                what: *what,
+                windows: *windows,
+            };
             cmd_refine(scene.as_deref(), &opts, out.as_deref(), *jobs, set, stop)
         }
         Command::Sweep { action: Some(SweepAction::Collect { dir }), .. } => cmd_collect(dir),

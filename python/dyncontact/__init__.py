@@ -10,6 +10,7 @@ bit for bit.
     for rec in dc.Simulation(scene).steps():
         rec.t, rec.u, rec.normal_force
     rows = dc.sweep("fixtures/sweeps/penalty.toml", out="sw", jobs=2)
+    table = dc.refine(scene, out="ref")    # refine.csv: each figure's order, f_ext, GCI
 
 Errors are exceptions: SceneError (a ValueError, with .key), SolverError (a RuntimeError, with
 .step, .time, .residuals); Ctrl-C during a run raises KeyboardInterrupt once the current step
@@ -40,6 +41,7 @@ __all__ = [
     "SolverError",
     "StepRecord",
     "history_columns",
+    "refine",
     "resume",
     "run",
     "sweep",
@@ -343,3 +345,50 @@ def sweep(
         return []
     with open(path, newline="") as f:
         return [{k: _value(v) for k, v in row.items()} for row in csv.DictReader(f)]
+
+
+def refine(
+    scene: Scene,
+    levels: int = 3,
+    ratio: float = 2.0,
+    what: str = "both",
+    windows: int = 4,
+    out: Optional[PathLike] = None,
+    jobs: Optional[int] = None,
+    progress: bool = False,
+) -> List[Dict[str, Any]]:
+    """Solution verification as ``dyncontact refine SCENE --levels N --ratio R --what W
+    --windows W --out OUT --jobs J`` does, and return refine.csv's rows.
+
+    The scene (with its ``with_set`` overrides) runs on ``levels`` levels: level l has
+    ``domain.cells`` times ``ratio**l`` in every direction (``what="h"``), ``time.step`` divided
+    by ``ratio**l`` (``"k"``) or both (``"both"``). Every figure of sweep.csv and the contact
+    impulses (``normal_impulse``, ``friction_impulse_x`` ... over the run and over ``windows``
+    equal windows, ``..._w1`` ...) get the observed order (G.1), Richardson's extrapolation (G.2)
+    and the grid convergence index (G.3) from the three finest levels.
+
+    Args:
+        scene: the scene to refine (a rectangle or box with ``domain.cells``).
+        out: the study's folder (default: out/<scene name>-refine); levels already completed
+            with the same scene are not run again.
+        jobs: levels run at once (default: the number of cores).
+
+    Returns:
+        list of dict: one per figure, refine.csv's columns (``figure``, ``level_0`` ...,
+        ``order``, ``extrapolated``, ``gci``, ``asymptotic`` as bool, ``note``); numbers as
+        float, empty cells as None.
+
+    Raises:
+        SceneError: the scene or an option is refused (``.key`` names it: ``domain.cells``,
+            ``time.step``, ``--levels``, ``--windows`` ...).
+        KeyboardInterrupt: Ctrl-C; running levels stop after their step, finished ones stay.
+    """
+    path = _native.run_refine(scene, levels, ratio, what, windows, None if out is None else os.fspath(out), jobs,
+                              progress)
+    with open(path, newline="") as f:
+        rows = []
+        for row in csv.DictReader(f):
+            r: Dict[str, Any] = {k: (v if k in ("figure", "note") else _value(v)) for k, v in row.items()}
+            r["asymptotic"] = row["asymptotic"] == "true"
+            rows.append(r)
+        return rows

@@ -123,3 +123,15 @@ def run_sweep(
     progress: bool = False,
 ) -> str:
     """Run a sweep; returns the path of sweep.csv (`dyncontact.sweep` wraps it)."""
+
+def run_refine(
+    scene: Scene,
+    levels: int = 3,
+    ratio: float = 2.0,
+    what: str = "both",
+    windows: int = 4,
+    out: Optional[Union[str, PathLike[str]]] = None,
+    jobs: Optional[int] = None,
+    progress: bool = False,
+) -> str:
+    """Run a refinement study; returns the path of refine.csv (`dyncontact.refine` wraps it)."""

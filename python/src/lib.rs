@@ -262,6 +262,54 @@ fn run_sweep(
     outcome(py, result, signal)
 }
 
+/// Run a refinement study as `dyncontact refine SCENE --levels N --ratio R --what W --windows W
+/// --out OUT --jobs J` does (the scene's own overrides apply before the levels refine it);
+/// returns the path of refine.csv.
+#[pyfunction]
+#[pyo3(signature = (scene, levels = 3, ratio = 2.0, what = "both", windows = 4, out = None, jobs = None, progress = false))]
+#[allow(clippy::too_many_arguments)]
+fn run_refine(
+    py: Python<'_>,
+    scene: &PyScene,
+    levels: usize,
+    ratio: f64,
+    what: &str,
+    windows: usize,
+    out: Option<PathBuf>,
+    jobs: Option<usize>,
+    progress: bool,
+) -> PyResult<PathBuf> {
+    use dyncontact::sweep::refine::{self, RefineOptions, What};
+    let what = match what {
+        "h" => What::H,
+        "k" => What::K,
+        "both" => What::Both,
+        other => {
+            return Err(to_py(py, &Error::scene("what", format!("{other:?}: give \"h\", \"k\" or \"both\""))));
+        }
+    };
+    let opts = RefineOptions { levels, ratio, what, windows };
+    let extra = py_result(py, values::overrides(&scene.overrides))?;
+    let refinement = py_result(py, refine::plan(&scene.base(), &extra, &scene.name, &opts))?;
+    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let jobs = jobs.unwrap_or(cores).max(1);
+    let dir = out.unwrap_or_else(|| refine::default_dir(&scene.name));
+    let (result, signal) = interruptible(py, |flag| -> dyncontact::Result<PathBuf> {
+        let _lock = sweep::lock(&dir)?;
+        let ropts = sweep::runner::RunnerOptions { jobs, progress, interrupt: Some(flag.clone()) };
+        let (outcomes, _) = refinement.run(&dir, &ropts)?;
+        if flag.load(std::sync::atomic::Ordering::SeqCst) {
+            let finished = outcomes
+                .iter()
+                .filter(|o| !matches!(o, sweep::runner::Outcome::Interrupted | sweep::runner::Outcome::NotRun))
+                .count();
+            return Err(Error::SweepInterrupted { finished, total: outcomes.len() });
+        }
+        Ok(dir.join("refine.csv"))
+    })?;
+    outcome(py, result, signal)
+}
+
 #[pymodule]
 fn _dyncontact(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // as the command line (src/main.rs says why): faer's thread pool costs more than it gains here
@@ -274,6 +322,7 @@ fn _dyncontact(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run_memory, m)?)?;
     m.add_function(wrap_pyfunction!(run_folder, m)?)?;
     m.add_function(wrap_pyfunction!(run_sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(run_refine, m)?)?;
     m.add("DEFAULT_SCENE", dyncontact::scene::DEFAULT_SCENE)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -38,6 +38,12 @@ pub struct PyScene {
 }
 
 impl PyScene {
+    /// The scene as the base of a sweep or refinement: its source text, label and folder (the
+    /// overrides are applied on top, as `--set`).
+    pub fn base(&self) -> dyncontact::sweep::Base {
+        dyncontact::sweep::Base { text: self.text.clone(), label: self.file.clone(), dir: self.dir.clone() }
+    }
+
     /// Read `text` with `overrides` as the command line does, and validate the model.
     pub fn load(text: String, file: String, dir: PathBuf, overrides: Vec<String>) -> dyncontact::Result<PyScene> {
         let parsed = values::overrides(&overrides)?;

@@ -232,7 +232,7 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
             ("max_penetration", "max_penetration", false),
         ] {
             if let Some(v) = h.max(col, abs) {
-                figures.insert(fig, v.to_string());
+                figures.insert(fig, crate::output::csv::real(v));
             }
         }
     }

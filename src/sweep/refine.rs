@@ -98,12 +98,82 @@ pub struct RefineOptions {
     /// refinement ratio r > 1 between consecutive levels
     pub ratio: f64,
     pub what: What,
+    /// the run [0, T] is split into this many equal windows for the windowed impulses (1: the
+    /// whole run only); it must divide the coarsest level's number of steps
+    pub windows: usize,
 }
 
 impl Default for RefineOptions {
     fn default() -> RefineOptions {
-        RefineOptions { levels: DEFAULT_LEVELS, ratio: 2.0, what: What::Both }
+        RefineOptions { levels: DEFAULT_LEVELS, ratio: 2.0, what: What::Both, windows: DEFAULT_WINDOWS }
     }
+}
+
+/// The default number of impulse windows.
+pub const DEFAULT_WINDOWS: usize = 4;
+
+/// The impulses `refine` estimates from each level's history.csv besides [`FIGURES`]: the
+/// integrals over time of the contact force, Σ_n (t_n − t_{n−1}) F_n with F_n the step's force —
+/// `normal_impulse` of `normal_force`, `friction_impulse_x`, `_y` (and `_z` in 3-D) of the
+/// friction force's global components — over the whole run and, with `windows` > 1, over each
+/// window ((w−1)T/W, wT/W] as `<name>_w<w>`. A force maximum is a value at one instant that an
+/// impact's peak makes erratic under refinement; an impulse is the momentum the contact
+/// exchanges, which converges.
+pub fn impulse_figures(dim: usize, windows: usize) -> Vec<String> {
+    let names: &[&str] = if dim == 3 {
+        &["normal_impulse", "friction_impulse_x", "friction_impulse_y", "friction_impulse_z"]
+    } else {
+        &["normal_impulse", "friction_impulse_x", "friction_impulse_y"]
+    };
+    let mut figures: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+    if windows > 1 {
+        for w in 1..=windows {
+            figures.extend(names.iter().map(|n| format!("{n}_w{w}")));
+        }
+    }
+    figures
+}
+
+/// The impulses of [`impulse_figures`] from a history.csv's text, in that order.
+pub fn impulses(history: &str, dim: usize, windows: usize) -> std::result::Result<Vec<f64>, String> {
+    let mut lines = history.lines();
+    let header: Vec<&str> = lines.next().ok_or("history.csv is empty")?.split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).ok_or(format!("history.csv has no {name}"));
+    let forces = ["normal_force", "friction_force_x", "friction_force_y", "friction_force_z"];
+    let mut cols = vec![column("t")?];
+    for f in &forces[..1 + dim] {
+        cols.push(column(f)?);
+    }
+    let mut rows: Vec<Vec<f64>> = Vec::new();
+    for (i, line) in lines.enumerate() {
+        let fields: Vec<&str> = line.split(',').collect();
+        let row = cols
+            .iter()
+            .map(|&c| fields.get(c).and_then(|v| v.parse::<f64>().ok()))
+            .collect::<Option<Vec<f64>>>()
+            .ok_or(format!("history.csv row {}: not a number in t or a force column", i + 2))?;
+        rows.push(row);
+    }
+    let steps = rows.len().saturating_sub(1);
+    if steps == 0 || windows == 0 || !steps.is_multiple_of(windows) {
+        return Err(format!("{steps} steps do not split into {windows} equal windows"));
+    }
+    let n_f = 1 + dim;
+    let mut total = vec![0.0; n_f];
+    let mut per_window = vec![vec![0.0; n_f]; windows];
+    for n in 1..=steps {
+        let k = rows[n][0] - rows[n - 1][0];
+        let w = (n - 1) * windows / steps;
+        for f in 0..n_f {
+            total[f] += k * rows[n][1 + f];
+            per_window[w][f] += k * rows[n][1 + f];
+        }
+    }
+    let mut out = total;
+    if windows > 1 {
+        per_window.into_iter().for_each(|w| out.extend(w));
+    }
+    Ok(out)
 }
 
 /// The expected order p_e of a figure's error in the refined parameter: 1 when h is refined
@@ -230,6 +300,8 @@ pub struct Refinement {
     pub size_name: &'static str,
     /// p_e of [`expected_order`]
     pub expected_order: f64,
+    /// the scene's dimension (2 or 3): the friction impulses' components
+    pub dim: usize,
 }
 
 /// One row of refine.csv.
@@ -286,6 +358,16 @@ pub fn plan(base: &Base, extra: &[Override], name: &str, opts: &RefineOptions) -
     };
     let (end, step) = (scene.time.end, scene.time.step);
     let whole = |x: f64| (x - x.round()).abs() <= 1e-9 * x.abs().max(1.0);
+    let steps0 = end / step;
+    if opts.windows == 0 || !whole(steps0) || !(steps0.round() as usize).is_multiple_of(opts.windows) {
+        return Err(Error::scene(
+            "--windows",
+            format!(
+                "{}: the coarsest level's {steps0} steps (time.end / time.step) do not split into {} equal windows of whole steps; give --windows N with N dividing the steps (1: the whole run only)",
+                opts.windows, opts.windows
+            ),
+        ));
+    }
     let mut sets = Vec::with_capacity(opts.levels);
     let mut sizes = Vec::with_capacity(opts.levels);
     let edge0 = match &scene.domain.size {
@@ -347,6 +429,7 @@ pub fn plan(base: &Base, extra: &[Override], name: &str, opts: &RefineOptions) -
         sizes,
         size_name: if opts.what.refines_h() { "h [m]" } else { "k [s]" },
         expected_order: expected_order(opts.what, scene.time.scheme),
+        dim: cells.len(),
     })
 }
 
@@ -365,7 +448,8 @@ impl Refinement {
     /// plots/refine_<figure>.svg.
     pub fn collect(&self, dir: &Path) -> Result<Vec<RefineRow>> {
         let (_, rows) = collect::collect(dir)?;
-        let table = estimates(&rows, self.options.ratio, self.expected_order);
+        let mut table = estimates(&rows, self.options.ratio, self.expected_order);
+        table.extend(self.impulse_rows(dir, &rows));
         write_atomic(&dir.join("refine.csv"), csv(&table, self.options.levels).as_bytes())?;
         let plots = dir.join("plots");
         std::fs::create_dir_all(&plots).map_err(|e| Error::io(&plots, e))?;
@@ -375,6 +459,47 @@ impl Refinement {
             }
         }
         Ok(table)
+    }
+}
+
+impl Refinement {
+    /// The rows of the impulses ([`impulse_figures`]) from each completed level's history.csv;
+    /// a level that did not complete, or whose history cannot be read, gives no value (the
+    /// rows' note says which).
+    fn impulse_rows(&self, dir: &Path, rows: &[Row]) -> Vec<RefineRow> {
+        let names = impulse_figures(self.dim, self.options.windows);
+        let mut values = vec![Vec::with_capacity(rows.len()); names.len()];
+        let mut problems = Vec::new();
+        for row in rows {
+            let level: Option<Vec<f64>> = if row.status.is_completed() {
+                let path = dir.join("points").join(&row.point).join("history.csv");
+                let read = std::fs::read_to_string(&path).map_err(|e| e.to_string());
+                match read.and_then(|text| impulses(&text, self.dim, self.options.windows)) {
+                    Ok(v) => Some(v),
+                    Err(e) => {
+                        problems.push(format!("{}: {e}", path.display()));
+                        None
+                    }
+                }
+            } else {
+                None
+            };
+            for (f, column) in values.iter_mut().enumerate() {
+                column.push(level.as_ref().map(|v| crate::output::csv::real(v[f])).unwrap_or_default());
+            }
+        }
+        names
+            .into_iter()
+            .zip(values)
+            .map(|(figure, values)| {
+                let numbers: Vec<Option<f64>> = values.iter().map(|v| v.parse().ok()).collect();
+                let mut estimate = Estimate::of(&numbers, self.options.ratio, self.expected_order);
+                if !problems.is_empty() {
+                    estimate.note = [estimate.note, problems.join("; ")].join("; ");
+                }
+                RefineRow { figure, estimate, values }
+            })
+            .collect()
     }
 }
 
@@ -403,7 +528,7 @@ pub fn estimates(rows: &[Row], r: f64, p_expected: f64) -> Vec<RefineRow> {
 
 /// A number as refine.csv writes it (empty: none).
 fn number(x: Option<f64>) -> String {
-    x.map(|v| v.to_string()).unwrap_or_default()
+    x.map(crate::output::csv::real).unwrap_or_default()
 }
 
 /// refine.csv: `figure`, `level_0` … `level_{N−1}` (coarsest first), `order`, `extrapolated`,
