@@ -110,8 +110,9 @@ enum Command {
         what: dyncontact::sweep::refine::What,
         /// the impulses of the contact force are estimated over the whole run and over this many
         /// equal windows of it (1: the whole run only); it must divide the coarsest level's steps
-        #[arg(long, value_name = "W", default_value_t = dyncontact::sweep::refine::DEFAULT_WINDOWS)]
-        windows: usize,
+        /// [default: 4, or 3, 2, 1 when 4 does not divide them]
+        #[arg(long, value_name = "W")]
+        windows: Option<usize>,
         /// output folder (default: out/<scene name>-refine)
         #[arg(long)]
         out: Option<PathBuf>,
@@ -501,11 +502,12 @@ fn cmd_refine(
     let jobs = jobs.unwrap_or(cores).max(1);
     let _lock = dyncontact::sweep::lock(&dir)?;
     say!(
-        "refine {}: {} levels at ratio {}, refining {}, folder {}",
+        "refine {}: {} levels at ratio {}, refining {}, impulses over the run and {} windows, folder {}",
         s.name,
         opts.levels,
         opts.ratio,
         opts.what.words(),
+        refinement.windows,
         dir.display()
     );
     let interrupt = Arc::clone(stop);

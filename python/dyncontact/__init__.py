@@ -352,7 +352,7 @@ def refine(
     levels: int = 3,
     ratio: float = 2.0,
     what: str = "both",
-    windows: int = 4,
+    windows: Optional[int] = None,
     out: Optional[PathLike] = None,
     jobs: Optional[int] = None,
     progress: bool = False,
@@ -364,8 +364,9 @@ def refine(
     ``domain.cells`` times ``ratio**l`` in every direction (``what="h"``), ``time.step`` divided
     by ``ratio**l`` (``"k"``) or both (``"both"``). Every figure of sweep.csv and the contact
     impulses (``normal_impulse``, ``friction_impulse_x`` ... over the run and over ``windows``
-    equal windows, ``..._w1`` ...) get the observed order (G.1), Richardson's extrapolation (G.2)
-    and the grid convergence index (G.3) from the three finest levels.
+    equal windows, ``..._w1`` ...; default 4, or 3, 2, 1 when 4 does not divide the coarsest
+    level's steps) get the observed order (G.1), Richardson's extrapolation (G.2) and the grid
+    convergence index (G.3) from the three finest levels.
 
     Args:
         scene: the scene to refine (a rectangle or box with ``domain.cells``).

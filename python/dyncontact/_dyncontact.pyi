@@ -129,7 +129,7 @@ def run_refine(
     levels: int = 3,
     ratio: float = 2.0,
     what: str = "both",
-    windows: int = 4,
+    windows: Optional[int] = None,
     out: Optional[Union[str, PathLike[str]]] = None,
     jobs: Optional[int] = None,
     progress: bool = False,

@@ -266,7 +266,7 @@ fn run_sweep(
 /// --out OUT --jobs J` does (the scene's own overrides apply before the levels refine it);
 /// returns the path of refine.csv.
 #[pyfunction]
-#[pyo3(signature = (scene, levels = 3, ratio = 2.0, what = "both", windows = 4, out = None, jobs = None, progress = false))]
+#[pyo3(signature = (scene, levels = 3, ratio = 2.0, what = "both", windows = None, out = None, jobs = None, progress = false))]
 #[allow(clippy::too_many_arguments)]
 fn run_refine(
     py: Python<'_>,
@@ -274,7 +274,7 @@ fn run_refine(
     levels: usize,
     ratio: f64,
     what: &str,
-    windows: usize,
+    windows: Option<usize>,
     out: Option<PathBuf>,
     jobs: Option<usize>,
     progress: bool,

@@ -99,13 +99,14 @@ pub struct RefineOptions {
     pub ratio: f64,
     pub what: What,
     /// the run [0, T] is split into this many equal windows for the windowed impulses (1: the
-    /// whole run only); it must divide the coarsest level's number of steps
-    pub windows: usize,
+    /// whole run only); it must divide the coarsest level's number of steps. None: the default,
+    /// [`DEFAULT_WINDOWS`] when it divides them, else the largest number below it that does
+    pub windows: Option<usize>,
 }
 
 impl Default for RefineOptions {
     fn default() -> RefineOptions {
-        RefineOptions { levels: DEFAULT_LEVELS, ratio: 2.0, what: What::Both, windows: DEFAULT_WINDOWS }
+        RefineOptions { levels: DEFAULT_LEVELS, ratio: 2.0, what: What::Both, windows: None }
     }
 }
 
@@ -302,6 +303,8 @@ pub struct Refinement {
     pub expected_order: f64,
     /// the scene's dimension (2 or 3): the friction impulses' components
     pub dim: usize,
+    /// the impulse windows (the option resolved: see [`RefineOptions::windows`])
+    pub windows: usize,
 }
 
 /// One row of refine.csv.
@@ -359,15 +362,19 @@ pub fn plan(base: &Base, extra: &[Override], name: &str, opts: &RefineOptions) -
     let (end, step) = (scene.time.end, scene.time.step);
     let whole = |x: f64| (x - x.round()).abs() <= 1e-9 * x.abs().max(1.0);
     let steps0 = end / step;
-    if opts.windows == 0 || !whole(steps0) || !(steps0.round() as usize).is_multiple_of(opts.windows) {
-        return Err(Error::scene(
-            "--windows",
-            format!(
-                "{}: the coarsest level's {steps0} steps (time.end / time.step) do not split into {} equal windows of whole steps; give --windows N with N dividing the steps (1: the whole run only)",
-                opts.windows, opts.windows
-            ),
-        ));
-    }
+    let divides = |w: usize| w == 1 || (w > 1 && whole(steps0) && (steps0.round() as usize).is_multiple_of(w));
+    let windows = match opts.windows {
+        None => (1..=DEFAULT_WINDOWS).rev().find(|&w| divides(w)).unwrap_or(1),
+        Some(w) if divides(w) => w,
+        Some(w) => {
+            return Err(Error::scene(
+                "--windows",
+                format!(
+                    "{w}: the coarsest level's {steps0} steps (time.end / time.step) do not split into {w} equal windows of whole steps; give --windows N with N dividing the steps (1: the whole run only)"
+                ),
+            ));
+        }
+    };
     let mut sets = Vec::with_capacity(opts.levels);
     let mut sizes = Vec::with_capacity(opts.levels);
     let edge0 = match &scene.domain.size {
@@ -430,6 +437,7 @@ pub fn plan(base: &Base, extra: &[Override], name: &str, opts: &RefineOptions) -
         size_name: if opts.what.refines_h() { "h [m]" } else { "k [s]" },
         expected_order: expected_order(opts.what, scene.time.scheme),
         dim: cells.len(),
+        windows,
     })
 }
 
@@ -467,14 +475,14 @@ impl Refinement {
     /// a level that did not complete, or whose history cannot be read, gives no value (the
     /// rows' note says which).
     fn impulse_rows(&self, dir: &Path, rows: &[Row]) -> Vec<RefineRow> {
-        let names = impulse_figures(self.dim, self.options.windows);
+        let names = impulse_figures(self.dim, self.windows);
         let mut values = vec![Vec::with_capacity(rows.len()); names.len()];
         let mut problems = Vec::new();
         for row in rows {
             let level: Option<Vec<f64>> = if row.status.is_completed() {
                 let path = dir.join("points").join(&row.point).join("history.csv");
                 let read = std::fs::read_to_string(&path).map_err(|e| e.to_string());
-                match read.and_then(|text| impulses(&text, self.dim, self.options.windows)) {
+                match read.and_then(|text| impulses(&text, self.dim, self.windows)) {
                     Ok(v) => Some(v),
                     Err(e) => {
                         problems.push(format!("{}: {e}", path.display()));

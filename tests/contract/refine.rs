@@ -356,3 +356,33 @@ fn refine_refuses_a_gmsh_mesh_and_fractional_steps_or_cells() {
         assert!(!out.join("points").exists(), "{args:?}: nothing is laid out");
     }
 }
+
+/// Without `--windows` the impulses take 4 windows when 4 divides the coarsest level's steps,
+/// else the largest of 3, 2, 1 that does: the B.2 layer with t = 0.041 (41 steps of 1e-3, a
+/// prime) has the whole-run impulses alone and says so on its first line; with t = 0.042 (42
+/// steps) 3 windows.
+#[test]
+fn refine_windows_default_follows_the_steps() {
+    let layer = root().join("fixtures/scenes/compliant_layer.toml").display().to_string();
+    for (t_end, windows) in [("0.041", 1usize), ("0.042", 3)] {
+        let out = tmp(&format!("refine-windows-{windows}"));
+        let args = [
+            layer.clone(),
+            "--set".into(),
+            "domain.cells=[25,1]".into(),
+            "--set".into(),
+            "time.step=1e-3".into(),
+            "--set".into(),
+            format!("time.end={t_end}"),
+            "--jobs".into(),
+            "2".into(),
+        ];
+        let run = Command::new(BIN).arg("refine").args(&args).arg("--out").arg(&out).output().expect("refine");
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        let first = String::from_utf8_lossy(&run.stdout).lines().next().unwrap_or_default().to_string();
+        assert!(first.contains(&format!("{windows} windows")), "{first}");
+        let (_, rows) = refine(&args, &out);
+        let impulses: Vec<&str> = rows.iter().map(|r| r[0].as_str()).filter(|f| f.contains("impulse")).collect();
+        assert_eq!(impulses, dyncontact::sweep::refine::impulse_figures(2, windows));
+    }
+}
