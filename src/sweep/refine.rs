@@ -135,7 +135,9 @@ pub fn impulse_figures(dim: usize, windows: usize) -> Vec<String> {
     figures
 }
 
-/// The impulses of [`impulse_figures`] from a history.csv's text, in that order.
+/// The impulses of [`impulse_figures`] from a history.csv's text, in that order. Parsed here
+/// rather than by `collect::History`, which skips malformed rows: a skipped step would shift
+/// every window's sum, so a row that does not read is an error naming it.
 pub fn impulses(history: &str, dim: usize, windows: usize) -> std::result::Result<Vec<f64>, String> {
     let mut lines = history.lines();
     let header: Vec<&str> = lines.next().ok_or("history.csv is empty")?.split(',').collect();
