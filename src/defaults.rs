@@ -133,6 +133,14 @@ pub const NEAR_FIELD_TOLERANCE: f64 = 1e-3;
 /// contact solve per step, pressing phase): 936 unknowns (academic3d 24×12×8) 5.9 ms against 4.8
 /// with node blocks; 1,632 (32×16×12) 45.9 against 50.7; 3,600 (48×24×16) 252 against 385.
 pub const NEAR_FIELD_FROM: usize = 1200;
+/// A dense W (whose responses A_k⁻¹ Hᵀ are not kept) comes from the Schur complement of A_k on
+/// the contact unknowns from this many components on, instead of d n_c solve pairs with the
+/// factor of A_k (`delassus::delassus_pair`). Measured on academic3d (W and W⁻¹ together, one
+/// process, this 2-core machine): 252 components 0.006 s against 0.017 s; 936 (24×12×8) 0.15
+/// against 0.69; 1,632 (32×16×12) 0.70 against 3.34; 3,600 (48×24×16) 5.5 against 25.2; 6,336
+/// (64×32×24) 51 against 218. It wins at every size; below this bound the solves stay, so
+/// the small scenes' pinned outputs keep their bits.
+pub const SCHUR_FROM: usize = 512;
 /// … and a direction falls back to the force form when its solve needs more than this many.
 pub const VELOCITY_FORM_MAX_ITERATIONS: usize = 60;
 

@@ -75,8 +75,10 @@ pub struct SetupTiming {
     pub assembly: f64,
     /// the factorization of A_k
     pub factorization: f64,
-    /// W = H A_k⁻¹ Hᵀ
+    /// W = H A_k⁻¹ Hᵀ (and W⁻¹ for the velocity form)
     pub delassus: f64,
+    /// how W was computed: "solves", "schur", "probed" (`delassus::Built::route`), or "" without contact
+    pub delassus_route: &'static str,
 }
 
 /// Wall-clock split of one step, in seconds.
@@ -276,22 +278,27 @@ impl<'p> Simulation<'p> {
             Operators::new(&problem.mesh, &problem.material, problem.model.solver.mass, &problem.dofs, contact_nodes)?;
         let assembly = clock.elapsed().as_secs_f64();
         let clock = Instant::now();
-        let stepper = StepOperator::new(&ops, problem.model.time.scheme, problem.k)?;
+        let mut stepper = StepOperator::new(&ops, problem.model.time.scheme, problem.k)?;
         let factorization = clock.elapsed().as_secs_f64();
         let clock = Instant::now();
-        let (delassus, responses) = match problem.contact.as_ref() {
+        let mut delassus_route = "";
+        let (delassus, responses, inverse) = match problem.contact.as_ref() {
             Some(c) => {
                 let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| problem.mesh.point(i)).collect();
-                let (w, g) =
-                    delassus::build_with_responses(stepper.factor(), c, &positions, problem.model.solver.contact_solve);
-                (Some(w), g)
+                let built = delassus::build_with_responses(
+                    stepper.factor(),
+                    stepper.matrix(),
+                    c,
+                    &positions,
+                    problem.model.solver.contact_solve,
+                );
+                let inverse = delassus::InverseDelassus::new(&built.w, c.dim, built.winv);
+                delassus_route = built.route;
+                (Some(built.w), built.responses, inverse)
             }
-            None => (None, None),
+            None => (None, None, None),
         };
-        let inverse = match (&delassus, problem.contact.as_ref()) {
-            (Some(w), Some(c)) => delassus::InverseDelassus::new(w, c.dim),
-            _ => None,
-        };
+        stepper.release_matrix();
         let t_delassus = clock.elapsed().as_secs_f64();
         let nc = problem.contact.as_ref().map(ContactModel::n).unwrap_or(0);
         let (u, v) = (problem.u0.clone(), problem.v0.clone());
@@ -327,7 +334,7 @@ impl<'p> Simulation<'p> {
             responses,
             products,
             state,
-            setup_timing: SetupTiming { assembly, factorization, delassus: t_delassus },
+            setup_timing: SetupTiming { assembly, factorization, delassus: t_delassus, delassus_route },
         })
     }
 

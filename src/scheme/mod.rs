@@ -7,7 +7,7 @@
 
 use crate::error::Result;
 use crate::fem::Operators;
-use crate::linalg::{self, Cholesky};
+use crate::linalg::{self, Cholesky, SpMat};
 use crate::model::kinds::SchemeKind;
 use crate::model::laws::NormalForceRule;
 
@@ -36,6 +36,9 @@ pub struct StepOperator {
     pub k: f64,
     /// A_k, factored once
     a: Cholesky,
+    /// A_k itself, kept through the setup for the Schur complement on the contact unknowns
+    /// (`delassus::delassus_pair`), then released
+    matrix: Option<SpMat>,
 }
 
 /// The operator products of a state (u, v): K u, K v, C v and M v. The time loop forms them once
@@ -68,7 +71,7 @@ impl StepOperator {
             }
             SchemeKind::BackwardEuler => linalg::combine(&[(1.0 / k, &ops.m), (1.0, &ops.c), (k, &ops.k)])?,
         };
-        Ok(StepOperator { kind, k, a: Cholesky::new(&a, "the step matrix A_k")? })
+        Ok(StepOperator { kind, k, a: Cholesky::new(&a, "the step matrix A_k")?, matrix: Some(a) })
     }
 
     /// The time at which the load is sampled: f^{n+½} = f(t_n + k/2) (decision 7), or
@@ -98,6 +101,16 @@ impl StepOperator {
 
     pub fn factor(&self) -> &Cholesky {
         &self.a
+    }
+
+    /// A_k, until [`release_matrix`](Self::release_matrix).
+    pub fn matrix(&self) -> Option<&SpMat> {
+        self.matrix.as_ref()
+    }
+
+    /// Free A_k's entries (the factor stays): the time loop reads only the factor.
+    pub fn release_matrix(&mut self) {
+        self.matrix = None;
     }
 
     /// (S.1) u^{n+1} = u^n + k v^{n+½} with v^{n+½} = (v^n + v^{n+1})/2

@@ -35,14 +35,18 @@ pub struct InverseDelassus {
 }
 
 impl InverseDelassus {
-    /// W⁻¹ of a dense W when the velocity form suits it (see the type's doc), else None.
-    pub fn new(w: &Delassus, dim: usize) -> Option<InverseDelassus> {
+    /// W⁻¹ of a dense W when the velocity form suits it (see the type's doc), else None:
+    /// `winv` when the setup already has it (the Schur complement), else W's Cholesky inverse.
+    pub fn new(w: &Delassus, dim: usize, winv: Option<Mat<f64>>) -> Option<InverseDelassus> {
         let Delassus::Dense(w) = w else { return None };
         let m = w.nrows();
         if m < crate::defaults::GEMV_FROM {
             return None;
         }
-        let winv = w.llt(Side::Lower).ok()?.inverse();
+        let winv = match winv {
+            Some(winv) => winv,
+            None => w.llt(Side::Lower).ok()?.inverse(),
+        };
         let near = (m >= crate::defaults::NEAR_FIELD_FROM)
             .then(|| NearField::new(&winv, dim, crate::defaults::NEAR_FIELD_TOLERANCE))
             .flatten();

@@ -23,11 +23,13 @@ mod cg;
 mod factors;
 mod frames;
 mod inverse;
+mod schur;
 mod sparse;
 
 pub use factors::{DelassusFactors, FactorCounts, FactorKey};
 pub use frames::SlipFrames;
 pub use inverse::InverseDelassus;
+pub use schur::{contact_block_of_factor, delassus_pair};
 pub use sparse::{Probe, SparseDelassus, SparseStats, sparse};
 
 use faer::{Mat, Par};
@@ -158,17 +160,36 @@ impl Delassus {
 /// [`SPARSE_DENSITY`](crate::defaults::SPARSE_DENSITY) of the entries (measured crossover: README,
 /// "Speed").
 pub fn build(a: &Cholesky, contact: &ContactModel, positions: &[[f64; 3]], choice: ContactSolve) -> Delassus {
-    build_with_responses(a, contact, positions, choice).0
+    build_with_responses(a, None, contact, positions, choice).w
+}
+
+/// What the setup of the contact solve computes once.
+pub struct Built {
+    /// W, in the form chosen
+    pub w: Delassus,
+    /// the responses G = A_k⁻¹ Hᵀ (dense form, when they fit in
+    /// [`RESPONSES_BYTES`](crate::defaults::RESPONSES_BYTES))
+    pub responses: Option<Mat<f64>>,
+    /// W⁻¹, when W came from the Schur complement of A_k (which gives it first)
+    pub winv: Option<Mat<f64>>,
+    /// how the dense W was computed: "solves" (d n_c solve pairs with the factor of A_k),
+    /// "schur" (the Schur complement, [`delassus_pair`]), or "probed" for the sparse form
+    pub route: &'static str,
 }
 
 /// [`build`], and for the dense form the responses G = A_k⁻¹ Hᵀ when they fit in
-/// [`RESPONSES_BYTES`](crate::defaults::RESPONSES_BYTES).
+/// [`RESPONSES_BYTES`](crate::defaults::RESPONSES_BYTES). With A_k itself (`matrix`), a dense W
+/// of at least [`SCHUR_FROM`](crate::defaults::SCHUR_FROM) components whose responses are not
+/// kept comes from the Schur complement of A_k on the contact unknowns (one more sparse
+/// factorization instead of d n_c solve pairs; W and W⁻¹ agree with the solves' to round-off),
+/// falling back to the solves if that factorization fails.
 pub fn build_with_responses(
     a: &Cholesky,
+    matrix: Option<&crate::linalg::SpMat>,
     contact: &ContactModel,
     positions: &[[f64; 3]],
     choice: ContactSolve,
-) -> (Delassus, Option<Mat<f64>>) {
+) -> Built {
     let m = contact.dim * contact.n();
     let truncation = crate::defaults::DELASSUS_TRUNCATION;
     let probe = match choice {
@@ -182,14 +203,18 @@ pub fn build_with_responses(
     };
     // the sparse form falls back to the dense one if faer refuses to build it (it cannot for
     // indices below m, but a failed allocation should not end the run)
-    match probe.and_then(|p| sparse(a, contact, positions, &p)) {
-        Some(s) => (Delassus::Sparse(s), None),
-        None => {
-            let keep = 8.0 * a.dim() as f64 * m as f64 <= crate::defaults::RESPONSES_BYTES;
-            let (w, g) = dense_with_responses(a, contact, keep);
-            (Delassus::Dense(w), g)
-        }
+    if let Some(s) = probe.and_then(|p| sparse(a, contact, positions, &p)) {
+        return Built { w: Delassus::Sparse(s), responses: None, winv: None, route: "probed" };
     }
+    let keep = 8.0 * a.dim() as f64 * m as f64 <= crate::defaults::RESPONSES_BYTES;
+    if !keep
+        && m >= crate::defaults::SCHUR_FROM
+        && let Some((w, winv)) = matrix.and_then(|k| delassus_pair(k, contact))
+    {
+        return Built { w: Delassus::Dense(w), responses: None, winv: Some(winv), route: "schur" };
+    }
+    let (w, g) = dense_with_responses(a, contact, keep);
+    Built { w: Delassus::Dense(w), responses: g, winv: None, route: "solves" }
 }
 
 /// The dense W (d n_c × d n_c, symmetric positive definite), components (ν_1, τ_1, …, ν_2, τ_2, …):
