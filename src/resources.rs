@@ -37,6 +37,13 @@ const OPERATORS: f64 = 5.0;
 /// The process before it holds a problem: the program, its libraries, the allocator, the
 /// output buffers (measured: a run of 1,088 unknowns peaks at 12.6 MB).
 pub const BASELINE: f64 = 8e6;
+/// The factor of A_k with the contact unknowns ordered last (the Schur complement's route to W)
+/// against the estimated factor of A_k: measured 1.66× (academic3d 48×24×16) and 1.54×
+/// (64×32×24) the entries of faer's unconstrained ordering; the estimate of that factor itself
+/// runs low in 3-D (see the module's doc), so the ratio is fitted to the measured peaks of the
+/// thick bench: 7,384 MB at 64×32×24 (estimate 7.0 GiB, 7,530 MB) and 1,711 MB at 48×24×16
+/// (estimate 2.1 GiB).
+const SCHUR_FACTOR: f64 = 2.3;
 /// Bytes per entry of an element matrix during assembly: a (row, column, value) triplet of 24
 /// bytes for each of M, K and C, held at once, and faer's conversion of one of them (fitted to
 /// the measured peaks: 4 × 24).
@@ -59,6 +66,10 @@ pub struct Estimate {
     pub contact_bytes: f64,
     /// the assembly's triplet lists (M, K, C at once) and faer's conversion
     pub assembly_bytes: f64,
+    /// the setup of a dense W by the Schur complement of A_k (0 when W comes from the
+    /// solves): the second factorization, with the contact unknowns last, and three m × m
+    /// matrices, held beside the factor of A_k
+    pub schur_bytes: f64,
     /// what the run writes to disk ([`Outputs`])
     pub outputs: Outputs,
 }
@@ -87,10 +98,20 @@ impl Estimate {
         self.mesh_bytes + self.operator_bytes + self.factor_bytes + self.contact_bytes
     }
 
-    /// The estimated peak resident memory, in bytes: the baseline and the larger of the
-    /// assembly and the solve.
+    /// What the setup of W by the Schur complement holds at its peak: the solve's mesh,
+    /// operators and factor, the second factor and three dense m × m matrices (0 without it).
+    pub fn schur_setup_bytes(&self) -> f64 {
+        if self.schur_bytes > 0.0 {
+            self.mesh_bytes + self.operator_bytes + self.factor_bytes + self.schur_bytes
+        } else {
+            0.0
+        }
+    }
+
+    /// The estimated peak resident memory, in bytes: the baseline and the largest of the
+    /// assembly, the setup of W by the Schur complement and the solve.
     pub fn total(&self) -> f64 {
-        BASELINE + (self.mesh_bytes + self.assembly_bytes).max(self.solve_bytes())
+        BASELINE + (self.mesh_bytes + self.assembly_bytes).max(self.solve_bytes()).max(self.schur_setup_bytes())
     }
 
     /// Floating-point work of one step: two triangular-solve pairs on the factor, and per
@@ -116,14 +137,23 @@ impl Estimate {
         let (solve, lu) = self.flops_per_step();
         vec![
             format!(
-                "memory (est.)  : {} at the peak — the solve holds {} (mesh {}, operators {}, factor of A_k {}, contact solve {}), the assembly {}",
+                "memory (est.)  : {} at the peak — the solve holds {} (mesh {}, operators {}, factor of A_k {}, contact solve {}), the assembly {}{}",
                 gib(self.total()),
                 gib(self.solve_bytes()),
                 gib(self.mesh_bytes),
                 gib(self.operator_bytes),
                 gib(self.factor_bytes),
                 gib(self.contact_bytes),
-                gib(self.mesh_bytes + self.assembly_bytes)
+                gib(self.mesh_bytes + self.assembly_bytes),
+                if self.schur_bytes > 0.0 {
+                    format!(
+                        ", the setup of W by the Schur complement {} (a second factor with the contact unknowns last and three m × m matrices: {})",
+                        gib(self.schur_setup_bytes()),
+                        gib(self.schur_bytes)
+                    )
+                } else {
+                    String::new()
+                }
             ),
             format!(
                 "outputs (est.) : {} — {} frames of {} each, history.csv {}, contact.csv {}{}",
@@ -136,6 +166,14 @@ impl Estimate {
                     format!(", trajectory.f64 {}", gib(self.outputs.trajectory_bytes))
                 } else {
                     String::new()
+                }
+            ),
+            format!(
+                "contact setup  : {}",
+                if self.schur_bytes > 0.0 {
+                    "W and W⁻¹ from the Schur complement of A_k — one more sparse factorization (contact unknowns last) and ~m³ dense flop"
+                } else {
+                    "W from d n_c solve pairs with the factor of A_k (or probed sparse: d × colours solves)"
                 }
             ),
             format!(
@@ -258,6 +296,13 @@ pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
         contact_bytes: (if m >= crate::defaults::GEMV_FROM as f64 { 3.0 } else { 2.0 }) * m * m * 8.0
             + Some(8.0 * n * m).filter(|g| *g <= crate::defaults::RESPONSES_BYTES).unwrap_or(0.0),
         assembly_bytes: ASSEMBLY_ENTRY * element_entries * triangles as f64,
+        // a dense W from SCHUR_FROM components on whose responses are not kept (an upper
+        // bound again: `auto` may probe it sparse)
+        schur_bytes: if m >= crate::defaults::SCHUR_FROM as f64 && 8.0 * n * m > crate::defaults::RESPONSES_BYTES {
+            SCHUR_FACTOR * factor_entries * SPARSE_ENTRY + 3.0 * m * m * 8.0
+        } else {
+            0.0
+        },
         outputs,
     })
 }
@@ -331,7 +376,7 @@ pub fn check_fits(e: &Estimate, available: Option<f64>) -> Result<()> {
         Some(avail) if e.total() > avail => Err(Error::scene(
             "domain",
             format!(
-                "the run would need about {} ({} nodes, {} unknowns; the solve holds mesh {}, operators {}, factor of A_k {}, contact solve {}) \
+                "the run would need about {} ({} nodes, {} unknowns; the solve holds mesh {}, operators {}, factor of A_k {}, contact solve {}{}) \
                  but {} are available; use a coarser mesh (fewer domain.cells or a coarser Gmsh mesh)",
                 gib(e.total()),
                 e.nodes,
@@ -340,6 +385,11 @@ pub fn check_fits(e: &Estimate, available: Option<f64>) -> Result<()> {
                 gib(e.operator_bytes),
                 gib(e.factor_bytes),
                 gib(e.contact_bytes),
+                if e.schur_bytes > 0.0 {
+                    format!("; the setup of W by the Schur complement holds {} more", gib(e.schur_bytes))
+                } else {
+                    String::new()
+                },
                 gib(avail)
             ),
         )),

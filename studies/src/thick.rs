@@ -59,6 +59,11 @@ pub struct ThickRow {
     pub assembly: f64,
     pub factorization: f64,
     pub delassus: f64,
+    /// how the run computed W and W⁻¹ ("schur" from SCHUR_FROM components on, else "solves")
+    pub route: &'static str,
+    /// seconds W and W⁻¹ take by d n_c solve pairs and W's Cholesky inverse (the route before
+    /// the Schur complement), measured beside the run (near-field rows only, else NaN)
+    pub delassus_solves: f64,
     pub newton_iterations: usize,
     pub cg_iterations: usize,
     /// the share of W⁻¹'s entries in its near field
@@ -95,6 +100,25 @@ fn measure(p: &Problem, cells: [i64; 3], near: bool) -> Result<ThickRow> {
         return Err(Error::Study(format!("thick: {cells:?} does not run in velocity form")));
     }
     let t = sim.setup_timing;
+    // the route before: W by the solves, then its Cholesky inverse (timed, then dropped)
+    let delassus_solves = match (near, p.contact.as_ref()) {
+        (true, Some(c)) => {
+            let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| p.mesh.point(i)).collect();
+            let clock = Instant::now();
+            let built = dyncontact::step::delassus::build_with_responses(
+                sim.stepper.factor(),
+                None,
+                c,
+                &positions,
+                dyncontact::model::kinds::ContactSolve::Dense,
+            );
+            let inverse = dyncontact::step::delassus::InverseDelassus::new(&built.w, c.dim, None);
+            let seconds = clock.elapsed().as_secs_f64();
+            drop((built, inverse));
+            seconds
+        }
+        _ => f64::NAN,
+    };
     let (mut free, mut contact, mut newton) = (Vec::new(), Vec::new(), 0);
     for rec in sim.steps() {
         let rec = rec?;
@@ -114,6 +138,8 @@ fn measure(p: &Problem, cells: [i64; 3], near: bool) -> Result<ThickRow> {
         assembly: t.assembly,
         factorization: t.factorization,
         delassus: t.delassus,
+        route: t.delassus_route,
+        delassus_solves,
         newton_iterations: newton,
         cg_iterations: counts.velocity_iterations,
         near_density,
@@ -144,7 +170,7 @@ pub fn run(plan: &ThickPlan, progress: &dyn Fn(&str)) -> Result<Vec<ThickRow>> {
 pub fn csv(rows: &[ThickRow]) -> String {
     csv_table(
         "cells,unknowns,contact_nodes,form,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
-contact_over_free,assembly_s,factorization_s,delassus_s,newton_iterations,cg_iterations,near_density,peak_mb",
+contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_by_solves_s,newton_iterations,cg_iterations,near_density,peak_mb",
         rows.iter().map(|r| {
             vec![
                 format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
@@ -160,6 +186,8 @@ contact_over_free,assembly_s,factorization_s,delassus_s,newton_iterations,cg_ite
                 format!("{:.3}", r.assembly),
                 format!("{:.3}", r.factorization),
                 format!("{:.3}", r.delassus),
+                r.route.to_string(),
+                if r.delassus_solves.is_nan() { String::new() } else { format!("{:.3}", r.delassus_solves) },
                 r.newton_iterations.to_string(),
                 r.cg_iterations.to_string(),
                 format!("{:.4}", r.near_density),
@@ -201,13 +229,24 @@ pub fn report(rows: &[ThickRow]) -> String {
     let mut s = String::from("thick 3-D boxes (academic3d refined, velocity form): per step min / median\n");
     let _ = writeln!(
         s,
-        "{:>10} {:>8} {:>6} {:<12} {:>17} {:>19} {:>8} {:>10} {:>8} {:>8} {:>7}",
-        "cells", "unknowns", "n_c", "form", "free[ms]", "contact[ms]", "c/free", "A_k+W[s]", "Newton", "CG", "peakMB"
+        "{:>10} {:>8} {:>6} {:<12} {:>17} {:>19} {:>8} {:>10} {:>17} {:>8} {:>8} {:>7}",
+        "cells",
+        "unknowns",
+        "n_c",
+        "form",
+        "free[ms]",
+        "contact[ms]",
+        "c/free",
+        "A_k+W[s]",
+        "W route (solves)",
+        "Newton",
+        "CG",
+        "peakMB"
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "{:>10} {:>8} {:>6} {:<12} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>4.1}+{:<5.1} {:>8} {:>8} {:>7.0}",
+            "{:>10} {:>8} {:>6} {:<12} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>4.1}+{:<5.1} {:>7} ({:>7.1}) {:>8} {:>8} {:>7.0}",
             format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
             r.unknowns,
             r.contact_nodes,
@@ -219,6 +258,8 @@ pub fn report(rows: &[ThickRow]) -> String {
             r.contact[1] / r.free[1],
             r.factorization,
             r.delassus,
+            r.route,
+            r.delassus_solves,
             r.newton_iterations,
             r.cg_iterations,
             r.peak_mb
