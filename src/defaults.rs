@@ -138,8 +138,9 @@ pub const NEAR_FIELD_FROM: usize = 1200;
 /// factor of A_k (`delassus::delassus_pair`). Measured on academic3d (W and W⁻¹ together, one
 /// process, this 2-core machine): 252 components 0.006 s against 0.017 s; 936 (24×12×8) 0.15
 /// against 0.69; 1,632 (32×16×12) 0.70 against 3.34; 3,600 (48×24×16) 5.5 against 25.2; 6,336
-/// (64×32×24) 51 against 218. It wins at every size; below this bound the solves stay, so
-/// the small scenes' pinned outputs keep their bits.
+/// (64×32×24) 51 against 218. It wins at every size; below this bound the solves stay (they
+/// cost well under a second there), so the small scenes keep their bits (of the pinned
+/// fixtures only hertz3d, 675 components, takes the Schur route: CHANGELOG, pin 11).
 pub const SCHUR_FROM: usize = 512;
 /// … and a direction falls back to the force form when its solve needs more than this many.
 pub const VELOCITY_FORM_MAX_ITERATIONS: usize = 60;
