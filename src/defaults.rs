@@ -140,7 +140,7 @@ pub const NEAR_FIELD_FROM: usize = 1200;
 /// against 0.69; 1,632 (32×16×12) 0.70 against 3.34; 3,600 (48×24×16) 5.5 against 25.2; 6,336
 /// (64×32×24) 51 against 218. It wins at every size; below this bound the solves stay (they
 /// cost well under a second there), so the small scenes keep their bits (of the pinned
-/// fixtures only hertz3d, 675 components, takes the Schur route: CHANGELOG, pin 11).
+/// fixtures only hertz3d, 1,875 components, takes the Schur route: CHANGELOG, pin 11).
 pub const SCHUR_FROM: usize = 512;
 /// … and a direction falls back to the force form when its solve needs more than this many.
 pub const VELOCITY_FORM_MAX_ITERATIONS: usize = 60;

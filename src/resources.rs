@@ -171,7 +171,7 @@ impl Estimate {
             format!(
                 "contact setup  : {}",
                 if self.schur_bytes > 0.0 {
-                    "W and W⁻¹ from the Schur complement of A_k — one more sparse factorization (contact unknowns last) and ~m³ dense flop"
+                    "a dense W and W⁻¹ from the Schur complement of A_k — one more sparse factorization (contact unknowns last) and ~m³ dense flop (`auto` may still probe W sparse first)"
                 } else {
                     "W from d n_c solve pairs with the factor of A_k (or probed sparse: d × colours solves)"
                 }
