@@ -111,7 +111,15 @@ impl Estimate {
     /// The estimated peak resident memory, in bytes: the baseline and the largest of the
     /// assembly, the setup of W by the Schur complement and the solve.
     pub fn total(&self) -> f64 {
-        BASELINE + (self.mesh_bytes + self.assembly_bytes).max(self.solve_bytes()).max(self.schur_setup_bytes())
+        self.required().max(BASELINE + self.schur_setup_bytes())
+    }
+
+    /// The least the run needs, in bytes: the baseline and the larger of the assembly and the
+    /// solve. The Schur complement's setup is taken only when its second factor fits in the
+    /// memory available at that moment (else W comes from the solves, with no second factor), so
+    /// the resource guard refuses by this figure.
+    pub fn required(&self) -> f64 {
+        BASELINE + (self.mesh_bytes + self.assembly_bytes).max(self.solve_bytes())
     }
 
     /// Floating-point work of one step: two triangular-solve pairs on the factor, and per
@@ -147,9 +155,10 @@ impl Estimate {
                 gib(self.mesh_bytes + self.assembly_bytes),
                 if self.schur_bytes > 0.0 {
                     format!(
-                        ", the setup of W by the Schur complement {} (a second factor with the contact unknowns last and three m × m matrices: {})",
+                        ", the setup of W by the Schur complement {} (a second factor with the contact unknowns last and three m × m matrices: {}; taken only if it fits then, else W comes from the solves and the peak is {})",
                         gib(self.schur_setup_bytes()),
-                        gib(self.schur_bytes)
+                        gib(self.schur_bytes),
+                        gib(self.required())
                     )
                 } else {
                     String::new()
@@ -373,12 +382,12 @@ pub fn peak_memory() -> Option<f64> {
 /// Refuse a run whose estimate exceeds the memory available, naming both and what to change.
 pub fn check_fits(e: &Estimate, available: Option<f64>) -> Result<()> {
     match available {
-        Some(avail) if e.total() > avail => Err(Error::scene(
+        Some(avail) if e.required() > avail => Err(Error::scene(
             "domain",
             format!(
                 "the run would need about {} ({} nodes, {} unknowns; the solve holds mesh {}, operators {}, factor of A_k {}, contact solve {}{}) \
                  but {} are available; use a coarser mesh (fewer domain.cells or a coarser Gmsh mesh)",
-                gib(e.total()),
+                gib(e.required()),
                 e.nodes,
                 e.unknowns,
                 gib(e.mesh_bytes),
@@ -386,7 +395,10 @@ pub fn check_fits(e: &Estimate, available: Option<f64>) -> Result<()> {
                 gib(e.factor_bytes),
                 gib(e.contact_bytes),
                 if e.schur_bytes > 0.0 {
-                    format!("; the setup of W by the Schur complement holds {} more", gib(e.schur_bytes))
+                    format!(
+                        "; W from the solves, as the Schur complement's setup would hold {} more",
+                        gib(e.schur_bytes)
+                    )
                 } else {
                     String::new()
                 },

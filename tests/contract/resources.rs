@@ -142,6 +142,15 @@ fn check_states_the_velocity_form_cost() {
     // 936 contact unknowns, responses too large to keep: W from the Schur complement, and the
     // estimate counts its second factor
     assert!(e.schur_bytes > 0.0 && e.schur_setup_bytes() <= e.total(), "{e:?}");
+    // the guard refuses by what the run needs without the Schur setup (taken only if it fits):
+    // at 64×32×24 (estimated 7.0 GiB with it, 3.8 GiB without) a machine with memory between
+    // the two runs it
+    let set = dyncontact::overrides::Override::parse("domain.cells=[64,32,24]").expect("override");
+    let big = Scene::from_file_with(&root.join("fixtures/scenes/academic3d.toml"), &[set]).expect("scene");
+    let big = estimate(&big.validate().expect("valid"), &root.join("fixtures/scenes")).expect("estimate");
+    assert!(big.required() < big.total(), "{big:?}");
+    check_fits(&big, Some(0.5 * (big.required() + big.total()))).expect("fits without the Schur setup");
+    assert!(check_fits(&big, Some(0.9 * big.required())).is_err(), "below what the solves need");
     assert!(text.lines().any(|l| l.contains("contact setup") && l.contains("Schur complement")), "{text}");
     let o = Command::new(BIN).arg("check").arg(root.join("fixtures/scenes/academic.toml")).output().expect("check");
     let text = String::from_utf8_lossy(&o.stdout);

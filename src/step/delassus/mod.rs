@@ -182,7 +182,8 @@ pub struct Built {
 /// of at least [`SCHUR_FROM`](crate::defaults::SCHUR_FROM) components whose responses are not
 /// kept comes from the Schur complement of A_k on the contact unknowns (one more sparse
 /// factorization instead of d n_c solve pairs; W and W⁻¹ agree with the solves' to round-off),
-/// falling back to the solves if that factorization fails.
+/// falling back to the solves if that factorization fails or its second factor would not fit
+/// in 90% of the memory available.
 pub fn build_with_responses(
     a: &Cholesky,
     matrix: Option<&crate::linalg::SpMat>,
@@ -209,12 +210,18 @@ pub fn build_with_responses(
     let keep = 8.0 * a.dim() as f64 * m as f64 <= crate::defaults::RESPONSES_BYTES;
     if !keep
         && m >= crate::defaults::SCHUR_FROM
-        && let Some((w, winv)) = matrix.and_then(|k| delassus_pair(k, contact))
+        && let Some((w, winv)) = matrix.and_then(|k| delassus_pair(k, contact, schur_budget()))
     {
         return Built { w: Delassus::Dense(w), responses: None, winv: Some(winv), route: "schur" };
     }
     let (w, g) = dense_with_responses(a, contact, keep);
     Built { w: Delassus::Dense(w), responses: g, winv: None, route: "solves" }
+}
+
+/// The memory the Schur route may take: 90% of what the system has available now (beside the
+/// factor of A_k already held), or no limit where the system does not say.
+fn schur_budget() -> Option<f64> {
+    crate::resources::available_memory().map(|b| 0.9 * b)
 }
 
 /// The dense W (d n_c × d n_c, symmetric positive definite), components (ν_1, τ_1, …, ν_2, τ_2, …):

@@ -29,9 +29,11 @@ use crate::model::contact::ContactModel;
 
 /// W and W⁻¹ (dense, m × m, contact components (ν_1, τ_1, …)) of A_k `a` and the contact
 /// model, by the Schur complement (see the module's doc); None when a factorization fails
-/// (A_k not positive definite in floating point, or memory).
-pub fn delassus_pair(a: &SpMat, contact: &ContactModel) -> Option<(Mat<f64>, Mat<f64>)> {
-    let l_cc = contact_block_of_factor(a, &contact.dofs)?;
+/// (A_k not positive definite in floating point, or memory), or when the second factor and
+/// three m × m matrices (their exact size is known after the symbolic factorization) would
+/// exceed `budget` bytes — the caller then takes the solves, which need no second factor.
+pub fn delassus_pair(a: &SpMat, contact: &ContactModel, budget: Option<f64>) -> Option<(Mat<f64>, Mat<f64>)> {
+    let l_cc = contact_block_of_factor(a, &contact.dofs, budget)?;
     let m = l_cc.nrows();
     let par = faer::get_global_parallelism();
     // S = L_CC L_CCᵀ (lower triangle), then mirrored
@@ -122,7 +124,7 @@ fn rotate(x: MatRef<'_, f64>, contact: &ContactModel) -> Mat<f64> {
 /// order), the others keeping their relative order. (Measured on academic3d 48×24×16: the
 /// factor holds 104 M entries this way against 115 M with the interior ordered by the
 /// minimum degree of A_II alone, and 62 M without the constraint.)
-pub fn contact_block_of_factor(a: &SpMat, last: &[usize]) -> Option<Mat<f64>> {
+pub fn contact_block_of_factor(a: &SpMat, last: &[usize], budget: Option<f64>) -> Option<Mat<f64>> {
     let n = a.nrows();
     let m = last.len();
     let n_i = n - m;
@@ -156,6 +158,10 @@ pub fn contact_block_of_factor(a: &SpMat, last: &[usize]) -> Option<Mat<f64>> {
         params,
     )
     .ok()?;
+    let needed = 8.0 * (symbolic.len_val() as f64 + 3.0 * (m as f64) * (m as f64));
+    if budget.is_some_and(|b| needed > b) {
+        return None;
+    }
     let par = faer::get_global_parallelism();
     let mut values = Vec::new();
     values.try_reserve_exact(symbolic.len_val()).ok()?;
