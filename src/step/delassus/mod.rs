@@ -22,11 +22,13 @@
 mod cg;
 mod factors;
 mod frames;
+mod hmatrix;
 mod inverse;
 mod schur;
 mod sparse;
 
 pub use factors::{DelassusFactors, FactorCounts, FactorKey};
+pub use hmatrix::HMatrix;
 pub use frames::SlipFrames;
 pub use inverse::InverseDelassus;
 pub use schur::{contact_block_of_factor, delassus_pair};
