@@ -144,6 +144,13 @@ pub const NEAR_FIELD_FROM: usize = 1200;
 pub const SCHUR_FROM: usize = 512;
 /// … and a direction falls back to the force form when its solve needs more than this many.
 pub const VELOCITY_FORM_MAX_ITERATIONS: usize = 60;
+/// The products with W⁻¹ in the velocity form go through its hierarchical form
+/// (`delassus::HMatrix`) from this many contact unknowns on.
+pub const HMATRIX_FROM: usize = 2400;
+/// … compressed to every entry within this fraction of max|W⁻¹|.
+pub const HMATRIX_TOLERANCE: f64 = 1e-12;
+/// … and W, for the momentum residual (N.1), to every entry within this fraction of max|W|.
+pub const HMATRIX_TOLERANCE_W: f64 = 1e-14;
 
 /// (R.1) A contact node's mass is not moved onto a neighbour in a way that leaves the neighbour
 /// with less than this share of its own lumped mass: that neighbour is left out of the

@@ -292,7 +292,17 @@ impl<'p> Simulation<'p> {
                     &positions,
                     problem.model.solver.contact_solve,
                 );
-                let inverse = delassus::InverseDelassus::new(&built.w, c.dim, built.winv);
+                let inverse = delassus::InverseDelassus::new(&built.w, c.dim, built.winv).map(|i| {
+                    if i.winv.nrows() >= crate::defaults::HMATRIX_FROM {
+                        i.compressed(&positions, crate::defaults::HMATRIX_TOLERANCE).with_compressed_w(
+                            &built.w,
+                            &positions,
+                            crate::defaults::HMATRIX_TOLERANCE_W,
+                        )
+                    } else {
+                        i
+                    }
+                });
                 delassus_route = built.route;
                 (Some(built.w), built.responses, inverse)
             }

@@ -202,10 +202,13 @@ impl StepData<'_> {
         }
         r
     }
-    /// y_free − W r.
+    /// y_free − W r (through W's hierarchical form where the velocity form keeps one).
     pub fn response(&self, r: &[f64]) -> Vec<f64> {
         let mut y = self.y_free.clone();
-        self.delassus.add_times(r, -1.0, &mut y);
+        match self.inverse.and_then(|i| i.hierarchical_w()) {
+            Some(h) => y.iter_mut().zip(h.apply(r)).for_each(|(y, wr)| *y -= wr),
+            None => self.delassus.add_times(r, -1.0, &mut y),
+        }
         y
     }
     /// A velocity scale for relative tests: the largest of the free velocity, `y`, and the
