@@ -49,7 +49,7 @@ pub struct ThickRow {
     pub cells: [i64; 3],
     pub unknowns: usize,
     pub contact_nodes: usize,
-    /// "near field" or "node blocks"
+    /// one of FORMS
     pub form: &'static str,
     pub steps: usize,
     /// per step, seconds: [min, median]
@@ -68,6 +68,8 @@ pub struct ThickRow {
     pub cg_iterations: usize,
     /// the share of W⁻¹'s entries in its near field
     pub near_density: f64,
+    /// the values the hierarchical form stores against m² (NaN in the dense forms)
+    pub h_share: f64,
     /// the process's peak resident memory after the run, MB
     pub peak_mb: f64,
 }
@@ -89,21 +91,43 @@ fn min_median(mut v: Vec<f64>) -> [f64; 2] {
     if v.is_empty() { [f64::NAN; 2] } else { [v[0], v[v.len() / 2]] }
 }
 
-/// One run: `near` keeps the near-field preconditioner, else node blocks only.
-fn measure(p: &Problem, cells: [i64; 3], near: bool) -> Result<ThickRow> {
+/// The forms a box runs in: W⁻¹'s and W's products through their hierarchical forms with the
+/// near-field preconditioner (`auto`'s from HMATRIX_FROM components on; forced here at every
+/// size so the slope spans the family), the dense products with the near field, node blocks
+/// (dense).
+pub const FORMS: [&str; 3] = ["hierarchical", "near field", "node blocks"];
+
+/// One run in `form` (one of FORMS).
+fn measure(p: &Problem, cells: [i64; 3], form: &'static str) -> Result<ThickRow> {
     let clock = Instant::now();
     let mut sim = Simulation::new(p)?;
     let _setup = clock.elapsed();
-    sim.inverse = sim.inverse.take().map(|i| if near { i.with_near_field() } else { i.without_near_field() });
+    let near = form != "node blocks";
+    let positions: Vec<[f64; 3]> =
+        p.contact.as_ref().map_or(Vec::new(), |c| c.nodes.iter().map(|&i| p.mesh.point(i)).collect());
+    let w = sim.delassus.take();
+    sim.inverse = sim.inverse.take().map(|i| {
+        let i = if near { i.with_near_field() } else { i.without_near_field() };
+        if let (true, Some(w)) = (form == "hierarchical", w.as_ref()) {
+            i.compressed(&positions, dyncontact::defaults::HMATRIX_TOLERANCE).with_compressed_w(
+                w,
+                &positions,
+                dyncontact::defaults::HMATRIX_TOLERANCE_W,
+            )
+        } else {
+            i.without_compression()
+        }
+    });
+    sim.delassus = w;
+    let h_share = sim.inverse.as_ref().and_then(|i| i.hierarchical()).map_or(f64::NAN, |h| h.storage_share());
     let near_density = sim.inverse.as_ref().map_or(0.0, |i| i.near_field_density());
     if sim.inverse.is_none() {
         return Err(Error::Study(format!("thick: {cells:?} does not run in velocity form")));
     }
     let t = sim.setup_timing;
     // the route before: W by the solves, then its Cholesky inverse (timed, then dropped)
-    let delassus_solves = match (near, p.contact.as_ref()) {
+    let delassus_solves = match (form == FORMS[0], p.contact.as_ref()) {
         (true, Some(c)) => {
-            let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| p.mesh.point(i)).collect();
             let clock = Instant::now();
             let built = dyncontact::step::delassus::build_with_responses(
                 sim.stepper.factor(),
@@ -131,7 +155,8 @@ fn measure(p: &Problem, cells: [i64; 3], near: bool) -> Result<ThickRow> {
         cells,
         unknowns: p.dofs.n_free,
         contact_nodes: p.contact.as_ref().map_or(0, |c| c.n()),
-        form: if near { "near field" } else { "node blocks" },
+        form,
+        h_share,
         steps: free.len(),
         free: min_median(free),
         contact: min_median(contact),
@@ -147,20 +172,14 @@ fn measure(p: &Problem, cells: [i64; 3], near: bool) -> Result<ThickRow> {
     })
 }
 
-/// Every box, near field then node blocks.
+/// Every box in every form.
 pub fn run(plan: &ThickPlan, progress: &dyn Fn(&str)) -> Result<Vec<ThickRow>> {
     let mut rows = Vec::new();
     for &cells in &plan.boxes {
         let p = Problem::from_scene(&scene(cells, plan.steps)?, Path::new("."))?;
-        for near in [true, false] {
-            progress(&format!(
-                "thick: {}x{}x{}, {}",
-                cells[0],
-                cells[1],
-                cells[2],
-                if near { "near field" } else { "node blocks" }
-            ));
-            rows.push(measure(&p, cells, near)?);
+        for form in FORMS {
+            progress(&format!("thick: {}x{}x{}, {form}", cells[0], cells[1], cells[2]));
+            rows.push(measure(&p, cells, form)?);
         }
     }
     Ok(rows)
@@ -170,7 +189,7 @@ pub fn run(plan: &ThickPlan, progress: &dyn Fn(&str)) -> Result<Vec<ThickRow>> {
 pub fn csv(rows: &[ThickRow]) -> String {
     csv_table(
         "cells,unknowns,contact_nodes,form,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
-contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_by_solves_s,newton_iterations,cg_iterations,near_density,peak_mb",
+contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_by_solves_s,newton_iterations,cg_iterations,near_density,h_share,peak_mb",
         rows.iter().map(|r| {
             vec![
                 format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
@@ -191,6 +210,7 @@ contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_
                 r.newton_iterations.to_string(),
                 r.cg_iterations.to_string(),
                 format!("{:.4}", r.near_density),
+                if r.h_share.is_nan() { String::new() } else { format!("{:.4}", r.h_share) },
                 format!("{:.0}", r.peak_mb),
             ]
         }),
@@ -211,7 +231,11 @@ pub fn slope(rows: &[ThickRow], form: &str) -> f64 {
 pub fn svg(rows: &[ThickRow], plan: &ThickPlan) -> Result<String> {
     let series = vec![
         LogSeries {
-            name: "contact solve, near-field preconditioner".into(),
+            name: "contact solve, hierarchical W⁻¹ + near field".into(),
+            points: points(rows, "hierarchical", |r| r.contact[1]),
+        },
+        LogSeries {
+            name: "contact solve, dense W⁻¹ + near field (before)".into(),
             points: points(rows, "near field", |r| r.contact[1]),
         },
         LogSeries {
@@ -229,7 +253,7 @@ pub fn report(rows: &[ThickRow]) -> String {
     let mut s = String::from("thick 3-D boxes (academic3d refined, velocity form): per step min / median\n");
     let _ = writeln!(
         s,
-        "{:>10} {:>8} {:>6} {:<12} {:>17} {:>19} {:>8} {:>10} {:>17} {:>8} {:>8} {:>7}",
+        "{:>10} {:>8} {:>6} {:<13} {:>17} {:>19} {:>8} {:>10} {:>17} {:>8} {:>8} {:>7}",
         "cells",
         "unknowns",
         "n_c",
@@ -246,7 +270,7 @@ pub fn report(rows: &[ThickRow]) -> String {
     for r in rows {
         let _ = writeln!(
             s,
-            "{:>10} {:>8} {:>6} {:<12} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>4.1}+{:<5.1} {:>7} ({:>7.1}) {:>8} {:>8} {:>7.0}",
+            "{:>10} {:>8} {:>6} {:<13} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>4.1}+{:<5.1} {:>7} ({:>7.1}) {:>8} {:>8} {:>7.0}",
             format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
             r.unknowns,
             r.contact_nodes,
@@ -267,7 +291,8 @@ pub fn report(rows: &[ThickRow]) -> String {
     }
     let _ = writeln!(
         s,
-        "median contact solve per step against n_c: log–log slope {:.2} with the near field, {:.2} with node blocks",
+        "median contact solve per step against n_c: log–log slope {:.2} hierarchical, {:.2} with the near field, {:.2} with node blocks",
+        slope(rows, "hierarchical"),
         slope(rows, "near field"),
         slope(rows, "node blocks")
     );
