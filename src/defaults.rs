@@ -144,9 +144,14 @@ pub const NEAR_FIELD_FROM: usize = 1200;
 pub const SCHUR_FROM: usize = 512;
 /// … and a direction falls back to the force form when its solve needs more than this many.
 pub const VELOCITY_FORM_MAX_ITERATIONS: usize = 60;
-/// The products with W⁻¹ in the velocity form go through its hierarchical form
-/// (`delassus::HMatrix`) from this many contact unknowns on.
-pub const HMATRIX_FROM: usize = 2400;
+/// The products with W⁻¹ and W in the velocity form go through their hierarchical forms
+/// (`delassus::HMatrix`) from this many contact unknowns on, where the near field preconditions
+/// (NEAR_FIELD_FROM). Measured on academic3d, median contact solve per pressing step, this
+/// 2-core machine (`cargo xtask bench --thick-only`): 936 components (24×12×8) 6.7 ms against
+/// 4.5 with the dense products and node blocks (the dense form stays below); 1,632 (32×16×12)
+/// 22.5 against 35.3; 3,600 (48×24×16) 99.2 against 216.7; 6,336 (64×32×24) 279.6 against 861.9.
+/// Of the pinned fixtures only hertz3d (1,875 components) takes it (CHANGELOG, pin 12).
+pub const HMATRIX_FROM: usize = 1200;
 /// … compressed to every entry within this fraction of max|W⁻¹|.
 pub const HMATRIX_TOLERANCE: f64 = 1e-12;
 /// … and W, for the momentum residual (N.1), to every entry within this fraction of max|W|.

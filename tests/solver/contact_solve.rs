@@ -297,7 +297,7 @@ fn a_run_with_the_hierarchical_inverse_takes_the_steps_of_the_dense_one() {
     assert!(linalg::norm_inf(&a.state.t_fric) > 0.0, "friction acted");
 }
 
-/// (S.6) A run compresses W⁻¹ where it should: a dense W of ≥ HMATRIX_FROM (2,400) components
+/// (S.6) A run compresses W⁻¹ where it should: a dense W of ≥ HMATRIX_FROM (1,200) components
 /// in velocity form — a wide, thin academic3d box (40×20×2 cells: 861 contact nodes, 2,583
 /// unknowns, cheap to factor) with the dense form asked for — and its first 3 steps are those of
 /// the dense products to Newton's tolerance (the bounds of the test above).
