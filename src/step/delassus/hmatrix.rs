@@ -15,8 +15,9 @@
 //! entry is within ε max|W⁻¹| of W⁻¹'s, and for any x, ‖(H − W⁻¹) x‖_∞ ≤ ε max|W⁻¹| ‖x‖₁: the
 //! bound `tests` check. A block whose factors would not be smaller than it stays dense.
 //!
-//! Written by hand: no maintained Rust crate offers H-matrices (the C++ and Julia ones — H2Lib,
-//! HLIBpro, HMatrices.jl — are the references this follows).
+//! Written by hand (README, design notes): scirs2-linalg's H-matrix module works on ndarray and
+//! brings SciRS2's dependency tree; the C++ and Julia libraries (H2Lib, HLIBpro, HMatrices.jl)
+//! are the references this follows.
 
 use faer::{Accum, Mat, MatRef, Par};
 
