@@ -669,9 +669,11 @@ fn hierarchical_delassus_gives_the_dense_step_solutions() {
     let w = sim0.delassus.take().expect("a dense W");
     let inverse = sim0.inverse.take().expect("velocity form");
     assert!(inverse.hierarchical().is_none(), "dense products below HMATRIX_FROM");
-    let inverse = inverse
-        .compressed(&positions, dyncontact::defaults::HMATRIX_TOLERANCE)
-        .with_compressed_w(&w, &positions, dyncontact::defaults::HMATRIX_TOLERANCE_W);
+    let inverse = inverse.compressed(&positions, dyncontact::defaults::HMATRIX_TOLERANCE).with_compressed_w(
+        &w,
+        &positions,
+        dyncontact::defaults::HMATRIX_TOLERANCE_W,
+    );
     let share = inverse.hierarchical().map(|h| h.storage_share()).expect("compressed");
     assert!(inverse.hierarchical_w().is_some(), "W compressed too");
     let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);

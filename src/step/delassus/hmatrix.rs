@@ -43,10 +43,7 @@ impl Cluster {
         (0..3).map(|k| (self.hi[k] - self.lo[k]).powi(2)).sum::<f64>().sqrt()
     }
     fn dist(&self, other: &Cluster) -> f64 {
-        (0..3)
-            .map(|k| (self.lo[k] - other.hi[k]).max(other.lo[k] - self.hi[k]).max(0.0).powi(2))
-            .sum::<f64>()
-            .sqrt()
+        (0..3).map(|k| (self.lo[k] - other.hi[k]).max(other.lo[k] - self.hi[k]).max(0.0).powi(2)).sum::<f64>().sqrt()
     }
 }
 
@@ -83,7 +80,8 @@ impl HMatrix {
             cluster(&mut nodes, positions, 0, &mut tree);
         }
         let order: Vec<usize> = nodes.iter().flat_map(|&i| (0..dim).map(move |k| dim * i + k)).collect();
-        let max_entry = (0..m).flat_map(|j| (0..m).map(move |i| (i, j))).fold(0.0f64, |s, (i, j)| s.max(a[(i, j)].abs()));
+        let max_entry =
+            (0..m).flat_map(|j| (0..m).map(move |i| (i, j))).fold(0.0f64, |s, (i, j)| s.max(a[(i, j)].abs()));
         let eps = tolerance * max_entry;
         // the pairs of clusters, on and above the diagonal
         let mut pairs = Vec::new();
@@ -154,18 +152,46 @@ impl HMatrix {
             match block {
                 Block::Dense { rows, cols, b } => {
                     let (x_cols, x_rows) = (xp.subrows(cols.start, cols.len()), xp.subrows(rows.start, rows.len()));
-                    faer::linalg::matmul::matmul(yp.subrows_mut(rows.start, rows.len()), Accum::Add, b.as_ref(), x_cols, 1.0, Par::Seq);
+                    faer::linalg::matmul::matmul(
+                        yp.subrows_mut(rows.start, rows.len()),
+                        Accum::Add,
+                        b.as_ref(),
+                        x_cols,
+                        1.0,
+                        Par::Seq,
+                    );
                     if rows != cols {
-                        faer::linalg::matmul::matmul(yp.subrows_mut(cols.start, cols.len()), Accum::Add, b.transpose(), x_rows, 1.0, Par::Seq);
+                        faer::linalg::matmul::matmul(
+                            yp.subrows_mut(cols.start, cols.len()),
+                            Accum::Add,
+                            b.transpose(),
+                            x_rows,
+                            1.0,
+                            Par::Seq,
+                        );
                     }
                 }
                 Block::LowRank { rows, cols, u, v } => {
                     // y_rows += U (Vᵀ x_cols), y_cols += V (Uᵀ x_rows)
                     let (x_cols, x_rows) = (xp.subrows(cols.start, cols.len()), xp.subrows(rows.start, rows.len()));
                     let t = v.transpose() * x_cols;
-                    faer::linalg::matmul::matmul(yp.subrows_mut(rows.start, rows.len()), Accum::Add, u.as_ref(), t.as_ref(), 1.0, Par::Seq);
+                    faer::linalg::matmul::matmul(
+                        yp.subrows_mut(rows.start, rows.len()),
+                        Accum::Add,
+                        u.as_ref(),
+                        t.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
                     let s = u.transpose() * x_rows;
-                    faer::linalg::matmul::matmul(yp.subrows_mut(cols.start, cols.len()), Accum::Add, v.as_ref(), s.as_ref(), 1.0, Par::Seq);
+                    faer::linalg::matmul::matmul(
+                        yp.subrows_mut(cols.start, cols.len()),
+                        Accum::Add,
+                        v.as_ref(),
+                        s.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
                 }
             }
         }

@@ -10,8 +10,8 @@ use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, MatMut, MatRef, Par, Side};
 
 use super::Delassus;
-use super::hmatrix::HMatrix;
 use super::cg::conjugate_gradients;
+use super::hmatrix::HMatrix;
 
 /// W⁻¹ of a dense Delassus operator, for Newton directions in velocity form (see
 /// `newton::velocity_direction`): with the prescribed components' velocities known, the

@@ -28,8 +28,8 @@ mod schur;
 mod sparse;
 
 pub use factors::{DelassusFactors, FactorCounts, FactorKey};
-pub use hmatrix::HMatrix;
 pub use frames::SlipFrames;
+pub use hmatrix::HMatrix;
 pub use inverse::InverseDelassus;
 pub use schur::{contact_block_of_factor, delassus_pair};
 pub use sparse::{Probe, SparseDelassus, SparseStats, sparse};

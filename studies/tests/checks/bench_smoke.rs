@@ -52,15 +52,21 @@ fn quick_bench_writes_its_files() {
         bench::run(&dir, &BenchOptions { quick: true, ..BenchOptions::default() }).expect("the quick benchmark runs");
     assert!(report.contains("work–precision") && report.contains("race"), "{report}");
 
-    // the thick 3-D boxes: both preconditioners on every box, in velocity form (a near field
-    // keeping a small share of W⁻¹ in the near-field rows, none in the node-block rows)
+    // the thick 3-D boxes: the three forms on every box, in velocity form (a near field keeping
+    // a small share of W⁻¹ in the hierarchical and near-field rows, none in the node-block rows;
+    // the hierarchical rows store less than the dense W⁻¹, the others nothing of the kind)
     let (_, rows) = read_csv(&dir.join("thick.csv"));
-    assert_eq!(rows.len(), 2 * 2, "two boxes × two preconditioners");
+    assert_eq!(rows.len(), 2 * 3, "two boxes × three forms");
     for r in &rows {
         let density = number(r, "near_density");
         match r["form"].as_str() {
-            "near field" => assert!(density > 0.0 && density < 0.5, "{r:?}"),
-            "node blocks" => assert_eq!(density, 0.0, "{r:?}"),
+            "hierarchical" => {
+                assert!(density > 0.0 && density < 0.5, "{r:?}");
+                let share = number(r, "h_share");
+                assert!(share > 0.0 && share <= 1.0, "{r:?}");
+            }
+            "near field" => assert!(density > 0.0 && density < 0.5 && r["h_share"].is_empty(), "{r:?}"),
+            "node blocks" => assert!(density == 0.0 && r["h_share"].is_empty(), "{r:?}"),
             other => panic!("form {other}"),
         }
         assert!(number(r, "cg_iterations") > 0.0 && number(r, "contact_median_s") > 0.0, "{r:?}");
