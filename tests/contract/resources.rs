@@ -122,8 +122,8 @@ fn memory_estimate_is_within_30_percent_of_the_measured_peak() {
 
 /// (issue 25) `check` states the contact solve's cost in the form the run takes: on academic3d
 /// (3-D, ~940 contact unknowns: the velocity form) about VELOCITY_PRODUCTS dense products of 2m²
-/// flop per Newton iteration, not a dense Cholesky's m³/3; on the 2-D academic scene the
-/// Cholesky bound.
+/// flop per Newton iteration, not a dense Cholesky's m³/3; refined to 48×24×16 (3,600
+/// unknowns, the hierarchical forms) at most that; on the 2-D academic scene the Cholesky bound.
 #[test]
 fn check_states_the_velocity_form_cost() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -152,6 +152,21 @@ fn check_states_the_velocity_form_cost() {
     check_fits(&big, Some(0.5 * (big.required() + big.total()))).expect("fits without the Schur setup");
     assert!(check_fits(&big, Some(0.9 * big.required())).is_err(), "below what the solves need");
     assert!(text.lines().any(|l| l.contains("contact setup") && l.contains("Schur complement")), "{text}");
+    // from HMATRIX_FROM contact unknowns on (48×24×16: 3,600) the products go through the
+    // hierarchical W and W⁻¹, so the dense products' flop are a bound ("at most")
+    let o = Command::new(BIN)
+        .arg("check")
+        .arg(root.join("fixtures/scenes/academic3d.toml"))
+        .args(["--set", "domain.cells=[48,24,16]"])
+        .output()
+        .expect("check");
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.lines().any(|l| l.trim_start().starts_with("cost per step")
+            && l.contains("at most")
+            && l.contains("hierarchical W or W⁻¹")),
+        "{text}"
+    );
     let o = Command::new(BIN).arg("check").arg(root.join("fixtures/scenes/academic.toml")).output().expect("check");
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(
