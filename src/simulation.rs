@@ -293,15 +293,7 @@ impl<'p> Simulation<'p> {
                     problem.model.solver.contact_solve,
                 );
                 let inverse = delassus::InverseDelassus::new(&built.w, c.dim, built.winv).map(|i| {
-                    if i.winv.nrows() >= crate::defaults::HMATRIX_FROM {
-                        i.compressed(&positions, crate::defaults::HMATRIX_TOLERANCE).with_compressed_w(
-                            &built.w,
-                            &positions,
-                            crate::defaults::HMATRIX_TOLERANCE_W,
-                        )
-                    } else {
-                        i
-                    }
+                    if i.winv.nrows() >= crate::defaults::HMATRIX_FROM { i.compressed(&built.w, &positions) } else { i }
                 });
                 delassus_route = built.route;
                 (Some(built.w), built.responses, inverse)

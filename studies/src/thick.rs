@@ -109,11 +109,7 @@ fn measure(p: &Problem, cells: [i64; 3], form: &'static str) -> Result<ThickRow>
     sim.inverse = sim.inverse.take().map(|i| {
         let i = if near { i.with_near_field() } else { i.without_near_field() };
         if let (true, Some(w)) = (form == "hierarchical", w.as_ref()) {
-            i.compressed(&positions, dyncontact::defaults::HMATRIX_TOLERANCE).with_compressed_w(
-                w,
-                &positions,
-                dyncontact::defaults::HMATRIX_TOLERANCE_W,
-            )
+            i.compressed(w, &positions)
         } else {
             i.without_compression()
         }

@@ -584,6 +584,45 @@ fn near_field_preconditioner_gives_the_node_block_solution() {
     assert!(ia.velocity_iterations < ib.velocity_iterations, "the near field saves iterations");
 }
 
+/// Each step of `p`'s run, its frozen problem solved to `set` with the run's own operators and
+/// with `w` and `inverse` instead: the largest differences of the velocities (of the velocity
+/// scale) and of the forces (of the largest force), the statuses seen, and the counts of the
+/// solves with `inverse`.
+fn against_the_run(
+    p: &Problem,
+    w: &dyncontact::step::delassus::Delassus,
+    inverse: &dyncontact::step::delassus::InverseDelassus,
+    set: NewtonSettings,
+) -> (f64, f64, std::collections::BTreeSet<String>, DelassusFactors) {
+    let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);
+    let (mut fa, mut fb) = (DelassusFactors::default(), DelassusFactors::default());
+    let mut statuses = std::collections::BTreeSet::new();
+    common::each_frozen_step(p, usize::MAX, set, |sim, data, _, s, _| {
+        let other = StepData {
+            delassus: w,
+            y_free: data.y_free.clone(),
+            nodes: data.nodes.clone(),
+            a_d: data.a_d,
+            a_v: data.a_v,
+            force_rule: data.force_rule,
+            law: data.law,
+            friction: data.friction,
+            dim: data.dim,
+            inverse: Some(inverse),
+        };
+        let a = newton::solve(&other, &mut fa, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("with `inverse`");
+        let b = newton::solve(data, &mut fb, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("the run's");
+        statuses.extend(a.status.iter().map(|st| format!("{st:?}")));
+        let ra = other.forces(&a.y, &a.lambda, &a.t);
+        if linalg::norm_inf(&ra) > 0.0 {
+            let vs = data.velocity_scale(&a.y).max(1e-300);
+            worst_v = worst_v.max(rel(&a.y, &b.y, vs));
+            worst_f = worst_f.max(rel(&ra, &data.forces(&b.y, &b.lambda, &b.t), linalg::norm_inf(&ra)));
+        }
+    });
+    (worst_v, worst_f, statuses, fa)
+}
+
 /// (S.6) The velocity form with W and W⁻¹ from the Schur complement of A_k on the contact
 /// unknowns (`delassus::delassus_pair`; a run takes it from SCHUR_FROM components on, forced here)
 /// gives the step solutions of W from the solves: on academic3d at 12×8×4 cells over 0.3 s
@@ -606,32 +645,7 @@ fn schur_delassus_gives_the_solves_step_solutions() {
         .expect("the Schur complement");
     let w = dyncontact::step::delassus::Delassus::Dense(w);
     let inverse = dyncontact::step::delassus::InverseDelassus::new(&w, c.dim, Some(winv)).expect("W⁻¹");
-    let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);
-    let (mut fa, mut fb) = (DelassusFactors::default(), DelassusFactors::default());
-    let mut statuses = std::collections::BTreeSet::new();
-    common::each_frozen_step(&p, usize::MAX, set, |sim, data, _, s, _| {
-        let other = StepData {
-            delassus: &w,
-            y_free: data.y_free.clone(),
-            nodes: data.nodes.clone(),
-            a_d: data.a_d,
-            a_v: data.a_v,
-            force_rule: data.force_rule,
-            law: data.law,
-            friction: data.friction,
-            dim: data.dim,
-            inverse: Some(&inverse),
-        };
-        let a = newton::solve(&other, &mut fa, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("Schur");
-        let b = newton::solve(data, &mut fb, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("solves");
-        statuses.extend(a.status.iter().map(|st| format!("{st:?}")));
-        let ra = other.forces(&a.y, &a.lambda, &a.t);
-        if linalg::norm_inf(&ra) > 0.0 {
-            let vs = data.velocity_scale(&a.y).max(1e-300);
-            worst_v = worst_v.max(rel(&a.y, &b.y, vs));
-            worst_f = worst_f.max(rel(&ra, &data.forces(&b.y, &b.lambda, &b.t), linalg::norm_inf(&ra)));
-        }
-    });
+    let (worst_v, worst_f, statuses, fa) = against_the_run(&p, &w, &inverse, set);
     println!(
         "Schur vs solves: worst per-step difference: velocity {worst_v:.3e}, force {worst_f:.3e}; statuses {statuses:?}"
     );
@@ -647,7 +661,7 @@ fn schur_delassus_gives_the_solves_step_solutions() {
 }
 
 /// (S.6) The velocity form with W⁻¹'s and W's products through their hierarchical forms
-/// (`InverseDelassus::compressed`, `with_compressed_w`; a run takes them from HMATRIX_FROM
+/// (`InverseDelassus::compressed`; a run takes them from HMATRIX_FROM
 /// components on, forced here below it) gives the step solutions of the dense products: on
 /// academic3d at 22×16×2 cells (391 contact nodes, 1,173 components, cheap to factor; the dense W
 /// asked for) over 0.3 s (slip, stick and separation), each step's frozen problem
@@ -669,39 +683,10 @@ fn hierarchical_delassus_gives_the_dense_step_solutions() {
     let w = sim0.delassus.take().expect("a dense W");
     let inverse = sim0.inverse.take().expect("velocity form");
     assert!(inverse.hierarchical().is_none(), "dense products below HMATRIX_FROM");
-    let inverse = inverse.compressed(&positions, dyncontact::defaults::HMATRIX_TOLERANCE).with_compressed_w(
-        &w,
-        &positions,
-        dyncontact::defaults::HMATRIX_TOLERANCE_W,
-    );
+    let inverse = inverse.compressed(&w, &positions);
     let share = inverse.hierarchical().map(|h| h.storage_share()).expect("compressed");
     assert!(inverse.hierarchical_w().is_some(), "W compressed too");
-    let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);
-    let (mut fa, mut fb) = (DelassusFactors::default(), DelassusFactors::default());
-    let mut statuses = std::collections::BTreeSet::new();
-    common::each_frozen_step(&p, usize::MAX, set, |sim, data, _, s, _| {
-        let other = StepData {
-            delassus: &w,
-            y_free: data.y_free.clone(),
-            nodes: data.nodes.clone(),
-            a_d: data.a_d,
-            a_v: data.a_v,
-            force_rule: data.force_rule,
-            law: data.law,
-            friction: data.friction,
-            dim: data.dim,
-            inverse: Some(&inverse),
-        };
-        let a = newton::solve(&other, &mut fa, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("hierarchical");
-        let b = newton::solve(data, &mut fb, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("dense");
-        statuses.extend(a.status.iter().map(|st| format!("{st:?}")));
-        let ra = other.forces(&a.y, &a.lambda, &a.t);
-        if linalg::norm_inf(&ra) > 0.0 {
-            let vs = data.velocity_scale(&a.y).max(1e-300);
-            worst_v = worst_v.max(rel(&a.y, &b.y, vs));
-            worst_f = worst_f.max(rel(&ra, &data.forces(&b.y, &b.lambda, &b.t), linalg::norm_inf(&ra)));
-        }
-    });
+    let (worst_v, worst_f, statuses, fa) = against_the_run(&p, &w, &inverse, set);
     println!(
         "hierarchical ({share:.3} of W⁻¹'s values) vs dense: worst per-step difference: velocity {worst_v:.3e}, force {worst_f:.3e}; statuses {statuses:?}"
     );

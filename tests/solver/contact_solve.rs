@@ -272,13 +272,7 @@ fn a_run_with_the_hierarchical_inverse_takes_the_steps_of_the_dense_one() {
     assert!(a.inverse.as_ref().is_some_and(|i| i.hierarchical().is_none()), "dense products below HMATRIX_FROM");
     let mut b = Simulation::new(&p).expect("setup");
     let w = b.delassus.as_ref().expect("W");
-    b.inverse = b.inverse.take().map(|i| {
-        i.compressed(&positions, dyncontact::defaults::HMATRIX_TOLERANCE).with_compressed_w(
-            w,
-            &positions,
-            dyncontact::defaults::HMATRIX_TOLERANCE_W,
-        )
-    });
+    b.inverse = b.inverse.take().map(|i| i.compressed(w, &positions));
     assert!(b.inverse.as_ref().is_some_and(|i| i.hierarchical_w().is_some()), "W compressed too");
     let share = b.inverse.as_ref().and_then(|i| i.hierarchical()).map(|h| h.storage_share()).expect("compressed");
     let (mut worst_v, mut worst_l, mut newton) = (0.0f64, 0.0f64, [0usize; 2]);

@@ -67,21 +67,17 @@ impl InverseDelassus {
         Some(inv)
     }
 
-    /// The products with W⁻¹ through its hierarchical form (`HMatrix`), every entry within
-    /// `tolerance` · max|W⁻¹| of W⁻¹'s: m log m memory reads per product instead of m². Only
-    /// the Newton directions see it, so the step's solution is the same to the Newton
-    /// tolerance; `positions` are the contact nodes'.
-    pub fn compressed(mut self, positions: &[[f64; 3]], tolerance: f64) -> InverseDelassus {
-        self.h = Some(HMatrix::new(self.winv.as_ref(), self.dim, positions, tolerance));
-        self
-    }
-
-    /// The momentum residual's products with W (N.1) through W's hierarchical form too, every
-    /// entry within `tolerance` · max|W| of W's (a dense `w` only): the residual moves by at most
-    /// `tolerance` · max|W| ‖r‖₁, far below the Newton tolerance for `tolerance` near round-off.
-    pub fn with_compressed_w(mut self, w: &Delassus, positions: &[[f64; 3]], tolerance: f64) -> InverseDelassus {
+    /// The products with W⁻¹ and with W through their hierarchical forms (`HMatrix`; `positions`
+    /// are the contact nodes'): m log m memory reads per product instead of m².
+    /// - W⁻¹ to every entry within HMATRIX_TOLERANCE · max|W⁻¹|: only the Newton directions see
+    ///   it, so the step's solution is the same to the Newton tolerance;
+    /// - W (a dense `w` only), for the momentum residual (N.1), to every entry within
+    ///   HMATRIX_TOLERANCE_W · max|W|: the residual moves by at most that times ‖r‖₁, far below
+    ///   the Newton tolerance.
+    pub fn compressed(mut self, w: &Delassus, positions: &[[f64; 3]]) -> InverseDelassus {
+        self.h = Some(HMatrix::new(self.winv.as_ref(), self.dim, positions, crate::defaults::HMATRIX_TOLERANCE));
         if let Delassus::Dense(w) = w {
-            self.w_h = Some(HMatrix::new(w.as_ref(), self.dim, positions, tolerance));
+            self.w_h = Some(HMatrix::new(w.as_ref(), self.dim, positions, crate::defaults::HMATRIX_TOLERANCE_W));
         }
         self
     }
