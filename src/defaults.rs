@@ -133,6 +133,15 @@ pub const NEAR_FIELD_TOLERANCE: f64 = 1e-3;
 /// contact solve per step, pressing phase): 936 unknowns (academic3d 24×12×8) 5.9 ms against 4.8
 /// with node blocks; 1,632 (32×16×12) 45.9 against 50.7; 3,600 (48×24×16) 252 against 385.
 pub const NEAR_FIELD_FROM: usize = 1200;
+/// The velocity form keeps its near-field factor as CG's preconditioner for the next solves
+/// while the free set holds (Newton's iterations and the steps after), until a solve with it
+/// takes more than this many times the iterations it took when new. Measured (this 2-core
+/// machine, contact solve): hertz3d (1,875 components, 302 directions) 6.2–6.6 s → 4.8–5.1 s,
+/// outputs bit for bit, CG 3,322 iterations either way; academic3d at 32×16×12 over 0.3 s
+/// (pressing, then shaking) 67.6 → 61.0 s (CG 46,665 → 59,389, Newton 9,808 both); at 48×24×16,
+/// 40 pressing steps, 91 → 99 ms per step (CG 775 → 1,109: there the factorizations saved do
+/// not pay for the iterations added).
+pub const NEAR_FIELD_KEPT_SLOWDOWN: usize = 2;
 /// A dense W (whose responses A_k⁻¹ Hᵀ are not kept) comes from the Schur complement of A_k on
 /// the contact unknowns from this many components on, instead of d n_c solve pairs with the
 /// factor of A_k (`delassus::delassus_pair`). Measured on academic3d (W and W⁻¹ together, one

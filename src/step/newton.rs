@@ -664,6 +664,7 @@ fn velocity_direction(
     }
     let mut x = vec![0.0; m];
     let iterations = inverse.solve(
+        &mut factors.near,
         &free,
         &diag,
         &blocks,

@@ -62,6 +62,9 @@ pub struct FactorCounts {
 pub struct DelassusFactors {
     last: Option<Factor>,
     counts: FactorCounts,
+    /// the velocity form's near-field factor, kept as its CG preconditioner while the free
+    /// set holds (`InverseDelassus::solve`)
+    pub near: Option<super::inverse::KeptNear>,
 }
 
 struct Factor {

@@ -62,8 +62,16 @@ impl InverseDelassus {
         let free: Vec<usize> = (0..m).collect();
         let blocks = vec![None; m / dim];
         let mut x = vec![0.0; m];
-        inv.trial_iterations =
-            inv.solve(&free, &vec![0.0; m], &blocks, &b, 1e-10, crate::defaults::VELOCITY_FORM_TRIAL, &mut x)?;
+        inv.trial_iterations = inv.solve(
+            &mut None,
+            &free,
+            &vec![0.0; m],
+            &blocks,
+            &b,
+            1e-10,
+            crate::defaults::VELOCITY_FORM_TRIAL,
+            &mut x,
+        )?;
         Some(inv)
     }
 
@@ -153,14 +161,21 @@ impl InverseDelassus {
 
     /// Solve [(W⁻¹)_FF + Ĝ_F] x_F = b_F by conjugate gradients preconditioned with the
     /// Cholesky factor of the same matrix's near field (node blocks where that factor fails:
-    /// the near field of a matrix that is not positive definite), to the relative residual `tolerance` within `max_iterations`. F: the free
-    /// components (`free_list`; x and b are full-length, zero off F); Ĝ: `diag` per component
-    /// plus, per node, an optional 2 × 2 block on its tangential pair (3-D slip; it replaces the
-    /// diagonal there). The iterations, or None when the matrix showed a non-positive curvature
-    /// (not positive definite: N.4 beyond (C.k)) or the tolerance was not reached.
+    /// the near field of a matrix that is not positive definite), to the relative residual
+    /// `tolerance` within `max_iterations`. F: the free components (`free_list`; x and b are
+    /// full-length, zero off F); Ĝ: `diag` per component plus, per node, an optional 2 × 2 block
+    /// on its tangential pair (3-D slip; it replaces the diagonal there). `kept`: the near-field
+    /// factor of an earlier solve, tried first as the preconditioner while its F is this one
+    /// (Ĝ moves between Newton iterations and steps; a preconditioner need not follow it, and
+    /// the answer is CG's to `tolerance` either way); a new factor takes its place when CG does
+    /// not converge with it, and the next solve factors anew once it costs more than
+    /// NEAR_FIELD_KEPT_SLOWDOWN times the iterations it took when new. The iterations, or None
+    /// when the matrix showed a non-positive curvature (not positive definite: N.4 beyond
+    /// (C.k)) or the tolerance was not reached.
     #[allow(clippy::too_many_arguments)]
     pub fn solve(
         &self,
+        kept: &mut Option<KeptNear>,
         free_list: &[usize],
         diag: &[f64],
         blocks: &[Option<[[f64; 2]; 2]>],
@@ -176,8 +191,23 @@ impl InverseDelassus {
         }
         let op = VelocityMatrix { inverse: self, is_free: &is_free, free_list, diag, blocks };
         x.iter_mut().for_each(|v| *v = 0.0);
-        if let Some(prec) = self.near.as_ref().and_then(|n| n.factor(self, &is_free, diag, blocks)) {
-            return conjugate_gradients(&op, &prec, b, x, tolerance, max_iterations);
+        if let Some(near) = &self.near {
+            if let Some(k) = kept.as_ref().filter(|k| k.is_free == is_free) {
+                if let Some(iterations) = conjugate_gradients(&op, &k.prec, b, x, tolerance, max_iterations) {
+                    // Ĝ has drifted far enough from the factor's to cost iterations: the next
+                    // solve factors anew
+                    if iterations > crate::defaults::NEAR_FIELD_KEPT_SLOWDOWN * k.fresh_iterations.max(1) {
+                        *kept = None;
+                    }
+                    return Some(iterations);
+                }
+                x.iter_mut().for_each(|v| *v = 0.0);
+            }
+            if let Some(prec) = near.factor(self, &is_free, diag, blocks) {
+                let solved = conjugate_gradients(&op, &prec, b, x, tolerance, max_iterations);
+                *kept = solved.map(|fresh_iterations| KeptNear { is_free, prec, fresh_iterations });
+                return solved;
+            }
         }
         let prec = NodeBlocks::new(self, &is_free, diag, blocks)?;
         conjugate_gradients(&op, &prec, b, x, tolerance, max_iterations)
@@ -199,6 +229,9 @@ impl std::fmt::Debug for InverseDelassus {
 struct NearField {
     /// the lower triangle's (row, column) of each stored value, column by column
     entries: Vec<(usize, usize)>,
+    /// W⁻¹'s value at each entry, read once here: the factor of every direction reads them
+    /// contiguously instead of gathering them from the dense W⁻¹ (scattered reads of m² memory)
+    values: Vec<f64>,
     pattern: SymbolicSparseColMat<usize>,
     symbolic: SymbolicLlt<usize>,
 }
@@ -236,7 +269,8 @@ impl NearField {
         }
         let pattern = SymbolicSparseColMat::new_checked(m, m, col_ptr, None, row_idx);
         let symbolic = SymbolicLlt::try_new(pattern.as_ref(), Side::Lower).ok()?;
-        Some(NearField { entries, pattern, symbolic })
+        let values = entries.iter().map(|&(p, q)| winv[(p, q)]).collect();
+        Some(NearField { entries, values, pattern, symbolic })
     }
 
     /// The Cholesky factor of the near field of (W⁻¹)_FF + Ĝ_F (Ĝ as in
@@ -253,11 +287,12 @@ impl NearField {
         let values: Vec<f64> = self
             .entries
             .iter()
-            .map(|&(p, q)| {
+            .zip(&self.values)
+            .map(|(&(p, q), &winv_pq)| {
                 if !is_free[p] || !is_free[q] {
                     return if p == q { 1.0 } else { 0.0 };
                 }
-                let mut v = inverse.winv[(p, q)] + if p == q { diag[p] } else { 0.0 };
+                let mut v = winv_pq + if p == q { diag[p] } else { 0.0 };
                 let i = p / d;
                 if let (true, Some(g)) = (q / d == i, blocks[i])
                     && p > d * i
@@ -273,6 +308,14 @@ impl NearField {
         let llt = Llt::try_new_with_symbolic(self.symbolic.clone(), mat.as_ref(), Side::Lower).ok()?;
         Some(NearPreconditioner { llt, m: is_free.len() })
     }
+}
+
+/// A near-field factor kept between solves (`InverseDelassus::solve`): the free set it was
+/// computed for, and CG's iterations with it then.
+pub struct KeptNear {
+    is_free: Vec<bool>,
+    prec: NearPreconditioner,
+    fresh_iterations: usize,
 }
 
 /// The near field's factor as the preconditioner of [`VelocityMatrix`].
