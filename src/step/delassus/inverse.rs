@@ -223,9 +223,9 @@ impl std::fmt::Debug for InverseDelassus {
 /// The near field of W⁻¹: the node blocks (i, j) whose largest entry relative to the diagonal,
 /// |W⁻¹_ab| / √(W⁻¹_aa W⁻¹_bb), is at least the tolerance — W⁻¹ is the Schur complement of A_k
 /// on the contact unknowns (a discrete Dirichlet-to-Neumann map, local where W is not), so these
-/// are a node's few neighbours. The lower triangle's pattern is analysed for Cholesky once; each
+/// are a node's few neighbours. The lower triangle's pattern is analysed for Cholesky once; a
 /// solve factors the values of (W⁻¹)_FF + Ĝ_F on it (identity rows for the prescribed
-/// components).
+/// components), or reuses the factor kept from an earlier solve on the same F (`KeptNear`).
 struct NearField {
     /// the lower triangle's (row, column) of each stored value, column by column
     entries: Vec<(usize, usize)>,
