@@ -537,32 +537,7 @@ fn near_field_preconditioner_gives_the_node_block_solution() {
         .with_near_field();
     let density = near.near_field_density();
     assert!(density > 0.0 && density <= 0.25, "near field density {density}");
-    let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);
-    let (mut fa, mut fb) = (DelassusFactors::default(), DelassusFactors::default());
-    let mut statuses = std::collections::BTreeSet::new();
-    common::each_frozen_step(&p, usize::MAX, set, |sim, data, _, s, _| {
-        let other = StepData {
-            delassus: data.delassus,
-            y_free: data.y_free.clone(),
-            nodes: data.nodes.clone(),
-            a_d: data.a_d,
-            a_v: data.a_v,
-            force_rule: data.force_rule,
-            law: data.law,
-            friction: data.friction,
-            dim: data.dim,
-            inverse: Some(&near),
-        };
-        let a = newton::solve(&other, &mut fa, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("near field");
-        let b = newton::solve(data, &mut fb, s, &sim.state.lambda, &sim.state.t_fric, &set).expect("node blocks");
-        statuses.extend(a.status.iter().map(|st| format!("{st:?}")));
-        let ra = other.forces(&a.y, &a.lambda, &a.t);
-        if linalg::norm_inf(&ra) > 0.0 {
-            let vs = data.velocity_scale(&a.y).max(1e-300);
-            worst_v = worst_v.max(rel(&a.y, &b.y, vs));
-            worst_f = worst_f.max(rel(&ra, &data.forces(&b.y, &b.lambda, &b.t), linalg::norm_inf(&ra)));
-        }
-    });
+    let (worst_v, worst_f, statuses, fa, fb) = against_the_run(&p, sim0.delassus.as_ref().expect("W"), &near, set);
     let (ia, ib) = (fa.all_counts(), fb.all_counts());
     println!(
         "near field ({:.2}% of W⁻¹): {} iterations in {} solves; node blocks: {} in {}; worst per-step difference: velocity {worst_v:.3e}, force {worst_f:.3e}; statuses {statuses:?}",
@@ -586,14 +561,14 @@ fn near_field_preconditioner_gives_the_node_block_solution() {
 
 /// Each step of `p`'s run, its frozen problem solved to `set` with the run's own operators and
 /// with `w` and `inverse` instead: the largest differences of the velocities (of the velocity
-/// scale) and of the forces (of the largest force), the statuses seen, and the counts of the
-/// solves with `inverse`.
+/// scale) and of the forces (of the largest force), the statuses seen, and the factor caches of
+/// the solves with `inverse` and of the run's.
 fn against_the_run(
     p: &Problem,
     w: &dyncontact::step::delassus::Delassus,
     inverse: &dyncontact::step::delassus::InverseDelassus,
     set: NewtonSettings,
-) -> (f64, f64, std::collections::BTreeSet<String>, DelassusFactors) {
+) -> (f64, f64, std::collections::BTreeSet<String>, DelassusFactors, DelassusFactors) {
     let (mut worst_v, mut worst_f) = (0.0f64, 0.0f64);
     let (mut fa, mut fb) = (DelassusFactors::default(), DelassusFactors::default());
     let mut statuses = std::collections::BTreeSet::new();
@@ -620,7 +595,7 @@ fn against_the_run(
             worst_f = worst_f.max(rel(&ra, &data.forces(&b.y, &b.lambda, &b.t), linalg::norm_inf(&ra)));
         }
     });
-    (worst_v, worst_f, statuses, fa)
+    (worst_v, worst_f, statuses, fa, fb)
 }
 
 /// (S.6) The velocity form with W and W⁻¹ from the Schur complement of A_k on the contact
@@ -645,7 +620,7 @@ fn schur_delassus_gives_the_solves_step_solutions() {
         .expect("the Schur complement");
     let w = dyncontact::step::delassus::Delassus::Dense(w);
     let inverse = dyncontact::step::delassus::InverseDelassus::new(&w, c.dim, Some(winv)).expect("W⁻¹");
-    let (worst_v, worst_f, statuses, fa) = against_the_run(&p, &w, &inverse, set);
+    let (worst_v, worst_f, statuses, fa, _) = against_the_run(&p, &w, &inverse, set);
     println!(
         "Schur vs solves: worst per-step difference: velocity {worst_v:.3e}, force {worst_f:.3e}; statuses {statuses:?}"
     );
@@ -686,7 +661,7 @@ fn hierarchical_delassus_gives_the_dense_step_solutions() {
     let inverse = inverse.compressed(&w, &positions);
     let share = inverse.hierarchical().map(|h| h.storage_share()).expect("compressed");
     assert!(inverse.hierarchical_w().is_some(), "W compressed too");
-    let (worst_v, worst_f, statuses, fa) = against_the_run(&p, &w, &inverse, set);
+    let (worst_v, worst_f, statuses, fa, _) = against_the_run(&p, &w, &inverse, set);
     println!(
         "hierarchical ({share:.3} of W⁻¹'s values) vs dense: worst per-step difference: velocity {worst_v:.3e}, force {worst_f:.3e}; statuses {statuses:?}"
     );

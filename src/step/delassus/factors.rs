@@ -58,13 +58,15 @@ pub struct FactorCounts {
 ///   [`PCG_NEW_SHARE`](crate::defaults::PCG_NEW_SHARE) of U is new to the kept factor — and they
 ///   converge within [`PCG_MAX_ITERATIONS`](crate::defaults::PCG_MAX_ITERATIONS);
 /// * **a new factorization**, which replaces the kept one.
+///
+/// It also keeps the velocity form's last near-field factor (see `InverseDelassus::solve`).
 #[derive(Default)]
 pub struct DelassusFactors {
     last: Option<Factor>,
     counts: FactorCounts,
     /// the velocity form's near-field factor, kept as its CG preconditioner while the free
     /// set holds (`InverseDelassus::solve`)
-    pub near: Option<super::inverse::KeptNear>,
+    pub(crate) near: Option<super::inverse::KeptNear>,
 }
 
 struct Factor {

@@ -173,7 +173,7 @@ impl InverseDelassus {
     /// when the matrix showed a non-positive curvature (not positive definite: N.4 beyond
     /// (C.k)) or the tolerance was not reached.
     #[allow(clippy::too_many_arguments)]
-    pub fn solve(
+    pub(crate) fn solve(
         &self,
         kept: &mut Option<KeptNear>,
         free_list: &[usize],
@@ -312,7 +312,7 @@ impl NearField {
 
 /// A near-field factor kept between solves (`InverseDelassus::solve`): the free set it was
 /// computed for, and CG's iterations with it then.
-pub struct KeptNear {
+pub(crate) struct KeptNear {
     is_free: Vec<bool>,
     prec: NearPreconditioner,
     fresh_iterations: usize,
