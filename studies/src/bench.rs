@@ -993,8 +993,11 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
         write(out, "bookkeeping.csv", &crate::bookkeeping::csv(&rows))?;
         return Ok(crate::bookkeeping::report(&rows));
     }
-    let thick_plan =
-        if opts.quick { crate::thick::ThickPlan::quick() } else { crate::thick::ThickPlan::full(opts.thick_largest) };
+    let thick_plan = if opts.quick {
+        (crate::thick::ThickPlan::quick(), crate::thick::ShakePlan::quick())
+    } else {
+        (crate::thick::ThickPlan::full(opts.thick_largest), crate::thick::ShakePlan::full(opts.thick_largest))
+    };
     if opts.thick_only {
         return thick_part(&thick_plan, out, &progress);
     }
@@ -1075,10 +1078,17 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     Ok(report)
 }
 
-/// Part 4b: the thick 3-D boxes (thick.csv, thick.svg) and their printed lines.
-fn thick_part(plan: &crate::thick::ThickPlan, out: &Path, progress: &dyn Fn(&str)) -> Result<String> {
+/// Part 4b: the thick 3-D boxes (thick.csv, thick.svg) pressed, and shaken with either inner
+/// solver (thick_shaking.csv), and their printed lines.
+fn thick_part(
+    (plan, shaking): &(crate::thick::ThickPlan, crate::thick::ShakePlan),
+    out: &Path,
+    progress: &dyn Fn(&str),
+) -> Result<String> {
     let rows = crate::thick::run(plan, progress)?;
     write(out, "thick.csv", &crate::thick::csv(&rows))?;
     write(out, "thick.svg", &crate::thick::svg(&rows, plan)?)?;
-    Ok(crate::thick::report(&rows))
+    let shaken = crate::thick::run_shaking(shaking, progress)?;
+    write(out, "thick_shaking.csv", &crate::thick::shaking_csv(&shaken))?;
+    Ok(crate::thick::report(&rows) + "\n" + &crate::thick::shaking_report(&shaken))
 }

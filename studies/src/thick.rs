@@ -7,6 +7,12 @@
 //! form) and with node blocks (the form before it). Per step: the free solve and the contact
 //! solve, min and median over the steps; per run: the setup split (assembly, factorization of
 //! A_k, W and W⁻¹) and the process's peak memory.
+//!
+//! The shaking window (thick_shaking.csv): each box pressed until the shaking starts (t = 0.2 s,
+//! under F.1 in the form the run picks itself), then the same state run `steps` steps further
+//! twice, with F.1 (`inner = "newton"`, the fixture's solver) and with the unfrozen Newton (N.4,
+//! `"newton-unfrozen"`): per step the free and contact solves and the convex solves and Newton
+//! iterations each solver spends — where the shaking's cost comes from.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -18,6 +24,8 @@ use dyncontact::output::loglog::{self, LogSeries, loglog_slope};
 use dyncontact::problem::Problem;
 use dyncontact::scene::Scene;
 use dyncontact::simulation::Simulation;
+use dyncontact::step::delassus::DelassusFactors;
+use dyncontact::step::fixed_point::Inner;
 
 /// What the thick part runs.
 #[derive(Debug, Clone)]
@@ -292,5 +300,175 @@ pub fn report(rows: &[ThickRow]) -> String {
         slope(rows, "near field"),
         slope(rows, "node blocks")
     );
+    s
+}
+
+/// When academic3d's shaking starts: its right-side traction is `if(t >= 0.2, …, 0)`.
+pub const SHAKING_FROM: f64 = 0.2;
+
+/// What the shaking window runs.
+#[derive(Debug, Clone)]
+pub struct ShakePlan {
+    pub boxes: Vec<[i64; 3]>,
+    /// steps of each solver from the shaking onset
+    pub steps: usize,
+}
+
+impl ShakePlan {
+    /// 24×12×8, 32×16×12, 48×24×16, 40 shaking steps each (64×32×24 with `largest`: 400
+    /// pressing steps of it take about three minutes more).
+    pub fn full(largest: bool) -> ShakePlan {
+        let mut boxes = vec![[24, 12, 8], [32, 16, 12], [48, 24, 16]];
+        if largest {
+            boxes.push([64, 32, 24]);
+        }
+        ShakePlan { boxes, steps: 40 }
+    }
+    /// The smoke test's plan: the smallest box of the quick thick plan, 3 shaking steps.
+    pub fn quick() -> ShakePlan {
+        ShakePlan { boxes: vec![[16, 8, 4]], steps: 3 }
+    }
+}
+
+/// The inner solvers of the shaking window, as the scene names them.
+pub const SHAKING_INNER: [&str; 2] = ["newton", "newton-unfrozen"];
+
+/// One solver's shaking window on one box.
+#[derive(Debug, Clone)]
+pub struct ShakeRow {
+    pub cells: [i64; 3],
+    pub unknowns: usize,
+    pub contact_nodes: usize,
+    /// one of SHAKING_INNER
+    pub inner: &'static str,
+    pub steps: usize,
+    /// per step, seconds: [min, median]
+    pub free: [f64; 2],
+    pub contact: [f64; 2],
+    /// convex solves of F.1 over the window (0 where N.4 solved every step)
+    pub convex_solves: usize,
+    pub newton_iterations: usize,
+    pub cg_iterations: usize,
+    /// N.4 steps that fell back to F.1
+    pub fallbacks: usize,
+    /// nodes slipping and sticking at the window's last step
+    pub slip_nodes: usize,
+    pub stick_nodes: usize,
+}
+
+/// The shaking window of every box with both solvers.
+pub fn run_shaking(plan: &ShakePlan, progress: &dyn Fn(&str)) -> Result<Vec<ShakeRow>> {
+    let mut rows = Vec::new();
+    for &cells in &plan.boxes {
+        let mut s = scene(cells, 1)?;
+        let pressing = (SHAKING_FROM / s.time.step).round() as usize;
+        s.time.end = s.time.step * (pressing + plan.steps) as f64;
+        // the run's own choice of form (dense below HMATRIX_FROM components, hierarchical above)
+        s.solver.contact_solve = dyncontact::model::kinds::ContactSolve::Auto;
+        let p = Problem::from_scene(&s, Path::new("."))?;
+        progress(&format!("thick shaking: {}x{}x{}, {pressing} pressing steps", cells[0], cells[1], cells[2]));
+        let mut sim = Simulation::new(&p)?;
+        for rec in sim.steps().take(pressing) {
+            rec?;
+        }
+        let onset = sim.state.clone();
+        let newton = match sim.settings.inner {
+            Inner::Newton(set) | Inner::NewtonUnfrozen(set) => set,
+            Inner::Conic(_) => return Err(Error::Study("thick shaking: academic3d's solver is Newton".into())),
+        };
+        for inner in SHAKING_INNER {
+            progress(&format!("thick shaking: {}x{}x{}, {inner}", cells[0], cells[1], cells[2]));
+            sim.restore(onset.clone())?;
+            // both solvers start cold: a fresh factor cache, the same state
+            sim.delassus_factors = DelassusFactors::default();
+            sim.settings.inner = if inner == "newton" { Inner::Newton(newton) } else { Inner::NewtonUnfrozen(newton) };
+            let (mut free, mut contact) = (Vec::new(), Vec::new());
+            let (mut convex, mut newton_iterations, mut fallbacks, mut last) = (0, 0, 0, (0, 0));
+            for rec in sim.steps() {
+                let rec = rec?;
+                free.push(rec.timing.free_solve);
+                contact.push(rec.timing.contact_solve);
+                convex += rec.report.fixed_point_iterations;
+                newton_iterations += rec.report.inner_iterations;
+                fallbacks += usize::from(rec.report.fallback.is_some());
+                last = (rec.slip_nodes, rec.stick_nodes);
+            }
+            rows.push(ShakeRow {
+                cells,
+                unknowns: p.dofs.n_free,
+                contact_nodes: p.contact.as_ref().map_or(0, |c| c.n()),
+                inner,
+                steps: free.len(),
+                free: min_median(free),
+                contact: min_median(contact),
+                convex_solves: convex,
+                newton_iterations,
+                cg_iterations: sim.delassus_factors.all_counts().velocity_iterations,
+                fallbacks,
+                slip_nodes: last.0,
+                stick_nodes: last.1,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// thick_shaking.csv.
+pub fn shaking_csv(rows: &[ShakeRow]) -> String {
+    csv_table(
+        "cells,unknowns,contact_nodes,inner,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
+contact_over_free,convex_solves,newton_iterations,cg_iterations,fallbacks,slip_nodes,stick_nodes",
+        rows.iter().map(|r| {
+            vec![
+                format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
+                r.unknowns.to_string(),
+                r.contact_nodes.to_string(),
+                r.inner.to_string(),
+                r.steps.to_string(),
+                format!("{:.6e}", r.free[0]),
+                format!("{:.6e}", r.free[1]),
+                format!("{:.6e}", r.contact[0]),
+                format!("{:.6e}", r.contact[1]),
+                format!("{:.3}", r.contact[1] / r.free[1]),
+                r.convex_solves.to_string(),
+                r.newton_iterations.to_string(),
+                r.cg_iterations.to_string(),
+                r.fallbacks.to_string(),
+                r.slip_nodes.to_string(),
+                r.stick_nodes.to_string(),
+            ]
+        }),
+    )
+}
+
+/// The printed lines of the shaking window.
+pub fn shaking_report(rows: &[ShakeRow]) -> String {
+    let mut s = format!(
+        "thick 3-D boxes while shaken (from t = {SHAKING_FROM} s, the same state for both solvers): per step min / median\n"
+    );
+    let _ = writeln!(
+        s,
+        "{:>10} {:>6} {:<16} {:>17} {:>19} {:>8} {:>12} {:>12} {:>8} {:>9}",
+        "cells", "n_c", "inner", "free[ms]", "contact[ms]", "c/free", "convex/step", "Newton/step", "CG", "fallbacks"
+    );
+    for r in rows {
+        let per = |v: usize| v as f64 / r.steps.max(1) as f64;
+        let _ = writeln!(
+            s,
+            "{:>10} {:>6} {:<16} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>12.1} {:>12.1} {:>8} {:>9}",
+            format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
+            r.contact_nodes,
+            r.inner,
+            1e3 * r.free[0],
+            1e3 * r.free[1],
+            1e3 * r.contact[0],
+            1e3 * r.contact[1],
+            r.contact[1] / r.free[1],
+            per(r.convex_solves),
+            per(r.newton_iterations),
+            r.cg_iterations,
+            r.fallbacks
+        );
+    }
     s
 }

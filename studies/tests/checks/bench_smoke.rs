@@ -73,6 +73,23 @@ fn quick_bench_writes_its_files() {
     }
     assert!(dir.join("thick.svg").is_file());
 
+    // the shaking window: one row per inner solver from the same state; F.1 makes at least one
+    // convex solve per frictional step, N.4 none where it solved the step itself (a fallback
+    // to F.1 is counted and makes them again)
+    let (_, rows) = read_csv(&dir.join("thick_shaking.csv"));
+    let inners: Vec<&str> = rows.iter().map(|r| r["inner"].as_str()).collect();
+    assert_eq!(inners, ["newton", "newton-unfrozen"], "one box × both solvers");
+    for r in &rows {
+        let steps = number(r, "steps");
+        assert!(steps == 3.0 && number(r, "newton_iterations") >= steps, "{r:?}");
+        assert!(number(r, "slip_nodes") + number(r, "stick_nodes") > 0.0, "the box is in contact: {r:?}");
+        let (convex, fallbacks) = (number(r, "convex_solves"), number(r, "fallbacks"));
+        match r["inner"].as_str() {
+            "newton" => assert!(convex >= steps && fallbacks == 0.0, "{r:?}"),
+            _ => assert!((convex == 0.0) == (fallbacks == 0.0), "{r:?}"),
+        }
+    }
+
     let (header, rows) = read_csv(&dir.join("work_precision.csv"));
     for c in WORK_COLUMNS {
         assert!(header.iter().any(|h| h == c), "work_precision.csv lacks column {c}");
