@@ -117,7 +117,7 @@ pub enum MassKind {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum FixedPointAcceleration {
-    /// Anderson(1) extrapolation of S, safeguarded (θ = 1 only)
+    /// Anderson extrapolation of S over the last ANDERSON_DEPTH iterates, safeguarded (θ = 1 only)
     #[default]
     Anderson,
     /// the plain iteration S ← θ G(S) + (1 − θ) S of the paper

@@ -33,7 +33,7 @@ pub struct FixedPointSettings {
     pub max_iterations: usize,
     /// θ of S ← θ S_new + (1 − θ) S
     pub relaxation: f64,
-    /// Anderson(1) extrapolation of S (with θ = 1): the same fixed point and the same stopping
+    /// Anderson(m) extrapolation of S (m = ANDERSON_DEPTH, with θ = 1): the same fixed point and the same stopping
     /// test, fewer convex solves; false: the plain iteration (the paper's F.1)
     pub anderson: bool,
 }
@@ -65,17 +65,23 @@ impl StepReport {
     }
 }
 
-/// One frozen-S solve with the chosen inner solver.
+/// One frozen-S solve with the chosen inner solver; `y0`: the last convex solve's contact
+/// velocities, Newton's start (the conic solver starts from its own).
 fn inner_solve(
     step: &StepData,
     factors: &mut DelassusFactors,
     s_bound: &[f64],
+    y0: Option<&[f64]>,
     lambda0: &[f64],
     t0: &[f64],
     inner: &Inner,
 ) -> Result<ContactSolution, InnerFailure> {
     match inner {
-        Inner::Newton(set) => newton::solve(step, factors, s_bound, lambda0, t0, set).map_err(InnerFailure::Newton),
+        Inner::Newton(set) => match y0 {
+            Some(y0) => newton::solve_from(step, factors, s_bound, y0, lambda0, t0, set),
+            None => newton::solve(step, factors, s_bound, lambda0, t0, set),
+        }
+        .map_err(InnerFailure::Newton),
         Inner::Conic(set) => conic::solve(step, s_bound, set).map_err(InnerFailure::Conic),
         // inside the fixed point (frictionless steps, fallback) the frozen Newton is used
         Inner::NewtonUnfrozen(set) => {
@@ -161,7 +167,7 @@ pub fn solve(
     let Some(mu) = mu.filter(|_| step.friction) else {
         // frictionless: one convex solve, no fixed point
         let s_bound = vec![0.0; n];
-        let sol = inner_solve(step, factors, &s_bound, lambda0, t0, inner).map_err(fail(0))?;
+        let sol = inner_solve(step, factors, &s_bound, None, lambda0, t0, inner).map_err(fail(0))?;
         if let Some(tr) = trace {
             tr.push(sol.y.clone());
         }
@@ -221,13 +227,15 @@ fn iterate(
     let mut y_prev = y0.to_vec();
     let (mut lam, mut tf) = (lambda0.to_vec(), t0.to_vec());
     let mut last: Option<(ContactSolution, Vec<f64>)> = None;
-    // G(S) and G(S) − S of the previous iteration, for the extrapolation
-    let mut history: Option<(Vec<f64>, Vec<f64>)> = None;
+    // G(S) and G(S) − S of the last ANDERSON_DEPTH iterations, oldest first, for the extrapolation
+    let mut history: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
     // the relative change of S the last iteration saw (the inner solves' forcing)
     let mut change = crate::defaults::INNER_FORCING_START;
     for l in 1..=fp.max_iterations.max(1) {
         let loose = inexact(inner, change);
-        let mut sol = inner_solve(step, factors, &s_bound, &lam, &tf, &loose).map_err(fail(l))?;
+        // from the second convex solve on, Newton starts at the last one's solution
+        let start = (l > 1).then_some(y_prev.as_slice());
+        let mut sol = inner_solve(step, factors, &s_bound, start, &lam, &tf, &loose).map_err(fail(l))?;
         if let Some(tr) = trace.as_deref_mut() {
             tr.push(sol.y.clone());
         }
@@ -247,7 +255,8 @@ fn iterate(
             if let Inner::Newton(set) = inner
                 && sol.residual > set.tolerance
             {
-                let polished = inner_solve(step, factors, &s_bound, &sol.lambda, &sol.t, inner).map_err(fail(l))?;
+                let polished =
+                    inner_solve(step, factors, &s_bound, Some(&sol.y), &sol.lambda, &sol.t, inner).map_err(fail(l))?;
                 report.inner_iterations += polished.iterations;
                 report.inner_residual = polished.residual;
                 sol = polished;
@@ -257,12 +266,8 @@ fn iterate(
         change = report.fixed_point_change;
         let s_used = s_bound.clone();
         let residual: Vec<f64> = s_new.iter().zip(&s_used).map(|(g, s)| g - s).collect();
-        let extrapolated = match &history {
-            Some((g_prev, f_prev)) if fp.anderson && fp.relaxation == 1.0 => {
-                anderson(&s_new, &residual, g_prev, f_prev)
-            }
-            _ => None,
-        };
+        let extrapolated =
+            if fp.anderson && fp.relaxation == 1.0 { anderson(&s_new, &residual, &history) } else { None };
         match extrapolated {
             Some(s_next) => s_bound = s_next,
             None => {
@@ -271,7 +276,10 @@ fn iterate(
                 }
             }
         }
-        history = Some((s_new, residual));
+        if history.len() == crate::defaults::ANDERSON_DEPTH {
+            history.remove(0);
+        }
+        history.push((s_new, residual));
         y_prev.clone_from(&sol.y);
         lam.clone_from(&sol.lambda);
         tf.clone_from(&sol.t);
@@ -299,20 +307,31 @@ fn inexact(inner: &Inner, change: f64) -> Inner {
     }
 }
 
-/// (F.1) Anderson(1) step for the fixed point S = G(S): with f = G(S) − S at this and the
-/// previous iterate, S_next = G − γ (G − G_prev), γ = f·(f − f_prev)/‖f − f_prev‖², clamped at 0
-/// (a bound is never negative). None — take the plain step — when the residual did not decrease
-/// (the safeguard that keeps the plain iteration's convergence) or the secant is degenerate.
-fn anderson(g: &[f64], f: &[f64], g_prev: &[f64], f_prev: &[f64]) -> Option<Vec<f64>> {
-    if linalg::dot(f, f) >= linalg::dot(f_prev, f_prev) {
+/// (F.1) Anderson(m) step for the fixed point S = G(S): with f = G(S) − S at this iterate and at
+/// the earlier ones of `history` ((G_j, f_j), at most ANDERSON_DEPTH), the coefficients γ
+/// minimize ‖f − Σ_j γ_j (f − f_j)‖₂ and S_next = G − Σ_j γ_j (G − G_j), clamped at 0 (a bound
+/// is never negative); with one earlier iterate γ = f·(f − f_1)/‖f − f_1‖², Anderson(1). None —
+/// take the plain step — when the residual did not decrease from the last iterate (the safeguard
+/// that keeps the plain iteration's convergence) or the differences are degenerate (the least
+/// squares drop directions below 1e-10 of the largest singular value).
+fn anderson(g: &[f64], f: &[f64], history: &[(Vec<f64>, Vec<f64>)]) -> Option<Vec<f64>> {
+    let (_, f_last) = history.last()?;
+    if linalg::dot(f, f) >= linalg::dot(f_last, f_last) {
         return None;
     }
-    let df: Vec<f64> = f.iter().zip(f_prev).map(|(a, b)| a - b).collect();
-    let dd = linalg::dot(&df, &df);
-    if dd <= 0.0 || !dd.is_finite() {
+    let differences = nalgebra::DMatrix::from_fn(f.len(), history.len(), |i, j| f[i] - history[j].1[i]);
+    let svd = differences.svd(true, true);
+    let largest = svd.singular_values.max();
+    if !(largest > 0.0 && largest.is_finite()) {
         return None;
     }
-    let gamma = linalg::dot(f, &df) / dd;
-    let s: Vec<f64> = g.iter().zip(g_prev).map(|(a, b)| (a - gamma * (a - b)).max(0.0)).collect();
+    let gamma = svd.solve(&nalgebra::DVector::from_column_slice(f), 1e-10 * largest).ok()?;
+    let mut s = g.to_vec();
+    for ((g_j, _), gamma_j) in history.iter().zip(gamma.iter()) {
+        for (s_i, (g_i, g_ji)) in s.iter_mut().zip(g.iter().zip(g_j)) {
+            *s_i -= gamma_j * (g_i - g_ji);
+        }
+    }
+    s.iter_mut().for_each(|v| *v = v.max(0.0));
     s.iter().all(|v| v.is_finite()).then_some(s)
 }

@@ -235,7 +235,23 @@ pub fn solve(
     t0: &[f64],
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
-    solve_with(step, factors, &SlipBound::Frozen(s), lambda0, t0, set)
+    solve_with(step, factors, &SlipBound::Frozen(s), None, lambda0, t0, set)
+}
+
+/// [`solve`] started at the contact velocities `y0` (with `lambda0`, `t0`) instead of the ones
+/// the warm-started forces give at the free motion: F.1's next convex problem from the last
+/// one's solution, which differs from it by the change of S (the solution itself does not
+/// depend on the start: the frozen problem is convex with a unique y).
+pub fn solve_from(
+    step: &StepData,
+    factors: &mut DelassusFactors,
+    s: &[f64],
+    y0: &[f64],
+    lambda0: &[f64],
+    t0: &[f64],
+    set: &NewtonSettings,
+) -> Result<ContactSolution, NewtonFailure> {
+    solve_with(step, factors, &SlipBound::Frozen(s), Some(y0), lambda0, t0, set)
 }
 
 /// (N.4) Semismooth Newton on the unfrozen Alart–Curnier system: the friction bound
@@ -251,7 +267,7 @@ pub fn solve_unfrozen(
     t0: &[f64],
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
-    solve_with(step, factors, &SlipBound::Law { mu, p_hat }, lambda0, t0, set)
+    solve_with(step, factors, &SlipBound::Law { mu, p_hat }, None, lambda0, t0, set)
 }
 
 /// (Co.3) Semismooth Newton on the coupled Alart–Curnier system of Coulomb's law with the
@@ -267,7 +283,7 @@ pub fn solve_coulomb(
     t0: &[f64],
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
-    solve_with(step, factors, &SlipBound::Coulomb { mu }, lambda0, t0, set)
+    solve_with(step, factors, &SlipBound::Coulomb { mu }, None, lambda0, t0, set)
 }
 
 /// An iterate of the Newton solve: contact velocities, multipliers, friction forces, and the
@@ -281,17 +297,19 @@ struct Iterate {
 
 /// Semismooth Newton for either friction bound (frozen: the convex problem of F.1; law: the
 /// unfrozen problem of N.4): stop test, Newton direction on the reduced system, line search.
+/// `y0`: the contact velocities to start from (None: those the warm-started forces give).
 pub fn solve_with(
     step: &StepData,
     factors: &mut DelassusFactors,
     bound: &SlipBound,
+    y0: Option<&[f64]>,
     lambda0: &[f64],
     t0: &[f64],
     set: &NewtonSettings,
 ) -> Result<ContactSolution, NewtonFailure> {
     let s = bound;
     let p = Params::new(step, set);
-    let mut x = initial_iterate(step, s, &p, lambda0, t0);
+    let mut x = initial_iterate(step, s, &p, y0, lambda0, t0);
     let mut prev_sets: Option<(Vec<bool>, Vec<bool>)> = None;
     let mut prev_ok = false;
     for it in 0..=set.max_iterations {
@@ -351,8 +369,15 @@ impl Params {
 }
 
 /// The start: the warm-started λ (≥ 0) and t (inside the bound at the free motion), and the
-/// contact velocities they give.
-fn initial_iterate(step: &StepData, s: &SlipBound, p: &Params, lambda0: &[f64], t0: &[f64]) -> Iterate {
+/// contact velocities `y0` when given, else those the forces give at the free motion.
+fn initial_iterate(
+    step: &StepData,
+    s: &SlipBound,
+    p: &Params,
+    y0: Option<&[f64]>,
+    lambda0: &[f64],
+    t0: &[f64],
+) -> Iterate {
     let n = step.n();
     let lambda: Vec<f64> =
         (0..n).map(|i| if step.nodes[i].bound.is_some() { lambda0[i].max(0.0) } else { 0.0 }).collect();
@@ -376,7 +401,10 @@ fn initial_iterate(step: &StepData, s: &SlipBound, p: &Params, lambda0: &[f64], 
             })
             .collect()
     };
-    let y = step.response(&step.forces(&step.y_free, &lambda, &t));
+    let y = match y0 {
+        Some(y0) => y0.to_vec(),
+        None => step.response(&step.forces(&step.y_free, &lambda, &t)),
+    };
     let f = residual(step, s, p, &y, &lambda, &t);
     Iterate { y, lambda, t, f }
 }
