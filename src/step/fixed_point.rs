@@ -33,8 +33,8 @@ pub struct FixedPointSettings {
     pub max_iterations: usize,
     /// θ of S ← θ S_new + (1 − θ) S
     pub relaxation: f64,
-    /// Anderson(m) extrapolation of S (m = ANDERSON_DEPTH, with θ = 1): the same fixed point and the same stopping
-    /// test, fewer convex solves; false: the plain iteration (the paper's F.1)
+    /// Anderson(m) extrapolation of S (m = ANDERSON_DEPTH, with θ = 1): the same fixed point and
+    /// the same stopping test, fewer convex solves; false: the plain iteration (the paper's F.1)
     pub anderson: bool,
 }
 
@@ -66,7 +66,8 @@ impl StepReport {
 }
 
 /// One frozen-S solve with the chosen inner solver; `y0`: the last convex solve's contact
-/// velocities, Newton's start (the conic solver starts from its own).
+/// velocities, where F.1's Newton starts (the conic solver, and the frozen Newton inside N.4's
+/// fallback, start from their own).
 fn inner_solve(
     step: &StepData,
     factors: &mut DelassusFactors,

@@ -315,18 +315,14 @@ pub struct ShakePlan {
 }
 
 impl ShakePlan {
-    /// 24×12×8, 32×16×12, 48×24×16, 40 shaking steps each (64×32×24 with `largest`: 400
-    /// pressing steps of it take about three minutes more).
+    /// The thick family's boxes, 40 shaking steps each (64×32×24 with `largest`: 400 pressing
+    /// steps of it take about three minutes more).
     pub fn full(largest: bool) -> ShakePlan {
-        let mut boxes = vec![[24, 12, 8], [32, 16, 12], [48, 24, 16]];
-        if largest {
-            boxes.push([64, 32, 24]);
-        }
-        ShakePlan { boxes, steps: 40 }
+        ShakePlan { boxes: ThickPlan::full(largest).boxes, steps: 40 }
     }
     /// The smoke test's plan: the smallest box of the quick thick plan, 3 shaking steps.
     pub fn quick() -> ShakePlan {
-        ShakePlan { boxes: vec![[16, 8, 4]], steps: 3 }
+        ShakePlan { boxes: ThickPlan::quick().boxes[..1].to_vec(), steps: 3 }
     }
 }
 

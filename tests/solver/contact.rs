@@ -509,16 +509,18 @@ fn f1_newton_from_the_last_solution_gives_the_same_solution() {
     let mut sim = Simulation::new(&p).expect("setup");
     assert!(sim.inverse.is_some(), "the velocity form runs at this size");
     let set = NewtonSettings::default();
-    let (mut worst_y, mut worst_f, mut iterations, mut statuses) = (0.0f64, 0.0f64, [0usize; 2], [false; 3]);
+    // statuses seen, by their VTU code: separated, stick, slip, contact
+    let (mut worst_y, mut worst_f, mut iterations, mut statuses) = (0.0f64, 0.0f64, [0usize; 2], [false; 4]);
     let mut factors = DelassusFactors::default();
     for rec in sim.steps().before_each(|sim| {
         let (w, _) = sim.free_velocity();
         let c = p.contact.as_ref().expect("contact");
         let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
         let mu = c.friction.as_ref().expect("friction");
-        let vn = c.restrict(&sim.state.v);
-        let s0: Vec<f64> = (0..data.n()).map(|i| mu.mu(data.slip_norm(i, &vn)) * p_hat[i]).collect();
         let (lambda, t) = (&sim.state.lambda, &sim.state.t_fric);
+        // F.1's first bound: S at the predictor from v^n
+        let normal = dyncontact::step::fixed_point::NormalPart::Predictor(&p_hat);
+        let s0 = dyncontact::step::fixed_point::friction_bound(&data, mu, &normal, &c.restrict(&sim.state.v), lambda);
         let first = newton::solve(&data, &mut factors, &s0, lambda, t, &set).expect("first solve");
         let s1: Vec<f64> = s0.iter().map(|v| 1.001 * v).collect();
         let fresh = newton::solve(&data, &mut factors, &s1, &first.lambda, &first.t, &set).expect("fresh start");
@@ -527,11 +529,7 @@ fn f1_newton_from_the_last_solution_gives_the_same_solution() {
         iterations[0] += fresh.iterations;
         iterations[1] += warm.iterations;
         for st in &fresh.status {
-            statuses[match st {
-                dyncontact::step::NodeStatus::Separated => 0,
-                dyncontact::step::NodeStatus::Stick => 1,
-                _ => 2,
-            }] = true;
+            statuses[st.code() as usize] = true;
         }
         worst_y = worst_y.max(rel(&fresh.y, &warm.y, data.velocity_scale(&fresh.y)));
         let (fa, fb) = (data.forces(&fresh.y, &fresh.lambda, &fresh.t), data.forces(&warm.y, &warm.lambda, &warm.t));
@@ -546,7 +544,13 @@ fn f1_newton_from_the_last_solution_gives_the_same_solution() {
          iterations {} vs {}; separated/stick/slip seen {statuses:?}",
         iterations[0], iterations[1]
     );
-    assert!(statuses.iter().all(|&seen| seen), "separation, stick and slip must all occur: {statuses:?}");
+    common::measured(
+        "f1_newton_from_the_last_solution_gives_the_same_solution",
+        "per-step force difference, Newton from the free motion vs from the last solution",
+        worst_f,
+        "≤ 1e-7",
+    );
+    assert!(statuses[..3].iter().all(|&seen| seen), "separation, stick and slip must all occur: {statuses:?}");
     assert!(worst_y <= 1e-9 && worst_f <= 1e-7, "velocities {worst_y:.3e}, forces {worst_f:.3e}");
     assert!(iterations[1] < iterations[0], "the nearby start should save iterations: {iterations:?}");
 }
