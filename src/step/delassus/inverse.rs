@@ -77,36 +77,13 @@ impl InverseDelassus {
 
     /// The products with W⁻¹ and with W through their hierarchical forms (`HMatrix`; `positions`
     /// are the contact nodes'): m log m memory reads per product instead of m².
-    /// - W⁻¹ at the loosest ε of HMATRIX_TOLERANCES whose error is certified:
-    ///   ‖H − W⁻¹‖_F ≤ HMATRIX_CERTIFICATE / ‖W‖_∞ ≤ HMATRIX_CERTIFICATE · λ_min(W⁻¹), so H stays
-    ///   positive definite and each Newton direction is that of a system within 10% of the exact
-    ///   one (only the directions see W⁻¹; the residual decides the answer, which stays the same to
-    ///   the Newton tolerance). Without a dense W to bound λ_min, or when no ε is certified, the
-    ///   tightest ε (1e-12, as before the certificate);
+    /// - W⁻¹ to every entry within HMATRIX_TOLERANCE · max|W⁻¹|: only the Newton directions see
+    ///   it, so the step's solution is the same to the Newton tolerance;
     /// - W (a dense `w` only), for the momentum residual (N.1), to every entry within
     ///   HMATRIX_TOLERANCE_W · max|W|: the residual moves by at most that times ‖r‖₁, far below
     ///   the Newton tolerance.
     pub fn compressed(mut self, w: &Delassus, positions: &[[f64; 3]]) -> InverseDelassus {
-        // λ_min(W⁻¹) = 1 / λ_max(W) ≥ 1 / ‖W‖_∞
-        let lambda_min = match w {
-            Delassus::Dense(w) => {
-                let norm_inf =
-                    (0..w.nrows()).map(|i| (0..w.ncols()).map(|j| w[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
-                (norm_inf > 0.0).then(|| 1.0 / norm_inf)
-            }
-            _ => None,
-        };
-        let tolerances = crate::defaults::HMATRIX_TOLERANCES;
-        let tightest = tolerances[tolerances.len() - 1];
-        let certified =
-            |h: &HMatrix| lambda_min.is_some_and(|l| h.error_frobenius() <= crate::defaults::HMATRIX_CERTIFICATE * l);
-        let h = tolerances
-            .iter()
-            .filter(|_| lambda_min.is_some())
-            .map(|&tol| HMatrix::new(self.winv.as_ref(), self.dim, positions, tol))
-            .find(certified)
-            .unwrap_or_else(|| HMatrix::new(self.winv.as_ref(), self.dim, positions, tightest));
-        self.h = Some(h);
+        self.h = Some(HMatrix::new(self.winv.as_ref(), self.dim, positions, crate::defaults::HMATRIX_TOLERANCE));
         if let Delassus::Dense(w) = w {
             self.w_h = Some(HMatrix::new(w.as_ref(), self.dim, positions, crate::defaults::HMATRIX_TOLERANCE_W));
         }
