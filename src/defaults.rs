@@ -165,8 +165,21 @@ pub const VELOCITY_FORM_MAX_ITERATIONS: usize = 60;
 /// 22.5 against 35.3; 3,600 (48×24×16) 99.2 against 216.7; 6,336 (64×32×24) 279.6 against 861.9.
 /// Of the pinned fixtures only hertz3d (1,875 components) takes it (CHANGELOG, pin 12).
 pub const HMATRIX_FROM: usize = 1200;
-/// … compressed to every entry within this fraction of max|W⁻¹|.
+/// … W⁻¹ compressed to every entry within this fraction of max|W⁻¹| for the exact directions
+/// (those Newton lands with: see `DirectionForm`) …
 pub const HMATRIX_TOLERANCE: f64 = 1e-12;
+/// … and, for the loose directions, to the loosest of these fractions whose compression is
+/// certified (HMATRIX_CERTIFICATE); none certified, no loose form. Its storage on academic3d's
+/// thick boxes (3,600 → 6,336 components) grows like m^1.0 at 1e-6, m^1.3 at 1e-8 and m^1.6 at
+/// 1e-12 (docs/performance.md); 1e-6 is certified on every academic3d box measured (1,173 to
+/// 6,336 components).
+pub const HMATRIX_LOOSE_TOLERANCES: [f64; 3] = [1e-6, 1e-8, 1e-10];
+/// A compression of W⁻¹ is certified when ‖H − W⁻¹‖_F ≤ this fraction of 1/‖W‖_∞, a lower bound
+/// of λ_min(W⁻¹) (W is symmetric positive definite, λ_max(W) ≤ ‖W‖_∞): then every principal
+/// submatrix of H keeps at least 90% of W⁻¹'s least eigenvalue (Weyl), so the conjugate gradients'
+/// operator (W⁻¹)_FF + ω Ĝ_F stays positive definite, and each Newton direction solves a system
+/// within this relative distance of the exact one (an inexact Newton step with forcing ≤ 0.11).
+pub const HMATRIX_CERTIFICATE: f64 = 0.1;
 /// … and W, for the momentum residual (N.1), to every entry within this fraction of max|W|.
 pub const HMATRIX_TOLERANCE_W: f64 = 1e-14;
 

@@ -311,11 +311,11 @@ pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
         // the dense W and one Newton matrix, W⁻¹ where the velocity form may keep it (from
         // GEMV_FROM unknowns), and the responses G = A_k⁻¹ Hᵀ where they are kept
         // (the near field of W⁻¹ and its factor: a few node blocks per node, below 1% of these);
-        // from HMATRIX_FROM unknowns the hierarchical W⁻¹ besides (never more values than the
-        // dense one: a block whose factors would not be smaller stays dense; 0.35–0.45 of them
-        // measured at 3,600 unknowns)
+        // from HMATRIX_FROM unknowns the hierarchical W⁻¹ besides, at 1e-12 and at its loose ε
+        // (each never more values than the dense one: a block whose factors would not be smaller
+        // stays dense; 0.35 and 0.145 of them measured at 3,600 unknowns)
         contact_bytes: (if m >= crate::defaults::HMATRIX_FROM as f64 {
-            4.0
+            5.0
         } else if m >= crate::defaults::GEMV_FROM as f64 {
             3.0
         } else {

@@ -439,5 +439,6 @@ fn finish(step: &StepData, s: &[f64], y: Vec<f64>, r: Vec<f64>, iterations: usiz
         status,
         iterations,
         residual: if scale > 0.0 { res / scale } else { linalg::norm_inf(&resp) },
+        exact: true,
     }
 }

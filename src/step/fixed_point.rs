@@ -252,9 +252,11 @@ fn iterate(
         let y_converged = l > 1 && dy <= fp.tolerance * y_scale;
         report.fixed_point_change = if s_scale > 0.0 { ds / s_scale } else { 0.0 };
         if s_converged || y_converged {
-            // the accepted solve to the Newton tolerance itself ((E.1) holds to it)
+            // the accepted solve to the Newton tolerance itself ((E.1) holds to it), landed by an
+            // exact direction (complementarity to round-off: the constraint dissipation stays
+            // monotone)
             if let Inner::Newton(set) = inner
-                && sol.residual > set.tolerance
+                && (sol.residual > set.tolerance || !sol.exact)
             {
                 let polished =
                     inner_solve(step, factors, &s_bound, Some(&sol.y), &sol.lambda, &sol.t, inner).map_err(fail(l))?;
@@ -302,7 +304,11 @@ fn inexact(inner: &Inner, change: f64) -> Inner {
     match inner {
         Inner::Newton(set) => {
             let forcing = crate::defaults::INNER_FORCING * change.min(crate::defaults::INNER_FORCING_START);
-            Inner::Newton(NewtonSettings { tolerance: set.tolerance.max(forcing), ..*set })
+            Inner::Newton(NewtonSettings {
+                tolerance: set.tolerance.max(forcing),
+                inexact: forcing > set.tolerance,
+                ..*set
+            })
         }
         other => *other,
     }

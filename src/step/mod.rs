@@ -119,6 +119,10 @@ pub struct ContactSolution {
     pub iterations: usize,
     /// final ‖residual‖_∞ relative to the velocity scale
     pub residual: f64,
+    /// whether the solution is the landing of an exact direction (`DirectionForm`; always, but
+    /// for an inexact convex solve of F.1 that stopped after a loose one — F.1 solves such an
+    /// answer again with exact directions before accepting it)
+    pub exact: bool,
 }
 
 impl StepData<'_> {

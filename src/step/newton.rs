@@ -30,7 +30,7 @@
 
 use faer::Mat;
 
-use super::delassus::{DelassusFactors, InverseDelassus, SlipFrames};
+use super::delassus::{DelassusFactors, DirectionForm, InverseDelassus, SlipFrames};
 use super::{ContactSolution, NodeStatus, StepData};
 use crate::defaults::{ARMIJO, LINE_SEARCH_HALVINGS, MAX_ITERATIONS, NEWTON_TOLERANCE};
 use crate::failure::{NewtonFailure, NewtonStatus};
@@ -109,6 +109,10 @@ pub struct NewtonSettings {
     /// factorization reused (`reduced_direction`, the default); false: the full m × m LU for
     /// every direction (the reference the reduced system is tested against)
     pub reduced: bool,
+    /// an inexact solve of the fixed point (F.1): its answer is only a step towards the bound's
+    /// fixed point (the accepted one is solved again to the full tolerance), so every direction
+    /// may be loose (`DirectionForm::Loose`) and Newton may stop after a loose one
+    pub inexact: bool,
 }
 
 impl Default for NewtonSettings {
@@ -119,6 +123,7 @@ impl Default for NewtonSettings {
             scale_normal: 1.0,
             scale_tangent: 1.0,
             reduced: true,
+            inexact: false,
         }
     }
 }
@@ -312,26 +317,40 @@ pub fn solve_with(
     let mut x = initial_iterate(step, s, &p, y0, lambda0, t0);
     let mut prev_sets: Option<(Vec<bool>, Vec<bool>)> = None;
     let mut prev_ok = false;
+    // the velocity form's loose directions (see `DirectionForm`): while the sets move, and
+    // throughout an inexact solve; Newton stops only after an exact direction otherwise
+    let loose_form = step.inverse.is_some_and(InverseDelassus::has_loose_form);
+    let mut last_exact = true;
     for it in 0..=set.max_iterations {
         let scale = step.velocity_scale(&x.y);
         let res = linalg::norm_inf(&x.f);
         let ok = res <= set.tolerance * scale;
         let cur_sets = sets(step, s, &p, &x.y, &x.lambda, &x.t);
         let stable = prev_sets.as_ref() == Some(&cur_sets);
-        if ok && (stable || prev_ok || it == 0 && res == 0.0) {
-            return Ok(solution(step, x, &cur_sets.1, it, if scale > 0.0 { res / scale } else { res }));
+        if loose_form && it == 1 {
+            // whether the next solve starts with a loose direction
+            factors.first_sets_moved = !stable;
+        }
+        if ok && (stable || prev_ok || it == 0 && res == 0.0) && (last_exact || set.inexact) {
+            let relative = if scale > 0.0 { res / scale } else { res };
+            return Ok(solution(step, x, &cur_sets.1, it, relative, last_exact));
         }
         if it == set.max_iterations {
             break;
         }
         prev_ok = ok;
-        let Some((dy, dm)) = direction(step, factors, s, &p, &x, &cur_sets, set.reduced) else {
+        // exact once the sets hold (or the residual is within the tolerance already), and at the
+        // start unless the last solve's first sets moved
+        let settled = stable || ok || (it == 0 && !factors.first_sets_moved);
+        let form = if loose_form && (set.inexact || !settled) { DirectionForm::Loose } else { DirectionForm::Exact };
+        let Some((dy, dm)) = direction(step, factors, s, &p, &x, &cur_sets, (set.reduced, form)) else {
             return Err(NewtonFailure {
                 status: NewtonStatus::SingularJacobian,
                 iterations: it,
                 residual: res / scale.max(f64::MIN_POSITIVE),
             });
         };
+        last_exact = form == DirectionForm::Exact;
         prev_sets = Some(cur_sets);
         x = line_search(step, s, &p, x, &dy, &dm);
     }
@@ -410,13 +429,20 @@ fn initial_iterate(
 }
 
 /// The converged iterate as a solution, with each node's status.
-fn solution(step: &StepData, x: Iterate, stick: &[bool], iterations: usize, residual: f64) -> ContactSolution {
+fn solution(
+    step: &StepData,
+    x: Iterate,
+    stick: &[bool],
+    iterations: usize,
+    residual: f64,
+    exact: bool,
+) -> ContactSolution {
     let n = step.n();
     let q: Vec<f64> = (0..n).map(|i| step.q(i, &x.y)).collect();
     // exact active sets: a node is separated when it carries no force at all
     let status =
         (0..n).map(|i| NodeStatus::classify(q[i] + x.lambda[i], 0.0, step.friction.then_some(stick[i]))).collect();
-    ContactSolution { y: x.y, lambda: x.lambda, t: x.t, q, status, iterations, residual }
+    ContactSolution { y: x.y, lambda: x.lambda, t: x.t, q, status, iterations, residual, exact }
 }
 
 /// A slipping node on the disk (3-D) linearized: with z = t + ρ v̄, ẑ = z/‖z‖, κ = S/‖z‖ < 1
@@ -502,7 +528,8 @@ fn direction(
     p: &Params,
     x: &Iterate,
     sets: &(Vec<bool>, Vec<bool>),
-    reduced: bool,
+    // the settings' choice of system, and which products with W⁻¹ the velocity form takes
+    (reduced, form): (bool, DirectionForm),
 ) -> Option<(Vec<f64>, Vec<f64>)> {
     let (n, m) = (step.n(), step.m());
     let (active, stick) = sets;
@@ -558,9 +585,19 @@ fn direction(
     } else {
         0.0
     };
+    // an exact direction's conjugate gradients stop once the iterate it lands on is within
+    // PCG_TOLERANCE of the velocity scale: relative to the right-hand side (of the size of ‖F‖)
+    // PCG_TOLERANCE · scale / ‖F‖, never looser than PCG_FORCING_MAX
+    let landing = if scale > 0.0 && linalg::norm_inf(f) > 0.0 {
+        (crate::defaults::PCG_TOLERANCE * scale / linalg::norm_inf(f))
+            .clamp(crate::defaults::PCG_TOLERANCE, crate::defaults::PCG_FORCING_MAX)
+    } else {
+        crate::defaults::PCG_TOLERANCE
+    };
     let coupled = coupling.iter().any(|c| *c != [0.0; 2]) || slips.iter().any(|d| d.ds_dn != 0.0);
     if let (true, false, Some(inverse)) = (reduced, coupled, step.inverse)
-        && let Some(d) = velocity_direction(step, factors, inverse, f, &prescribed, &g, &slips, &dy, &dm, forcing)
+        && let Some(d) =
+            velocity_direction(step, factors, inverse, f, &prescribed, &g, &slips, &dy, &dm, (forcing, landing), form)
     {
         return Some(d);
     }
@@ -645,9 +682,10 @@ fn direction(
 ///   [(W⁻¹)_FF + ω Ĝ_F] Δy_F = −(W⁻¹ (F_y + Δy_P))_F − r_k,F,   ω Δm_P = −(W⁻¹ (F_y + Δy))_P − r_k,P,
 /// r_k the known force change (ω dm on F, the compliance part ω g Δy on P). The matrix is
 /// symmetric and, when the step problem is convex, positive definite: conjugate gradients
-/// preconditioned by the near field of W⁻¹ to round-off (PCG_TOLERANCE), or by node blocks to
-/// the relative residual `forcing`. None (another form is used) when they do
-/// not converge or meet a non-positive curvature.
+/// preconditioned by the near field of W⁻¹ to `landing` for an exact direction (the landed
+/// iterate within PCG_TOLERANCE of the velocity scale), else (node blocks, loose directions) to
+/// the relative residual `forcing`. None (another form is used) when they do not converge or meet
+/// a non-positive curvature.
 #[allow(clippy::too_many_arguments)]
 fn velocity_direction(
     step: &StepData,
@@ -659,7 +697,8 @@ fn velocity_direction(
     slips: &[DiskSlip],
     dy: &[f64],
     dm: &[f64],
-    forcing: f64,
+    (forcing, landing): (f64, f64),
+    form: DirectionForm,
 ) -> Option<(Vec<f64>, Vec<f64>)> {
     let (n, m) = (step.n(), step.m());
     let omega = |l: usize| step.nodes[step.node_of(l)].omega;
@@ -684,7 +723,7 @@ fn velocity_direction(
     for l in (0..m).filter(|&l| prescribed[l]) {
         fy_p[l] += dy[l];
     }
-    let u0 = inverse.apply(&fy_p);
+    let u0 = inverse.apply(&fy_p, form);
     let free: Vec<usize> = (0..m).filter(|&l| !prescribed[l]).collect();
     let mut b = vec![0.0; m];
     for &l in &free {
@@ -697,24 +736,26 @@ fn velocity_direction(
         &diag,
         &blocks,
         &b,
-        // with the near field a direction to round-off costs a few more iterations and keeps
-        // Newton's finite termination on fixed sets (exact complementarity: d ≤ g to round-off,
-        // so the constraint dissipation never decreases); node blocks stop at the forcing
-        if inverse.has_near_field() {
-            crate::defaults::PCG_TOLERANCE
+        // with the near field an exact direction lands to round-off of the velocity scale, which
+        // keeps Newton's finite termination on fixed sets (exact complementarity: d ≤ g to
+        // round-off, so the constraint dissipation never decreases); node blocks, and loose
+        // directions (inexact already), stop at the forcing
+        if inverse.has_near_field() && form == DirectionForm::Exact {
+            landing
         } else {
             forcing.max(crate::defaults::PCG_TOLERANCE)
         },
         crate::defaults::VELOCITY_FORM_MAX_ITERATIONS,
+        form,
         &mut x,
     )?;
-    factors.record_velocity_solve(iterations);
+    factors.record_velocity_solve(iterations, form == DirectionForm::Loose && inverse.has_loose_form());
     for &l in &free {
         dy[l] = x[l];
     }
     // the prescribed components' force changes (W⁻¹ x on those rows alone)
     let rows: Vec<usize> = (0..m).filter(|&l| prescribed[l]).collect();
-    for (&l, u1) in rows.iter().zip(inverse.apply_at(&x, &rows)) {
+    for (&l, u1) in rows.iter().zip(inverse.apply_at(&x, &rows, form)) {
         dm[l] = (-(u0[l] + u1) - r_k[l]) / omega(l);
     }
     // the free tangential components' force changes beyond the known part: Ĝ Δy (normals keep

@@ -37,6 +37,8 @@ pub struct FactorCounts {
     /// and their iterations
     pub velocity_solves: usize,
     pub velocity_iterations: usize,
+    /// of those directions, the loose ones (`DirectionForm::Loose` with a loose form kept)
+    pub loose_velocity_solves: usize,
 }
 
 /// The factor cache of the Newton matrices W'_UU + D (a principal submatrix of the Delassus
@@ -67,6 +69,10 @@ pub struct DelassusFactors {
     /// the velocity form's near-field factor, kept as its CG preconditioner while the free
     /// set holds (`InverseDelassus::solve`)
     pub(crate) near: Option<super::inverse::KeptNear>,
+    /// whether the last Newton solve's first direction was taken on sets that then moved: the
+    /// next solve starts with a loose direction (`DirectionForm`) if so, else with an exact one
+    /// (which lands at once when the sets were right, as on hertz3d's pressing steps)
+    pub(crate) first_sets_moved: bool,
 }
 
 struct Factor {
@@ -218,9 +224,10 @@ impl DelassusFactors {
     }
 
     /// Count a Newton direction solved in velocity form (`InverseDelassus`).
-    pub fn record_velocity_solve(&mut self, iterations: usize) {
+    pub fn record_velocity_solve(&mut self, iterations: usize, loose: bool) {
         self.counts.velocity_solves += 1;
         self.counts.velocity_iterations += iterations;
+        self.counts.loose_velocity_solves += usize::from(loose);
     }
 
     /// Every count so far.

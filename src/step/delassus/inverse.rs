@@ -13,6 +13,20 @@ use super::Delassus;
 use super::cg::conjugate_gradients;
 use super::hmatrix::HMatrix;
 
+/// Which products with W⁻¹ a Newton direction in velocity form takes.
+/// - `Exact`: the dense W⁻¹, or its hierarchical form to HMATRIX_TOLERANCE (1e-12 of max|W⁻¹|):
+///   on a fixed active set the direction lands on the linearized system's solution to round-off
+///   (complementarity exact, so the constraint dissipation never decreases). Newton stops only
+///   after such a direction.
+/// - `Loose`: the certified loose form where one is kept (else the exact one): an inexact Newton
+///   direction (forcing ≤ HMATRIX_CERTIFICATE), for the iterations whose active sets still move
+///   and for the fixed point's inexact convex solves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DirectionForm {
+    Exact,
+    Loose,
+}
+
 /// W⁻¹ of a dense Delassus operator, for Newton directions in velocity form (see
 /// `newton::velocity_direction`): with the prescribed components' velocities known, the
 /// linearized step is the symmetric system [(W⁻¹)_FF + ω Ĝ_F] Δy_F = b on the free components F,
@@ -36,6 +50,8 @@ pub struct InverseDelassus {
     /// W⁻¹ compressed as a hierarchical matrix (`compressed`): when present, every product
     /// with W⁻¹ goes through it (the entries of the preconditioners still come from `winv`)
     h: Option<HMatrix>,
+    /// W⁻¹ compressed at a certified loose ε (`compressed`): the loose directions' products
+    h_loose: Option<HMatrix>,
     /// W compressed likewise, for the momentum residual (N.1) of the velocity form
     w_h: Option<HMatrix>,
 }
@@ -56,7 +72,7 @@ impl InverseDelassus {
         let near = (m >= crate::defaults::NEAR_FIELD_FROM)
             .then(|| NearField::new(&winv, dim, crate::defaults::NEAR_FIELD_TOLERANCE))
             .flatten();
-        let mut inv = InverseDelassus { winv, dim, trial_iterations: 0, near, h: None, w_h: None };
+        let mut inv = InverseDelassus { winv, dim, trial_iterations: 0, near, h: None, h_loose: None, w_h: None };
         // the trial: every component free, no stiffness, a pseudo-random right-hand side
         let b: Vec<f64> = (0..m).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
         let free: Vec<usize> = (0..m).collect();
@@ -70,6 +86,7 @@ impl InverseDelassus {
             &b,
             1e-10,
             crate::defaults::VELOCITY_FORM_TRIAL,
+            DirectionForm::Exact,
             &mut x,
         )?;
         Some(inv)
@@ -77,13 +94,33 @@ impl InverseDelassus {
 
     /// The products with W⁻¹ and with W through their hierarchical forms (`HMatrix`; `positions`
     /// are the contact nodes'): m log m memory reads per product instead of m².
-    /// - W⁻¹ to every entry within HMATRIX_TOLERANCE · max|W⁻¹|: only the Newton directions see
-    ///   it, so the step's solution is the same to the Newton tolerance;
+    /// - W⁻¹ to every entry within HMATRIX_TOLERANCE · max|W⁻¹| for the exact directions: the
+    ///   step's solution is the same to round-off of the linearized system Newton lands on;
+    /// - W⁻¹ at the loosest ε of HMATRIX_LOOSE_TOLERANCES whose error is certified, for the loose
+    ///   directions: ‖H − W⁻¹‖_F ≤ HMATRIX_CERTIFICATE / ‖W‖_∞ ≤ HMATRIX_CERTIFICATE · λ_min(W⁻¹),
+    ///   so H stays positive definite and a loose direction is that of a system within 10% of the
+    ///   exact one (an inexact Newton direction). Without a dense W to bound λ_min, or when no ε is
+    ///   certified, no loose form (every direction exact);
     /// - W (a dense `w` only), for the momentum residual (N.1), to every entry within
     ///   HMATRIX_TOLERANCE_W · max|W|: the residual moves by at most that times ‖r‖₁, far below
     ///   the Newton tolerance.
     pub fn compressed(mut self, w: &Delassus, positions: &[[f64; 3]]) -> InverseDelassus {
         self.h = Some(HMatrix::new(self.winv.as_ref(), self.dim, positions, crate::defaults::HMATRIX_TOLERANCE));
+        // λ_min(W⁻¹) = 1 / λ_max(W) ≥ 1 / ‖W‖_∞
+        let lambda_min = match w {
+            Delassus::Dense(w) => {
+                let norm_inf =
+                    (0..w.nrows()).map(|i| (0..w.ncols()).map(|j| w[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
+                (norm_inf > 0.0).then(|| 1.0 / norm_inf)
+            }
+            _ => None,
+        };
+        self.h_loose = lambda_min.and_then(|l| {
+            crate::defaults::HMATRIX_LOOSE_TOLERANCES
+                .iter()
+                .map(|&tol| HMatrix::new(self.winv.as_ref(), self.dim, positions, tol))
+                .find(|h| h.error_frobenius() <= crate::defaults::HMATRIX_CERTIFICATE * l)
+        });
         if let Delassus::Dense(w) = w {
             self.w_h = Some(HMatrix::new(w.as_ref(), self.dim, positions, crate::defaults::HMATRIX_TOLERANCE_W));
         }
@@ -94,7 +131,15 @@ impl InverseDelassus {
     /// bench).
     pub fn without_compression(mut self) -> InverseDelassus {
         self.h = None;
+        self.h_loose = None;
         self.w_h = None;
+        self
+    }
+
+    /// The same W⁻¹ with every direction exact (no loose form: the comparisons of the tests and
+    /// the bench).
+    pub fn without_loose_form(mut self) -> InverseDelassus {
+        self.h_loose = None;
         self
     }
 
@@ -103,14 +148,32 @@ impl InverseDelassus {
         self.w_h.as_ref()
     }
 
-    /// The hierarchical form, when the products go through it.
+    /// The hierarchical form, when the exact directions' products go through it.
     pub fn hierarchical(&self) -> Option<&HMatrix> {
         self.h.as_ref()
     }
 
-    /// out = W⁻¹ x (all components).
-    pub fn apply(&self, x: &[f64]) -> Vec<f64> {
-        if let Some(h) = &self.h {
+    /// The certified loose hierarchical form, when the loose directions' products go through it.
+    pub fn hierarchical_loose(&self) -> Option<&HMatrix> {
+        self.h_loose.as_ref()
+    }
+
+    /// Whether loose directions differ from exact ones (a certified loose form is kept).
+    pub fn has_loose_form(&self) -> bool {
+        self.h_loose.is_some()
+    }
+
+    /// The form whose products a direction of `form` takes: the loose one when asked for and kept.
+    fn form(&self, form: DirectionForm) -> Option<&HMatrix> {
+        match form {
+            DirectionForm::Loose => self.h_loose.as_ref().or(self.h.as_ref()),
+            DirectionForm::Exact => self.h.as_ref(),
+        }
+    }
+
+    /// out = W⁻¹ x (all components), through `form`'s products.
+    pub fn apply(&self, x: &[f64], form: DirectionForm) -> Vec<f64> {
+        if let Some(h) = self.form(form) {
             return h.apply(x);
         }
         let mut out = vec![0.0; x.len()];
@@ -122,8 +185,8 @@ impl InverseDelassus {
 
     /// (W⁻¹ x)_l for the components l of `rows` alone (W⁻¹ is symmetric: row l is read as the
     /// contiguous column l), in the order of `rows`.
-    pub fn apply_at(&self, x: &[f64], rows: &[usize]) -> Vec<f64> {
-        if let Some(h) = &self.h {
+    pub fn apply_at(&self, x: &[f64], rows: &[usize], form: DirectionForm) -> Vec<f64> {
+        if let Some(h) = self.form(form) {
             let all = h.apply(x);
             return rows.iter().map(|&l| all[l]).collect();
         }
@@ -159,7 +222,7 @@ impl InverseDelassus {
             .map_or(0.0, |n| (2 * n.entries.len() - self.winv.nrows()) as f64 / (self.winv.nrows() as f64).powi(2))
     }
 
-    /// Solve [(W⁻¹)_FF + Ĝ_F] x_F = b_F by conjugate gradients preconditioned with the
+    /// Solve [(W⁻¹)_FF + Ĝ_F] x_F = b_F (W⁻¹'s products through `form`) by conjugate gradients preconditioned with the
     /// Cholesky factor of the same matrix's near field (node blocks where that factor fails:
     /// the near field of a matrix that is not positive definite), to the relative residual
     /// `tolerance` within `max_iterations`. F: the free components (`free_list`; x and b are
@@ -182,6 +245,7 @@ impl InverseDelassus {
         b: &[f64],
         tolerance: f64,
         max_iterations: usize,
+        form: DirectionForm,
         x: &mut [f64],
     ) -> Option<usize> {
         let m = b.len();
@@ -189,14 +253,17 @@ impl InverseDelassus {
         for &l in free_list {
             is_free[l] = true;
         }
-        let op = VelocityMatrix { inverse: self, is_free: &is_free, free_list, diag, blocks };
+        let op = VelocityMatrix { inverse: self, form, is_free: &is_free, free_list, diag, blocks };
         x.iter_mut().for_each(|v| *v = 0.0);
         if let Some(near) = &self.near {
-            if let Some(k) = kept.as_ref().filter(|k| k.is_free == is_free) {
+            let slot = usize::from(form == DirectionForm::Loose);
+            if let Some(k) = kept.as_mut().filter(|k| k.is_free == is_free) {
                 if let Some(iterations) = conjugate_gradients(&op, &k.prec, b, x, tolerance, max_iterations) {
                     // Ĝ has drifted far enough from the factor's to cost iterations: the next
-                    // solve factors anew
-                    if iterations > crate::defaults::NEAR_FIELD_KEPT_SLOWDOWN * k.fresh_iterations.max(1) {
+                    // solve factors anew (measured against the factor's first solve of the same
+                    // form: loose directions stop at the forcing, exact ones at round-off)
+                    let fresh = *k.fresh_iterations[slot].get_or_insert(iterations);
+                    if iterations > crate::defaults::NEAR_FIELD_KEPT_SLOWDOWN * fresh.max(1) {
                         *kept = None;
                     }
                     return Some(iterations);
@@ -205,7 +272,11 @@ impl InverseDelassus {
             }
             if let Some(prec) = near.factor(self, &is_free, diag, blocks) {
                 let solved = conjugate_gradients(&op, &prec, b, x, tolerance, max_iterations);
-                *kept = solved.map(|fresh_iterations| KeptNear { is_free, prec, fresh_iterations });
+                *kept = solved.map(|iterations| {
+                    let mut fresh_iterations = [None; 2];
+                    fresh_iterations[slot] = Some(iterations);
+                    KeptNear { is_free, prec, fresh_iterations }
+                });
                 return solved;
             }
         }
@@ -311,11 +382,11 @@ impl NearField {
 }
 
 /// A near-field factor kept between solves (`InverseDelassus::solve`): the free set it was
-/// computed for, and CG's iterations with it then.
+/// computed for, and CG's iterations in its first solve of each form (exact, loose).
 pub(crate) struct KeptNear {
     is_free: Vec<bool>,
     prec: NearPreconditioner,
-    fresh_iterations: usize,
+    fresh_iterations: [Option<usize>; 2],
 }
 
 /// The near field's factor as the preconditioner of [`VelocityMatrix`].
@@ -355,6 +426,7 @@ impl Precond<f64> for NearPreconditioner {}
 #[derive(Debug)]
 struct VelocityMatrix<'a> {
     inverse: &'a InverseDelassus,
+    form: DirectionForm,
     is_free: &'a [bool],
     free_list: &'a [usize],
     diag: &'a [f64],
@@ -375,7 +447,7 @@ impl LinOp<f64> for VelocityMatrix<'_> {
         let (m, d) = (self.is_free.len(), self.inverse.dim);
         for c in 0..rhs.ncols() {
             let v: Vec<f64> = (0..m).map(|l| if self.is_free[l] { rhs[(l, c)] } else { 0.0 }).collect();
-            let mut o = self.inverse.apply(&v);
+            let mut o = self.inverse.apply(&v, self.form);
             for l in 0..m {
                 if !self.is_free[l] {
                     o[l] = 0.0;

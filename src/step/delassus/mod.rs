@@ -30,7 +30,7 @@ mod sparse;
 pub use factors::{DelassusFactors, FactorCounts, FactorKey};
 pub use frames::SlipFrames;
 pub use hmatrix::HMatrix;
-pub use inverse::InverseDelassus;
+pub use inverse::{DirectionForm, InverseDelassus};
 pub use schur::{contact_block_of_factor, delassus_pair};
 pub use sparse::{Probe, SparseDelassus, SparseStats, sparse};
 
