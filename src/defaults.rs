@@ -3,6 +3,13 @@
 
 /// `solver.newton_tolerance`: Newton stops when ‖F‖_∞ ≤ tolerance × the step's velocity scale.
 pub const NEWTON_TOLERANCE: f64 = 1e-10;
+/// A velocity-form solve with loose directions has landed, whatever its last direction, once its
+/// Newton residual is within this of the velocity scale: where an exact direction lands (its
+/// conjugate gradients stop at PCG_TOLERANCE of the scale), so complementarity holds to
+/// round-off. A loose direction divides the residual by ≳ 1e3 on fixed sets, so it takes one
+/// from Newton's tolerance: measured on academic3d 48×24×16, 40 pressing steps, 166 → 135
+/// Newton iterations and 212 → 36 products with the exact W⁻¹, the same convex solves.
+pub const NEWTON_LANDING: f64 = 1e-13;
 /// `solver.fixed_point_tolerance`: (F.1) stops when S (or y) moves by less than this, relative.
 pub const FIXED_POINT_TOLERANCE: f64 = 1e-8;
 /// `solver.max_newton_iterations` and `solver.max_fixed_point_iterations`.

@@ -253,8 +253,8 @@ fn iterate(
         report.fixed_point_change = if s_scale > 0.0 { ds / s_scale } else { 0.0 };
         if s_converged || y_converged {
             // the accepted solve to the Newton tolerance itself ((E.1) holds to it), landed by an
-            // exact direction (complementarity to round-off: the constraint dissipation stays
-            // monotone)
+            // exact direction or below NEWTON_LANDING (complementarity to round-off: the
+            // constraint dissipation stays monotone)
             if let Inner::Newton(set) = inner
                 && (sol.residual > set.tolerance || !sol.exact)
             {

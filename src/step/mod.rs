@@ -119,9 +119,10 @@ pub struct ContactSolution {
     pub iterations: usize,
     /// final ‖residual‖_∞ relative to the velocity scale
     pub residual: f64,
-    /// whether the solution is the landing of an exact direction (`DirectionForm`; always, but
-    /// for an inexact convex solve of F.1 that stopped after a loose one — F.1 solves such an
-    /// answer again with exact directions before accepting it)
+    /// whether the solution has landed to round-off: after an exact direction (`DirectionForm`)
+    /// or with its residual below NEWTON_LANDING; always, but for an inexact convex solve of F.1
+    /// that stopped after a loose one above it — F.1 solves such an answer again before
+    /// accepting it
     pub exact: bool,
 }
 

@@ -318,7 +318,8 @@ pub fn solve_with(
     let mut prev_sets: Option<(Vec<bool>, Vec<bool>)> = None;
     let mut prev_ok = false;
     // the velocity form's loose directions (see `DirectionForm`): while the sets move, and
-    // throughout an inexact solve; Newton stops only after an exact direction otherwise
+    // throughout an inexact solve; Newton stops otherwise only after an exact direction or once
+    // the residual has landed below NEWTON_LANDING of the velocity scale
     let loose_form = step.inverse.is_some_and(InverseDelassus::has_loose_form);
     let mut last_exact = true;
     for it in 0..=set.max_iterations {
@@ -331,9 +332,12 @@ pub fn solve_with(
             // whether the next solve starts with a loose direction
             factors.first_sets_moved = !stable;
         }
-        if ok && (stable || prev_ok || it == 0 && res == 0.0) && (last_exact || set.inexact) {
+        // landed to round-off: the iterate solves (N.1)–(N.3) as closely as an exact direction
+        // lands, whatever direction got it there (at the start too: a warm start already there)
+        let landed = loose_form && res <= crate::defaults::NEWTON_LANDING * scale;
+        if landed || ok && (stable || prev_ok || it == 0 && res == 0.0) && (last_exact || set.inexact) {
             let relative = if scale > 0.0 { res / scale } else { res };
-            return Ok(solution(step, x, &cur_sets.1, it, relative, last_exact));
+            return Ok(solution(step, x, &cur_sets.1, it, relative, last_exact || landed));
         }
         if it == set.max_iterations {
             break;
@@ -729,7 +733,7 @@ fn velocity_direction(
     for &l in &free {
         b[l] = -u0[l] - r_k[l];
     }
-    let mut x = vec![0.0; m];
+    let (mut x, mut winv_x) = (vec![0.0; m], vec![0.0; m]);
     let iterations = inverse.solve(
         &mut factors.near,
         &free,
@@ -747,16 +751,16 @@ fn velocity_direction(
         },
         crate::defaults::VELOCITY_FORM_MAX_ITERATIONS,
         form,
-        &mut x,
+        (&mut x, &mut winv_x),
     )?;
     factors.record_velocity_solve(iterations, form == DirectionForm::Loose && inverse.has_loose_form());
     for &l in &free {
         dy[l] = x[l];
     }
-    // the prescribed components' force changes (W⁻¹ x on those rows alone)
-    let rows: Vec<usize> = (0..m).filter(|&l| prescribed[l]).collect();
-    for (&l, u1) in rows.iter().zip(inverse.apply_at(&x, &rows, form)) {
-        dm[l] = (-(u0[l] + u1) - r_k[l]) / omega(l);
+    // the prescribed components' force changes (W⁻¹ x on those rows, summed by the conjugate
+    // gradients beside x)
+    for l in (0..m).filter(|&l| prescribed[l]) {
+        dm[l] = (-(u0[l] + winv_x[l]) - r_k[l]) / omega(l);
     }
     // the free tangential components' force changes beyond the known part: Ĝ Δy (normals keep
     // Δλ; their compliance force follows y through q)

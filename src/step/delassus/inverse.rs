@@ -10,17 +10,20 @@ use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, MatMut, MatRef, Par, Side};
 
 use super::Delassus;
-use super::cg::conjugate_gradients;
+use super::cg::conjugate_gradients_tracked;
 use super::hmatrix::HMatrix;
 
 /// Which products with W⁻¹ a Newton direction in velocity form takes.
 /// - `Exact`: the dense W⁻¹, or its hierarchical form to HMATRIX_TOLERANCE (1e-12 of max|W⁻¹|):
 ///   on a fixed active set the direction lands on the linearized system's solution to round-off
-///   (complementarity exact, so the constraint dissipation never decreases). Newton stops only
-///   after such a direction.
+///   (complementarity exact, so the constraint dissipation never decreases).
 /// - `Loose`: the certified loose form where one is kept (else the exact one): an inexact Newton
 ///   direction (forcing ≤ HMATRIX_CERTIFICATE), for the iterations whose active sets still move
-///   and for the fixed point's inexact convex solves.
+///   and for the fixed point's inexact convex solves. On a residual r it leaves ≲ 1e-3 r, so
+///   from Newton's tolerance one more lands below NEWTON_LANDING too.
+///
+/// Newton stops after an exact direction or once the residual is below NEWTON_LANDING of the
+/// velocity scale (landed to round-off, whichever direction got it there).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DirectionForm {
     Exact,
@@ -77,7 +80,7 @@ impl InverseDelassus {
         let b: Vec<f64> = (0..m).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
         let free: Vec<usize> = (0..m).collect();
         let blocks = vec![None; m / dim];
-        let mut x = vec![0.0; m];
+        let (mut x, mut winv_x) = (vec![0.0; m], vec![0.0; m]);
         inv.trial_iterations = inv.solve(
             &mut None,
             &free,
@@ -87,7 +90,7 @@ impl InverseDelassus {
             1e-10,
             crate::defaults::VELOCITY_FORM_TRIAL,
             DirectionForm::Exact,
-            &mut x,
+            (&mut x, &mut winv_x),
         )?;
         Some(inv)
     }
@@ -183,17 +186,6 @@ impl InverseDelassus {
         out
     }
 
-    /// (W⁻¹ x)_l for the components l of `rows` alone (W⁻¹ is symmetric: row l is read as the
-    /// contiguous column l), in the order of `rows`.
-    pub fn apply_at(&self, x: &[f64], rows: &[usize], form: DirectionForm) -> Vec<f64> {
-        if let Some(h) = self.form(form) {
-            let all = h.apply(x);
-            return rows.iter().map(|&l| all[l]).collect();
-        }
-        let xv = faer::ColRef::from_slice(x);
-        rows.iter().map(|&l| self.winv.col(l).transpose() * xv).collect()
-    }
-
     /// The same W⁻¹ with the near-field preconditioner whatever its size (the tests and the
     /// bench compare the two preconditioners below NEAR_FIELD_FROM too).
     pub fn with_near_field(mut self) -> InverseDelassus {
@@ -246,7 +238,7 @@ impl InverseDelassus {
         tolerance: f64,
         max_iterations: usize,
         form: DirectionForm,
-        x: &mut [f64],
+        (x, winv_x): (&mut [f64], &mut [f64]),
     ) -> Option<usize> {
         let m = b.len();
         let mut is_free = vec![false; m];
@@ -254,24 +246,25 @@ impl InverseDelassus {
             is_free[l] = true;
         }
         let op = VelocityMatrix { inverse: self, form, is_free: &is_free, free_list, diag, blocks };
-        x.iter_mut().for_each(|v| *v = 0.0);
+        let apply = |v: &[f64], out: &mut [f64], winv_v: &mut [f64]| op.apply(v, out, winv_v);
         if let Some(near) = &self.near {
             let slot = usize::from(form == DirectionForm::Loose);
-            if let Some(k) = kept.as_mut().filter(|k| k.is_free == is_free) {
-                if let Some(iterations) = conjugate_gradients(&op, &k.prec, b, x, tolerance, max_iterations) {
-                    // Ĝ has drifted far enough from the factor's to cost iterations: the next
-                    // solve factors anew (measured against the factor's first solve of the same
-                    // form: loose directions stop at the forcing, exact ones at round-off)
-                    let fresh = *k.fresh_iterations[slot].get_or_insert(iterations);
-                    if iterations > crate::defaults::NEAR_FIELD_KEPT_SLOWDOWN * fresh.max(1) {
-                        *kept = None;
-                    }
-                    return Some(iterations);
+            if let Some(k) = kept.as_mut().filter(|k| k.is_free == is_free)
+                && let Some(iterations) =
+                    conjugate_gradients_tracked(apply, &k.prec, b, (&mut *x, &mut *winv_x), tolerance, max_iterations)
+            {
+                // Ĝ has drifted far enough from the factor's to cost iterations: the next
+                // solve factors anew (measured against the factor's first solve of the same
+                // form: loose directions stop at the forcing, exact ones at round-off)
+                let fresh = *k.fresh_iterations[slot].get_or_insert(iterations);
+                if iterations > crate::defaults::NEAR_FIELD_KEPT_SLOWDOWN * fresh.max(1) {
+                    *kept = None;
                 }
-                x.iter_mut().for_each(|v| *v = 0.0);
+                return Some(iterations);
             }
             if let Some(prec) = near.factor(self, &is_free, diag, blocks) {
-                let solved = conjugate_gradients(&op, &prec, b, x, tolerance, max_iterations);
+                let solved =
+                    conjugate_gradients_tracked(apply, &prec, b, (&mut *x, &mut *winv_x), tolerance, max_iterations);
                 *kept = solved.map(|iterations| {
                     let mut fresh_iterations = [None; 2];
                     fresh_iterations[slot] = Some(iterations);
@@ -281,7 +274,7 @@ impl InverseDelassus {
             }
         }
         let prec = NodeBlocks::new(self, &is_free, diag, blocks)?;
-        conjugate_gradients(&op, &prec, b, x, tolerance, max_iterations)
+        conjugate_gradients_tracked(apply, &prec, b, (x, winv_x), tolerance, max_iterations)
     }
 }
 
@@ -433,45 +426,28 @@ struct VelocityMatrix<'a> {
     blocks: &'a [Option<[[f64; 2]; 2]>],
 }
 
-impl LinOp<f64> for VelocityMatrix<'_> {
-    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
-        StackReq::EMPTY
-    }
-    fn nrows(&self) -> usize {
-        self.is_free.len()
-    }
-    fn ncols(&self) -> usize {
-        self.is_free.len()
-    }
-    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _stack: &mut MemStack) {
+impl VelocityMatrix<'_> {
+    /// out = [(W⁻¹)_FF + Ĝ_F] v_F (zero off F) and winv_v = W⁻¹ v_F on every component (the
+    /// prescribed rows' forces follow from it).
+    fn apply(&self, v: &[f64], out: &mut [f64], winv_v: &mut [f64]) {
         let (m, d) = (self.is_free.len(), self.inverse.dim);
-        for c in 0..rhs.ncols() {
-            let v: Vec<f64> = (0..m).map(|l| if self.is_free[l] { rhs[(l, c)] } else { 0.0 }).collect();
-            let mut o = self.inverse.apply(&v, self.form);
-            for l in 0..m {
-                if !self.is_free[l] {
-                    o[l] = 0.0;
+        let v: Vec<f64> = (0..m).map(|l| if self.is_free[l] { v[l] } else { 0.0 }).collect();
+        winv_v.copy_from_slice(&self.inverse.apply(&v, self.form));
+        for l in 0..m {
+            out[l] = if self.is_free[l] { winv_v[l] } else { 0.0 };
+        }
+        for &l in self.free_list {
+            out[l] += self.diag[l] * v[l];
+        }
+        for (i, blk) in self.blocks.iter().enumerate() {
+            if let Some(g) = blk {
+                let (a, b) = (d * i + 1, d * i + 2);
+                if self.is_free[a] && self.is_free[b] {
+                    out[a] += g[0][0] * v[a] + g[0][1] * v[b];
+                    out[b] += g[1][0] * v[a] + g[1][1] * v[b];
                 }
-            }
-            for &l in self.free_list {
-                o[l] += self.diag[l] * v[l];
-            }
-            for (i, blk) in self.blocks.iter().enumerate() {
-                if let Some(g) = blk {
-                    let (a, b) = (d * i + 1, d * i + 2);
-                    if self.is_free[a] && self.is_free[b] {
-                        o[a] += g[0][0] * v[a] + g[0][1] * v[b];
-                        o[b] += g[1][0] * v[a] + g[1][1] * v[b];
-                    }
-                }
-            }
-            for (l, ol) in o.into_iter().enumerate() {
-                out[(l, c)] = ol;
             }
         }
-    }
-    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
-        self.apply(out, rhs, par, stack)
     }
 }
 
