@@ -578,7 +578,7 @@ fn ck_limit_is_the_problems_and_the_summary_reports_it() {
 }
 
 /// (S.6) The velocity form's preconditioner: the Cholesky factor of W⁻¹'s near field (its
-/// node blocks above 1e-3 of the diagonal; taken from NEAR_FIELD_FROM unknowns on, forced here)
+/// node blocks above NEAR_FIELD_TOLERANCE of the diagonal; taken from NEAR_FIELD_FROM unknowns on, forced here)
 /// in place of node blocks changes the path of conjugate gradients, not the Newton solution: on academic3d at 12×8×4 cells (324 contact unknowns;
 /// pressing with half the nodes slipping outward, then shaking: slip, stick and separation), each
 /// step's frozen problem solved to 1e-13 of the velocity scale both ways gives velocities within

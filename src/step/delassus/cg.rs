@@ -110,3 +110,61 @@ pub(super) fn conjugate_gradients_tracked(
     }
     None
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::Mat;
+    use faer::matrix_free::IdentityPrecond;
+
+    /// A symmetric positive definite n × n matrix (diagonally dominant: the off-diagonal row sums
+    /// stay below 2 Σ 1/k² < 3.3 < 4) and a rectangular companion K.
+    fn system(n: usize) -> (Mat<f64>, Mat<f64>, Vec<f64>) {
+        let a = Mat::from_fn(n, n, |i, j| {
+            if i == j { 4.0 + 0.1 * i as f64 } else { 1.0 / (1.0 + (i as f64 - j as f64).abs()).powi(2) }
+        });
+        let k = Mat::from_fn(n + 5, n, |i, j| ((i * 7 + j * 3) % 11) as f64 - 5.0);
+        let b = (0..n).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
+        (a, k, b)
+    }
+
+    fn product(m: &Mat<f64>, v: &[f64]) -> Vec<f64> {
+        (0..m.nrows()).map(|i| (0..m.ncols()).map(|j| m[(i, j)] * v[j]).sum()).collect()
+    }
+
+    /// (N.1) The tracked conjugate gradients (the velocity form's directions) stop at their
+    /// relative residual, and the companion they sum is K applied to the x they return: to
+    /// 1e-13 of ‖K‖∞‖x‖∞ (round-off of the ~30 sums; the companion is never formed from x);
+    /// on a negative definite matrix they stop at the first curvature test.
+    #[test]
+    fn tracked_conjugate_gradients_sum_the_companion_of_their_answer() {
+        let n = 30;
+        let (a, k, b) = system(n);
+        let apply = |p: &[f64], ap: &mut [f64], kp: &mut [f64]| {
+            ap.copy_from_slice(&product(&a, p));
+            kp.copy_from_slice(&product(&k, p));
+        };
+        let (mut x, mut kx) = (vec![1.0; n], vec![1.0; n + 5]);
+        let prec = IdentityPrecond { dim: n };
+        let iterations = conjugate_gradients_tracked(apply, &prec, &b, (&mut x, &mut kx), 1e-12, 100)
+            .expect("an SPD system converges");
+        assert!(iterations > 1 && iterations < n, "{iterations} iterations");
+        let ax = product(&a, &x);
+        let residual = ax.iter().zip(&b).map(|(p, q)| (p - q).powi(2)).sum::<f64>().sqrt();
+        let b_norm = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        // the stopping test on the recurrence's residual; recomputed from x it carries the
+        // round-off of one product more (~n u ‖A‖ ‖x‖ ≈ 1e-14 ‖b‖ here)
+        assert!(residual <= 2e-12 * b_norm, "‖b − A x‖ = {residual:e}");
+        let exact = product(&k, &x);
+        let k_norm = (0..k.nrows()).map(|i| (0..n).map(|j| k[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
+        let x_norm = x.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        let err = exact.iter().zip(&kx).fold(0.0f64, |s, (p, q)| s.max((p - q).abs()));
+        assert!(err <= 1e-13 * k_norm * x_norm, "‖K x − Σ α K p‖∞ = {err:e}");
+
+        let negative = |p: &[f64], ap: &mut [f64], kp: &mut [f64]| {
+            ap.iter_mut().zip(product(&a, p)).for_each(|(o, v)| *o = -v);
+            kp.copy_from_slice(&product(&k, p));
+        };
+        assert_eq!(conjugate_gradients_tracked(negative, &prec, &b, (&mut x, &mut kx), 1e-12, 100), None);
+    }
+}
