@@ -147,6 +147,12 @@ pub const NEAR_FIELD_TOLERANCE: f64 = 3e-3;
 /// factorizations than it saves on small W. Measured (cargo xtask bench --thick-only, median
 /// contact solve per step, pressing phase): 936 unknowns (academic3d 24×12×8) 5.9 ms against 4.8
 /// with node blocks; 1,632 (32×16×12) 45.9 against 50.7; 3,600 (48×24×16) 252 against 385.
+/// Re-measured with the loose directions and the hierarchical forms (academic3d's whole run,
+/// 2,000 steps, contact solve in s, node blocks → near field): 432 unknowns (16×8×4) 4.63 → 4.47,
+/// 660 (20×10×6) 12.0 → 11.4, 936 (24×12×8) 25.6 → 24.1 — within 6%, not taken lower: on
+/// ill-conditioned W (a thin box with the dense form asked for, 22×16×2) the near field's exact
+/// directions, stopped where the iterate lands relative to the right-hand side, leave Newton's
+/// residual at 1.9e-12 of the velocity scale instead of round-off.
 pub const NEAR_FIELD_FROM: usize = 1200;
 /// The velocity form keeps its near-field factor as CG's preconditioner for the next solves
 /// while the free set holds (Newton's iterations and the steps after), until a solve with it
@@ -169,13 +175,18 @@ pub const SCHUR_FROM: usize = 512;
 /// … and a direction falls back to the force form when its solve needs more than this many.
 pub const VELOCITY_FORM_MAX_ITERATIONS: usize = 60;
 /// The products with W⁻¹ and W in the velocity form go through their hierarchical forms
-/// (`delassus::HMatrix`) from this many contact unknowns on, where the near field preconditions
-/// (NEAR_FIELD_FROM). Measured on academic3d, median contact solve per pressing step, this
-/// 2-core machine (`cargo xtask bench --thick-only`): 936 components (24×12×8) 6.7 ms against
-/// 4.5 with the dense products and node blocks (the dense form stays below); 1,632 (32×16×12)
-/// 22.5 against 35.3; 3,600 (48×24×16) 99.2 against 216.7; 6,336 (64×32×24) 279.6 against 861.9.
-/// Of the pinned fixtures only hertz3d (1,875 components) takes it (CHANGELOG, pin 12).
-pub const HMATRIX_FROM: usize = 1200;
+/// (`delassus::HMatrix`), with W⁻¹'s certified loose form for the directions taken while the
+/// sets move (`DirectionForm`), from this many contact unknowns on. Measured on academic3d's
+/// whole run (2,000 steps, pressing then shaking, this 2-core machine, node blocks below
+/// NEAR_FIELD_FROM, contact solve in s, dense products → hierarchical forms): 324 components
+/// (12×8×4) 3.04 → 3.14 (the dense form stays below), 432 (16×8×4) 5.87 → 4.63, 660 (20×10×6)
+/// 22.1 → 12.0, 936 (24×12×8, the fixture) 56.9 → 25.6 (the whole run 72.9 → 37 s); pressing
+/// only (`cargo xtask bench --thick-only`, median per step, near field from 1,632 on) 936 7.9 →
+/// 4.3 ms, 1,632 (32×16×12) 43.7 → 12.6, 3,600 (48×24×16) 320.7 → 41.9, 6,336 (64×32×24)
+/// 1,583.6 → 105.1. (It was 1,200, measured before the loose directions.) Of the pinned fixtures
+/// only hertz3d (1,875 components) takes it (CHANGELOG, pin 12); academic3d is pinned at 8×4×4
+/// (108 components).
+pub const HMATRIX_FROM: usize = 400;
 /// … W⁻¹ compressed to every entry within this fraction of max|W⁻¹| for the exact directions
 /// (those Newton lands with: see `DirectionForm`) …
 pub const HMATRIX_TOLERANCE: f64 = 1e-12;

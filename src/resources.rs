@@ -195,15 +195,23 @@ impl Estimate {
                     solve,
                     if self.velocity_form() && !hierarchical { "about" } else { "at most" },
                     lu,
-                    if hierarchical {
-                        "velocity form: ~9 products with the hierarchical W or W⁻¹ (0.3–0.6 of the dense values, measured), a sparse near-field factor"
-                    } else if self.velocity_form() && self.dim * self.contact_nodes >= crate::defaults::NEAR_FIELD_FROM
-                    {
-                        "velocity form: ~9 products with the dense W or W⁻¹, a sparse near-field factor"
-                    } else if self.velocity_form() {
-                        "velocity form: ~9 products with the dense W or W⁻¹, node-block preconditioner"
+                    if self.velocity_form() {
+                        // the products' form (HMATRIX_FROM) and the preconditioner (NEAR_FIELD_FROM)
+                        format!(
+                            "velocity form: ~9 products with the {}, {}",
+                            if hierarchical {
+                                "hierarchical W or W⁻¹ (0.3–0.6 of the dense values, measured)"
+                            } else {
+                                "dense W or W⁻¹"
+                            },
+                            if self.dim * self.contact_nodes >= crate::defaults::NEAR_FIELD_FROM {
+                                "a sparse near-field factor"
+                            } else {
+                                "node-block preconditioner"
+                            }
+                        )
                     } else {
-                        "dense Cholesky; reused while the contact sets hold, less with the sparse form"
+                        "dense Cholesky; reused while the contact sets hold, less with the sparse form".to_string()
                     },
                     self.dim * self.contact_nodes
                 )

@@ -359,7 +359,8 @@ pub fn run_shaking(plan: &ShakePlan, progress: &dyn Fn(&str)) -> Result<Vec<Shak
         let mut s = scene(cells, 1)?;
         let pressing = (SHAKING_FROM / s.time.step).round() as usize;
         s.time.end = s.time.step * (pressing + plan.steps) as f64;
-        // the run's own choice of form (dense below HMATRIX_FROM components, hierarchical above)
+        // the run's own choice of form (dense products below HMATRIX_FROM = 400 components,
+        // hierarchical above; node blocks below NEAR_FIELD_FROM = 1,200, the near field above)
         s.solver.contact_solve = dyncontact::model::kinds::ContactSolve::Auto;
         let p = Problem::from_scene(&s, Path::new("."))?;
         progress(&format!("thick shaking: {}x{}x{}, {pressing} pressing steps", cells[0], cells[1], cells[2]));

@@ -121,24 +121,47 @@ fn memory_estimate_is_within_30_percent_of_the_measured_peak() {
 }
 
 /// (issue 25) `check` states the contact solve's cost in the form the run takes: on academic3d
-/// (3-D, ~940 contact unknowns: the velocity form) about VELOCITY_PRODUCTS dense products of 2m²
-/// flop per Newton iteration, not a dense Cholesky's m³/3; refined to 48×24×16 (3,600
-/// unknowns, the hierarchical forms) at most that; on the 2-D academic scene the Cholesky bound.
+/// at 12×8×4 (3-D, ~350 contact unknowns: the velocity form, dense products, node blocks) about
+/// VELOCITY_PRODUCTS dense products of 2m² flop per Newton iteration, not a dense Cholesky's
+/// m³/3; at the fixture's 24×12×8 (~940 unknowns, from HMATRIX_FROM on: the hierarchical forms,
+/// node blocks) and refined to 48×24×16 (3,600 unknowns, the near field too) at most that; on the
+/// 2-D academic scene the Cholesky bound.
 #[test]
 fn check_states_the_velocity_form_cost() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let o = Command::new(BIN).arg("check").arg(root.join("fixtures/scenes/academic3d.toml")).output().expect("check");
-    let text = String::from_utf8_lossy(&o.stdout);
-    let line = text
-        .lines()
-        .find(|l| l.trim_start().starts_with("cost per step"))
-        .unwrap_or_else(|| panic!("no cost line: {text}"));
-    let scene = Scene::from_file(&root.join("fixtures/scenes/academic3d.toml")).expect("scene");
+    let check_text = |sets: &[&str]| {
+        let mut c = Command::new(BIN);
+        c.arg("check").arg(root.join("fixtures/scenes/academic3d.toml"));
+        for s in sets {
+            c.args(["--set", s]);
+        }
+        String::from_utf8_lossy(&c.output().expect("check").stdout).to_string()
+    };
+    let cost_line = |sets: &[&str]| {
+        let text = check_text(sets);
+        text.lines()
+            .find(|l| l.trim_start().starts_with("cost per step"))
+            .unwrap_or_else(|| panic!("no cost line: {text}"))
+            .to_string()
+    };
+    let coarse = dyncontact::overrides::Override::parse("domain.cells=[12,8,4]").expect("override");
+    let scene = Scene::from_file_with(&root.join("fixtures/scenes/academic3d.toml"), &[coarse]).expect("scene");
     let e = estimate(&scene.validate().expect("valid"), &root.join("fixtures/scenes")).expect("estimate");
     let m = (3 * e.contact_nodes) as f64;
+    assert!(m < dyncontact::defaults::HMATRIX_FROM as f64, "{m} unknowns: the dense products");
     let flops = dyncontact::resources::VELOCITY_PRODUCTS * 2.0 * m * m;
     assert_eq!(e.flops_per_step().1, flops, "the velocity form's work");
-    assert!(line.contains("velocity form") && line.contains(&format!("about {flops:.2e} flop")), "{line}");
+    let line = cost_line(&["domain.cells=[12,8,4]"]);
+    assert!(line.contains("dense W or W⁻¹, node-block") && line.contains(&format!("about {flops:.2e} flop")), "{line}");
+    let text = check_text(&[]);
+    let line = cost_line(&[]);
+    assert!(
+        line.contains("at most")
+            && line.contains("hierarchical W or W⁻¹ (0.3–0.6 of the dense values, measured), node-block"),
+        "{line}"
+    );
+    let scene = Scene::from_file(&root.join("fixtures/scenes/academic3d.toml")).expect("scene");
+    let e = estimate(&scene.validate().expect("valid"), &root.join("fixtures/scenes")).expect("estimate");
     // 936 contact unknowns, responses too large to keep: W from the Schur complement, and the
     // estimate counts its second factor
     assert!(e.schur_bytes > 0.0 && e.schur_setup_bytes() <= e.total(), "{e:?}");
@@ -164,7 +187,8 @@ fn check_states_the_velocity_form_cost() {
     assert!(
         text.lines().any(|l| l.trim_start().starts_with("cost per step")
             && l.contains("at most")
-            && l.contains("hierarchical W or W⁻¹")),
+            && l.contains("hierarchical W or W⁻¹")
+            && l.contains("near-field factor")),
         "{text}"
     );
     let o = Command::new(BIN).arg("check").arg(root.join("fixtures/scenes/academic.toml")).output().expect("check");

@@ -702,8 +702,8 @@ fn schur_delassus_gives_the_solves_step_solutions() {
 }
 
 /// (S.6) The velocity form with W⁻¹'s and W's products through their hierarchical forms
-/// (`InverseDelassus::compressed`; a run takes them from HMATRIX_FROM
-/// components on, forced here below it) gives the step solutions of the dense products: on
+/// (`InverseDelassus::compressed`, which a run takes from HMATRIX_FROM = 400 components on)
+/// gives the step solutions of the dense products (`without_compression`): on
 /// academic3d at 22×16×2 cells (391 contact nodes, 1,173 components, cheap to factor; the dense W
 /// asked for) over 0.3 s (slip, stick and separation), each step's frozen problem
 /// solved to 1e-13 of the velocity scale both ways gives velocities within 1e-12 and forces
@@ -720,16 +720,15 @@ fn hierarchical_delassus_gives_the_dense_step_solutions() {
     s.time.end = 0.3;
     let p = problem(s);
     let set = NewtonSettings { tolerance: 1e-13, ..NewtonSettings::default() };
-    let c = p.contact.as_ref().expect("contact");
-    let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| p.mesh.point(i)).collect();
     let mut sim0 = Simulation::new(&p).expect("setup");
     let w = sim0.delassus.take().expect("a dense W");
     let inverse = sim0.inverse.take().expect("velocity form");
-    assert!(inverse.hierarchical().is_none(), "dense products below HMATRIX_FROM");
-    let inverse = inverse.compressed(&w, &positions);
-    let share = inverse.hierarchical().map(|h| h.storage_share()).expect("compressed");
+    let share = inverse.hierarchical().map(|h| h.storage_share()).expect("the run compresses W⁻¹ from HMATRIX_FROM on");
     assert!(inverse.hierarchical_w().is_some(), "W compressed too");
-    let (worst_v, worst_f, statuses, fa, _) = against_the_run(&p, &w, &inverse, set);
+    // the dense products the run's hierarchical ones are compared against
+    let dense = inverse.without_compression();
+    assert!(dense.hierarchical().is_none() && dense.hierarchical_w().is_none(), "dense products");
+    let (worst_v, worst_f, statuses, _, f_run) = against_the_run(&p, &w, &dense, set);
     println!(
         "hierarchical ({share:.3} of W⁻¹'s values) vs dense: worst per-step difference: velocity {worst_v:.3e}, force {worst_f:.3e}; statuses {statuses:?}"
     );
@@ -742,5 +741,5 @@ fn hierarchical_delassus_gives_the_dense_step_solutions() {
     assert!(["Separated", "Stick", "Slip"].iter().all(|s| statuses.contains(*s)), "statuses seen: {statuses:?}");
     assert!(share < 1.0, "the far field compressed: {share:.3} of the dense values");
     assert!(worst_v <= 1e-12 && worst_f <= 1e-9, "velocity {worst_v:.3e}, force {worst_f:.3e}");
-    assert!(fa.all_counts().velocity_solves > 0, "the hierarchical run used the velocity form");
+    assert!(f_run.all_counts().velocity_solves > 0, "the hierarchical run used the velocity form");
 }
