@@ -90,6 +90,9 @@ pub const MAX_CELLS_PER_SIDE: i64 = 65_536;
 /// relative residual (far below the Newton tolerance, so the direction is exact to round-off for
 /// Newton's purposes) …
 pub const PCG_TOLERANCE: f64 = 1e-13;
+/// An exact direction's conjugate gradients (velocity form, near field) never stop tighter than
+/// this relative residual, near the round-off of their recurrence.
+pub const LANDING_FLOOR: f64 = 1e-15;
 /// … within this many iterations, else the matrix is factored anew.
 pub const PCG_MAX_ITERATIONS: usize = 12;
 /// The kept factor preconditions a Newton matrix whose unknowns U differ from its own when at
@@ -149,10 +152,7 @@ pub const NEAR_FIELD_TOLERANCE: f64 = 3e-3;
 /// with node blocks; 1,632 (32×16×12) 45.9 against 50.7; 3,600 (48×24×16) 252 against 385.
 /// Re-measured with the loose directions and the hierarchical forms (academic3d's whole run,
 /// 2,000 steps, contact solve in s, node blocks → near field): 432 unknowns (16×8×4) 4.63 → 4.47,
-/// 660 (20×10×6) 12.0 → 11.4, 936 (24×12×8) 25.6 → 24.1 — within 6%, not taken lower: on
-/// ill-conditioned W (a thin box with the dense form asked for, 22×16×2) the near field's exact
-/// directions, stopped where the iterate lands relative to the right-hand side, leave Newton's
-/// residual at 1.9e-12 of the velocity scale instead of round-off.
+/// 660 (20×10×6) 12.0 → 11.4, 936 (24×12×8) 25.6 → 24.1 — within 6%, so not taken lower.
 pub const NEAR_FIELD_FROM: usize = 1200;
 /// The velocity form keeps its near-field factor as CG's preconditioner for the next solves
 /// while the free set holds (Newton's iterations and the steps after), until a solve with it

@@ -590,14 +590,9 @@ fn direction(
         0.0
     };
     // an exact direction's conjugate gradients stop once the iterate it lands on is within
-    // PCG_TOLERANCE of the velocity scale: relative to the right-hand side (of the size of ‖F‖)
-    // PCG_TOLERANCE · scale / ‖F‖, never looser than PCG_FORCING_MAX
-    let landing = if scale > 0.0 && linalg::norm_inf(f) > 0.0 {
-        (crate::defaults::PCG_TOLERANCE * scale / linalg::norm_inf(f))
-            .clamp(crate::defaults::PCG_TOLERANCE, crate::defaults::PCG_FORCING_MAX)
-    } else {
-        crate::defaults::PCG_TOLERANCE
-    };
+    // PCG_TOLERANCE of the velocity scale (in velocity units; `velocity_direction` turns it into
+    // a tolerance on its system's residual)
+    let landing = crate::defaults::PCG_TOLERANCE * scale;
     let coupled = coupling.iter().any(|c| *c != [0.0; 2]) || slips.iter().any(|d| d.ds_dn != 0.0);
     if let (true, false, Some(inverse)) = (reduced, coupled, step.inverse)
         && let Some(d) =
@@ -687,7 +682,8 @@ fn direction(
 /// r_k the known force change (ω dm on F, the compliance part ω g Δy on P). The matrix is
 /// symmetric and, when the step problem is convex, positive definite: conjugate gradients
 /// preconditioned by the near field of W⁻¹ to `landing` for an exact direction (the landed
-/// iterate within PCG_TOLERANCE of the velocity scale), else (node blocks, loose directions) to
+/// iterate within PCG_TOLERANCE of the velocity scale, `landing` in velocity units: their
+/// residual ρ within landing / ‖W‖_∞ in 2-norm), else (node blocks, loose directions) to
 /// the relative residual `forcing`. None (another form is used) when they do not converge or meet
 /// a non-positive curvature.
 #[allow(clippy::too_many_arguments)]
@@ -742,10 +738,20 @@ fn velocity_direction(
         &b,
         // with the near field an exact direction lands to round-off of the velocity scale, which
         // keeps Newton's finite termination on fixed sets (exact complementarity: d ≤ g to
-        // round-off, so the constraint dissipation never decreases); node blocks, and loose
-        // directions (inexact already), stop at the forcing
+        // round-off, so the constraint dissipation never decreases): the system's residual ρ (force
+        // units, zero on the prescribed rows) moves the linearized (N.1) rows by W ρ, and
+        // ‖W ρ‖_∞ ≤ ‖W‖_∞ ‖ρ‖₂ ≤ `landing` once ‖ρ‖₂ ≤ landing / ‖W‖_∞ — relative to ‖b‖₂, never
+        // tighter than LANDING_FLOOR (round-off of the conjugate gradients' recurrence) nor looser
+        // than PCG_FORCING_MAX; node blocks, and loose directions (inexact already), stop at the
+        // forcing
         if inverse.has_near_field() && form == DirectionForm::Exact {
-            landing
+            let norm_b = linalg::dot(&b, &b).sqrt();
+            let wb = inverse.w_norm_inf() * norm_b;
+            if wb > 0.0 {
+                (landing / wb).clamp(crate::defaults::LANDING_FLOOR, crate::defaults::PCG_FORCING_MAX)
+            } else {
+                crate::defaults::PCG_TOLERANCE
+            }
         } else {
             forcing.max(crate::defaults::PCG_TOLERANCE)
         },

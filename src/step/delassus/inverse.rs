@@ -57,6 +57,9 @@ pub struct InverseDelassus {
     h_loose: Option<HMatrix>,
     /// W compressed likewise, for the momentum residual (N.1) of the velocity form
     w_h: Option<HMatrix>,
+    /// ‖W‖_∞ (the largest row sum of |W|): bounds how far a residual of the directions' systems,
+    /// in force units, moves the momentum residual (N.1), in velocity units
+    w_norm_inf: f64,
 }
 
 impl InverseDelassus {
@@ -75,7 +78,9 @@ impl InverseDelassus {
         let near = (m >= crate::defaults::NEAR_FIELD_FROM)
             .then(|| NearField::new(&winv, dim, crate::defaults::NEAR_FIELD_TOLERANCE))
             .flatten();
-        let mut inv = InverseDelassus { winv, dim, trial_iterations: 0, near, h: None, h_loose: None, w_h: None };
+        let w_norm_inf = norm_inf(w.as_ref());
+        let mut inv =
+            InverseDelassus { winv, dim, trial_iterations: 0, near, h: None, h_loose: None, w_h: None, w_norm_inf };
         // the trial: every component free, no stiffness, a pseudo-random right-hand side
         let b: Vec<f64> = (0..m).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
         let free: Vec<usize> = (0..m).collect();
@@ -112,8 +117,7 @@ impl InverseDelassus {
         // λ_min(W⁻¹) = 1 / λ_max(W) ≥ 1 / ‖W‖_∞
         let lambda_min = match w {
             Delassus::Dense(w) => {
-                let norm_inf =
-                    (0..w.nrows()).map(|i| (0..w.ncols()).map(|j| w[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
+                let norm_inf = norm_inf(w.as_ref());
                 (norm_inf > 0.0).then(|| 1.0 / norm_inf)
             }
             _ => None,
@@ -144,6 +148,11 @@ impl InverseDelassus {
     pub fn without_loose_form(mut self) -> InverseDelassus {
         self.h_loose = None;
         self
+    }
+
+    /// ‖W‖_∞ of the W this inverse was formed from.
+    pub fn w_norm_inf(&self) -> f64 {
+        self.w_norm_inf
     }
 
     /// W's hierarchical form, when the momentum residual's products go through it.
@@ -521,3 +530,9 @@ impl LinOp<f64> for NodeBlocks {
 }
 
 impl Precond<f64> for NodeBlocks {}
+
+/// ‖A‖_∞ of a symmetric A: its largest column sum of |A| (the row sums, read down the columns
+/// of the column-major storage).
+fn norm_inf(a: MatRef<'_, f64>) -> f64 {
+    (0..a.ncols()).map(|j| a.col(j).iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max)
+}
