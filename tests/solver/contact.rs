@@ -701,6 +701,21 @@ fn schur_delassus_gives_the_solves_step_solutions() {
     assert!(fa.all_counts().velocity_solves > 0, "the Schur run used the velocity form");
 }
 
+/// academic3d on a thin box, 22×16×2 cells (391 contact nodes, 1,173 components, cheap to
+/// factor; W ill-conditioned), the dense form asked for, over 0.3 s (slip, stick and
+/// separation): the problem, its dense W and the run's W⁻¹ (in the run's own forms).
+fn thin_dense_box() -> (Problem, dyncontact::step::delassus::Delassus, dyncontact::step::delassus::InverseDelassus) {
+    let mut s = fixture("academic3d");
+    s.domain.cells = Some(vec![22, 16, 2]);
+    s.solver.contact_solve = dyncontact::model::kinds::ContactSolve::Dense;
+    s.time.end = 0.3;
+    let p = problem(s);
+    let mut sim0 = Simulation::new(&p).expect("setup");
+    let w = sim0.delassus.take().expect("a dense W");
+    let inverse = sim0.inverse.take().expect("velocity form");
+    (p, w, inverse)
+}
+
 /// (S.6) An exact direction preconditioned by the near field lands where W is ill-conditioned:
 /// its conjugate gradients stop once ‖W‖_∞ ‖ρ‖₂ (a bound of how far their residual ρ, in force
 /// units, moves the momentum residual) is within 1e-13 of the velocity scale. On the thin
@@ -713,15 +728,8 @@ fn schur_delassus_gives_the_solves_step_solutions() {
 /// after 50 exact directions here.
 #[test]
 fn near_field_directions_land_on_an_ill_conditioned_w() {
-    let mut s = fixture("academic3d");
-    s.domain.cells = Some(vec![22, 16, 2]);
-    s.solver.contact_solve = dyncontact::model::kinds::ContactSolve::Dense;
-    s.time.end = 0.3;
-    let p = problem(s);
+    let (p, w, inverse) = thin_dense_box();
     let set = NewtonSettings { tolerance: 1e-13, ..NewtonSettings::default() };
-    let mut sim0 = Simulation::new(&p).expect("setup");
-    let w = sim0.delassus.take().expect("a dense W");
-    let inverse = sim0.inverse.take().expect("velocity form");
     assert!(!inverse.has_near_field(), "node blocks below NEAR_FIELD_FROM");
     assert!(inverse.hierarchical().is_some(), "the hierarchical forms from HMATRIX_FROM on");
     let near = inverse.with_near_field();
@@ -754,15 +762,8 @@ fn near_field_directions_land_on_an_ill_conditioned_w() {
 /// scale.
 #[test]
 fn hierarchical_delassus_gives_the_dense_step_solutions() {
-    let mut s = fixture("academic3d");
-    s.domain.cells = Some(vec![22, 16, 2]);
-    s.solver.contact_solve = dyncontact::model::kinds::ContactSolve::Dense;
-    s.time.end = 0.3;
-    let p = problem(s);
+    let (p, w, inverse) = thin_dense_box();
     let set = NewtonSettings { tolerance: 1e-13, ..NewtonSettings::default() };
-    let mut sim0 = Simulation::new(&p).expect("setup");
-    let w = sim0.delassus.take().expect("a dense W");
-    let inverse = sim0.inverse.take().expect("velocity form");
     let share = inverse.hierarchical().map(|h| h.storage_share()).expect("the run compresses W⁻¹ from HMATRIX_FROM on");
     assert!(inverse.hierarchical_w().is_some(), "W compressed too");
     // the dense products the run's hierarchical ones are compared against

@@ -114,14 +114,8 @@ impl InverseDelassus {
     ///   the Newton tolerance.
     pub fn compressed(mut self, w: &Delassus, positions: &[[f64; 3]]) -> InverseDelassus {
         self.h = Some(HMatrix::new(self.winv.as_ref(), self.dim, positions, crate::defaults::HMATRIX_TOLERANCE));
-        // λ_min(W⁻¹) = 1 / λ_max(W) ≥ 1 / ‖W‖_∞
-        let lambda_min = match w {
-            Delassus::Dense(w) => {
-                let norm_inf = norm_inf(w.as_ref());
-                (norm_inf > 0.0).then(|| 1.0 / norm_inf)
-            }
-            _ => None,
-        };
+        // λ_min(W⁻¹) = 1 / λ_max(W) ≥ 1 / ‖W‖_∞ (summed in `new` from the same W)
+        let lambda_min = (matches!(w, Delassus::Dense(_)) && self.w_norm_inf > 0.0).then(|| 1.0 / self.w_norm_inf);
         self.h_loose = lambda_min.and_then(|l| {
             crate::defaults::HMATRIX_LOOSE_TOLERANCES
                 .iter()
