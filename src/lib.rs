@@ -22,7 +22,7 @@
 //! - [`sweep`]: many runs of one scene (axes, `[set]`), in parallel here or as Snakemake jobs; sweep.csv
 //! - [`study`]: the user's studies (`dyncontact study penalty`: the ε → 0 study), on the public API only;
 //!   the developers' studies (benchmarks, stability map) are the `dyncontact-studies` crate (studies/)
-//! - [`linalg`]: thin wrappers over faer; [`reference`]: closed forms; [`variational`]: V.1/V.2 checks
+//! - [`linalg`]: thin wrappers over faer; [`ordering`]: the factors' fill-reducing orders; [`reference`]: closed forms; [`variational`]: V.1/V.2 checks
 
 // Two lints this crate does not follow, on purpose:
 // - `!(x > t)` is how the code says "fails unless x is a number above t": NaN fails it, which the
@@ -42,6 +42,7 @@ pub mod fingerprint;
 pub mod linalg;
 pub mod mesh;
 pub mod model;
+pub mod ordering;
 pub mod output;
 pub mod overrides;
 pub mod problem;

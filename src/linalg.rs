@@ -1,13 +1,16 @@
 //! Thin wrappers over faer: sparse matrices from triplets, products, the sparse Cholesky
 //! factor that the time loop reuses, and a dense LU for the unsymmetric contact systems.
 
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
-use faer::sparse::{SparseColMat, Triplet};
-use faer::{Mat, Side};
+use faer::sparse::linalg::LltError;
+use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky};
+use faer::sparse::{FaerError, SparseColMat, Triplet};
+use faer::{Conj, Mat, Side};
 
 use crate::error::{Error, Result};
 use crate::failure::LinearAlgebraFailure;
+use crate::ordering::FillOrder;
 
 /// Compressed sparse column matrix of f64.
 pub type SpMat = SparseColMat<usize, f64>;
@@ -129,54 +132,85 @@ pub fn combine(terms: &[(f64, &SpMat)]) -> Result<SpMat> {
     from_triplets(n, m, &trip)
 }
 
-/// Sparse Cholesky factor L Lᵀ of a symmetric positive definite matrix, computed once.
+/// Sparse Cholesky factor L Lᵀ of a symmetric positive definite matrix, computed once, its
+/// unknowns ordered by `ordering::analyse` (AMD, or nested dissection where the unknowns'
+/// positions are given and its factor is the smaller by a margin).
 pub struct Cholesky {
-    llt: Llt<usize, f64>,
-    n: usize,
-    /// stored entries of the factor L (a solve pair reads them twice)
-    factor_len: usize,
+    symbolic: SymbolicCholesky<usize>,
+    /// the factor's values, in `symbolic`'s layout
+    values: Vec<f64>,
+    order: FillOrder,
 }
 
 impl Cholesky {
-    /// Factor `a` (only its lower triangle is read).
-    pub fn new(a: &SpMat, what: &str) -> Result<Cholesky> {
-        let sym = SymbolicLlt::try_new(a.symbolic(), Side::Lower).map_err(|cause| {
-            Error::LinearAlgebra(LinearAlgebraFailure::SymbolicCholesky { matrix: what.to_string(), cause })
-        })?;
-        let llt = Llt::try_new_with_symbolic(sym, a.as_ref(), Side::Lower).map_err(|cause| {
+    /// Factor `a` (only its lower triangle is read); `positions`: where each unknown sits (one
+    /// per row), for the nested dissection.
+    pub fn new(a: &SpMat, what: &str, positions: Option<&[[f64; 3]]>) -> Result<Cholesky> {
+        let (symbolic, order) =
+            crate::ordering::analyse(a.symbolic(), positions, &[], Default::default()).map_err(|cause| {
+                Error::LinearAlgebra(LinearAlgebraFailure::SymbolicCholesky { matrix: what.to_string(), cause })
+            })?;
+        let numeric = |symbolic: &SymbolicCholesky<usize>| -> std::result::Result<Vec<f64>, LltError> {
+            let mut values = Vec::new();
+            values.try_reserve_exact(symbolic.len_val()).map_err(|_| FaerError::OutOfMemory)?;
+            values.resize(symbolic.len_val(), 0.0);
+            let par = faer::get_global_parallelism();
+            let mut mem = MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
+                .map_err(|_| FaerError::OutOfMemory)?;
+            symbolic.factorize_numeric_llt(
+                &mut values,
+                a.as_ref(),
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )?;
+            Ok(values)
+        };
+        let values = numeric(&symbolic).map_err(|cause| {
             Error::LinearAlgebra(LinearAlgebraFailure::Cholesky { matrix: what.to_string(), cause })
         })?;
-        // faer's Llt does not expose its symbolic part; a second symbolic analysis (cheap next to
-        // the numeric one) gives the factor's size for the cost rules of the time loop
-        let factor_len = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
-            a.symbolic(),
-            Side::Lower,
-            Default::default(),
-            Default::default(),
-        )
-        .map(|s| s.len_val())
-        .unwrap_or(usize::MAX);
-        Ok(Cholesky { llt, n: a.nrows(), factor_len })
+        Ok(Cholesky { symbolic, values, order })
     }
 
     pub fn dim(&self) -> usize {
-        self.n
+        self.symbolic.nrows()
     }
 
     /// Stored entries of the factor L.
     pub fn factor_len(&self) -> usize {
-        self.factor_len
+        self.symbolic.len_val()
     }
 
-    /// b ← A⁻¹ b.
-    pub fn solve_in_place(&self, b: &mut [f64]) {
-        let col = faer::ColMut::from_slice_mut(b);
-        self.llt.solve_in_place(col.as_mat_mut());
+    /// How the factor's unknowns are ordered.
+    pub fn fill_order(&self) -> FillOrder {
+        self.order
     }
 
     /// B ← A⁻¹ B for a dense block of right-hand sides.
     pub fn solve_mat_in_place(&self, b: &mut Mat<f64>) {
-        self.llt.solve_in_place(b.as_mut());
+        let par = faer::get_global_parallelism();
+        let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(b.ncols(), par));
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            b.as_mut(),
+            par,
+            MemStack::new(&mut mem),
+        );
+    }
+
+    /// b ← A⁻¹ b.
+    pub fn solve_in_place(&self, b: &mut [f64]) {
+        let par = faer::get_global_parallelism();
+        let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(1, par));
+        let col = faer::ColMut::from_slice_mut(b);
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            col.as_mat_mut(),
+            par,
+            MemStack::new(&mut mem),
+        );
     }
 }
 

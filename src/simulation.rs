@@ -287,7 +287,7 @@ impl<'p> Simulation<'p> {
                 let positions: Vec<[f64; 3]> = c.nodes.iter().map(|&i| problem.mesh.point(i)).collect();
                 let built = delassus::build_with_responses(
                     stepper.factor(),
-                    stepper.matrix(),
+                    stepper.matrix().map(|a| (a, Some(ops.positions.as_slice()))),
                     c,
                     &positions,
                     problem.model.solver.contact_solve,

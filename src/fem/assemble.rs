@@ -72,6 +72,9 @@ pub struct Operators {
     pub c: SpMat,
     /// row-sum lumped nodal masses per free DOF (used by (C.k) whatever the mass choice)
     pub m_lumped: Vec<f64>,
+    /// where each free DOF sits (its node's position; z = 0 in 2-D): the nested dissection of
+    /// the step matrix's factor (`ordering`)
+    pub positions: Vec<[f64; 3]>,
 }
 
 /// (P.2) Galerkin form of ρü = Div σ + f0 with σ from (P.1): assembles, on all 2N DOFs,
@@ -191,7 +194,13 @@ impl Operators {
         } else {
             restrict(&m, dofs)?
         };
-        Ok(Operators { m, k: restrict(&k, dofs)?, c: restrict(&c, dofs)?, m_lumped })
+        let mut positions = vec![[0.0; 3]; dofs.n_free];
+        for (g, free) in dofs.map.iter().enumerate() {
+            if let Some(i) = free {
+                positions[*i] = mesh.point(g / dofs.dim);
+            }
+        }
+        Ok(Operators { m, k: restrict(&k, dofs)?, c: restrict(&c, dofs)?, m_lumped, positions })
     }
 }
 

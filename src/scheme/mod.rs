@@ -63,7 +63,8 @@ impl StateProducts {
 
 impl StepOperator {
     /// (S.2) The constant step matrix A_k = M/k + C/2 + (k/4) K of the midpoint rule
-    /// (A = M/k + C + k K for backward Euler), factored once by sparse Cholesky.
+    /// (A = M/k + C + k K for backward Euler), factored once by sparse Cholesky (ordered by
+    /// nested dissection of the DOFs' positions where that factor is the smaller, `ordering`).
     pub fn new(ops: &Operators, kind: SchemeKind, k: f64) -> Result<StepOperator> {
         let a = match kind {
             SchemeKind::Midpoint | SchemeKind::Trapezoid => {
@@ -71,7 +72,8 @@ impl StepOperator {
             }
             SchemeKind::BackwardEuler => linalg::combine(&[(1.0 / k, &ops.m), (1.0, &ops.c), (k, &ops.k)])?,
         };
-        Ok(StepOperator { kind, k, a: Cholesky::new(&a, "the step matrix A_k")?, matrix: Some(a) })
+        let factor = Cholesky::new(&a, "the step matrix A_k", Some(&ops.positions))?;
+        Ok(StepOperator { kind, k, a: factor, matrix: Some(a) })
     }
 
     /// The time at which the load is sampled: f^{n+½} = f(t_n + k/2) (decision 7), or

@@ -718,7 +718,7 @@ fn a_failed_factorization_keeps_faers_error() {
     use faer::linalg::cholesky::llt::factor::LltError as Pivot;
     use faer::sparse::linalg::LltError;
     let a = dyncontact::linalg::from_triplets(1, 1, &[(0, 0, -1.0)]).expect("a 1 × 1 matrix");
-    let e = dyncontact::linalg::Cholesky::new(&a, "M").err().expect("−1 is not positive definite");
+    let e = dyncontact::linalg::Cholesky::new(&a, "M", None).err().expect("−1 is not positive definite");
     let Error::LinearAlgebra(LinearAlgebraFailure::Cholesky { matrix, cause }) = &e else { panic!("{e:?}") };
     assert_eq!(matrix, "M");
     assert!(matches!(cause, LltError::Numeric(Pivot::NonPositivePivot { .. })), "{cause:?}");

@@ -682,7 +682,8 @@ fn schur_delassus_gives_the_solves_step_solutions() {
     let sim0 = Simulation::new(&p).expect("setup");
     assert_eq!(sim0.setup_timing.delassus_route, "solves", "351 components: below SCHUR_FROM");
     let stepper = dyncontact::scheme::StepOperator::new(&sim0.ops, p.model.time.scheme, p.k).expect("A_k");
-    let (w, winv) = dyncontact::step::delassus::delassus_pair(stepper.matrix().expect("A_k"), c, None)
+    let positions = Some(sim0.ops.positions.as_slice());
+    let (w, winv) = dyncontact::step::delassus::delassus_pair(stepper.matrix().expect("A_k"), positions, c, None)
         .expect("the Schur complement");
     let w = dyncontact::step::delassus::Delassus::Dense(w);
     let inverse = dyncontact::step::delassus::InverseDelassus::new(&w, c.dim, Some(winv)).expect("W⁻¹");

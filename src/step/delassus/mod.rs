@@ -180,7 +180,8 @@ pub struct Built {
 }
 
 /// [`build`], and for the dense form the responses G = A_k⁻¹ Hᵀ when they fit in
-/// [`RESPONSES_BYTES`](crate::defaults::RESPONSES_BYTES). With A_k itself (`matrix`), a dense W
+/// [`RESPONSES_BYTES`](crate::defaults::RESPONSES_BYTES). With A_k itself (`matrix`, with its
+/// unknowns' positions for the nested dissection of the second factor), a dense W
 /// of at least [`SCHUR_FROM`](crate::defaults::SCHUR_FROM) components whose responses are not
 /// kept comes from the Schur complement of A_k on the contact unknowns (one more sparse
 /// factorization instead of d n_c solve pairs; W and W⁻¹ agree with the solves' to round-off),
@@ -188,7 +189,7 @@ pub struct Built {
 /// in 90% of the memory available.
 pub fn build_with_responses(
     a: &Cholesky,
-    matrix: Option<&crate::linalg::SpMat>,
+    matrix: Option<(&crate::linalg::SpMat, Option<&[[f64; 3]]>)>,
     contact: &ContactModel,
     positions: &[[f64; 3]],
     choice: ContactSolve,
@@ -212,7 +213,8 @@ pub fn build_with_responses(
     let keep = 8.0 * a.dim() as f64 * m as f64 <= crate::defaults::RESPONSES_BYTES;
     if !keep
         && m >= crate::defaults::SCHUR_FROM
-        && let Some((w, winv)) = matrix.and_then(|k| delassus_pair(k, contact, schur_budget()))
+        && let Some((w, winv)) =
+            matrix.and_then(|(k, dof_positions)| delassus_pair(k, dof_positions, contact, schur_budget()))
     {
         return Built { w: Delassus::Dense(w), responses: None, winv: Some(winv), route: "schur" };
     }
