@@ -80,6 +80,9 @@ pub struct ThickRow {
     pub h_share: f64,
     /// the process's peak resident memory after the run, MB
     pub peak_mb: f64,
+    /// the entries of A_k's factor, and how its unknowns are ordered
+    pub factor_entries: usize,
+    pub fill_order: &'static str,
 }
 
 fn scene(cells: [i64; 3], steps: usize) -> Result<Scene> {
@@ -173,6 +176,8 @@ fn measure(p: &Problem, cells: [i64; 3], form: &'static str) -> Result<ThickRow>
         cg_iterations: counts.velocity_iterations,
         near_density,
         peak_mb: dyncontact::resources::peak_memory().unwrap_or(f64::NAN) / 1e6,
+        factor_entries: sim.stepper.factor().factor_len(),
+        fill_order: sim.stepper.factor().fill_order().name(),
     })
 }
 
@@ -193,7 +198,7 @@ pub fn run(plan: &ThickPlan, progress: &dyn Fn(&str)) -> Result<Vec<ThickRow>> {
 pub fn csv(rows: &[ThickRow]) -> String {
     csv_table(
         "cells,unknowns,contact_nodes,form,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
-contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_by_solves_s,newton_iterations,cg_iterations,near_density,h_share,peak_mb",
+contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_by_solves_s,newton_iterations,cg_iterations,near_density,h_share,peak_mb,factor_entries,fill_order",
         rows.iter().map(|r| {
             vec![
                 format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
@@ -216,6 +221,8 @@ contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_
                 format!("{:.4}", r.near_density),
                 if r.h_share.is_nan() { String::new() } else { format!("{:.4}", r.h_share) },
                 format!("{:.0}", r.peak_mb),
+                r.factor_entries.to_string(),
+                r.fill_order.to_string(),
             ]
         }),
     )
@@ -257,7 +264,7 @@ pub fn report(rows: &[ThickRow]) -> String {
     let mut s = String::from("thick 3-D boxes (academic3d refined, velocity form): per step min / median\n");
     let _ = writeln!(
         s,
-        "{:>10} {:>8} {:>6} {:<13} {:>17} {:>19} {:>8} {:>10} {:>17} {:>8} {:>8} {:>7}",
+        "{:>10} {:>8} {:>6} {:<13} {:>17} {:>19} {:>8} {:>10} {:>17} {:>8} {:>8} {:>7} {:>9}",
         "cells",
         "unknowns",
         "n_c",
@@ -269,12 +276,13 @@ pub fn report(rows: &[ThickRow]) -> String {
         "W route (solves)",
         "Newton",
         "CG",
-        "peakMB"
+        "peakMB",
+        "L[M]"
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "{:>10} {:>8} {:>6} {:<13} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>4.1}+{:<5.1} {:>7} ({:>7.1}) {:>8} {:>8} {:>7.0}",
+            "{:>10} {:>8} {:>6} {:<13} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>4.1}+{:<5.1} {:>7} ({:>7.1}) {:>8} {:>8} {:>7.0} {:>6.1} {}",
             format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
             r.unknowns,
             r.contact_nodes,
@@ -290,7 +298,9 @@ pub fn report(rows: &[ThickRow]) -> String {
             r.delassus_solves,
             r.newton_iterations,
             r.cg_iterations,
-            r.peak_mb
+            r.peak_mb,
+            r.factor_entries as f64 / 1e6,
+            if r.fill_order == "nested dissection" { "ND" } else { "AMD" }
         );
     }
     let _ = writeln!(
