@@ -38,12 +38,15 @@ const OPERATORS: f64 = 5.0;
 /// output buffers (measured: a run of 1,088 unknowns peaks at 12.6 MB).
 pub const BASELINE: f64 = 8e6;
 /// The factor of A_k with the contact unknowns ordered last (the Schur complement's route to W)
-/// against the estimated factor of A_k: measured 1.66× (academic3d 48×24×16) and 1.54×
-/// (64×32×24) the entries of faer's unconstrained ordering; the estimate of that factor itself
-/// runs low in 3-D (see the module's doc), so the ratio is fitted to the measured peaks of the
-/// thick bench: 7,384 MB at 64×32×24 (estimate 7.0 GiB, 7,530 MB) and 1,711 MB at 48×24×16
-/// (estimate 2.1 GiB).
-const SCHUR_FACTOR: f64 = 2.3;
+/// against the estimated factor of A_k. In the thick boxes that take this route both factors
+/// are ordered by nested dissection (`ordering`): measured 48.1 M and 181.7 M entries for A_k's
+/// (academic3d 48×24×16 and 64×32×24; the estimate says 32.5 M and 112 M) and the ratio is fitted
+/// to the measured peaks of the thick bench: 4,569 MB at 64×32×24 (estimate 4.5 GiB, ~4.8 GB;
+/// 7,428 MB under AMD, when this was 2.3) and 1,464 MB at 48×24×16 (estimate 1.4 GiB, the
+/// assembly's phase there). A body whose second factor is larger (AMD kept) has it sized exactly
+/// before it is computed (`schur::contact_block_of_factor`'s budget), so the estimate errs only
+/// in what `check` prints.
+const SCHUR_FACTOR: f64 = 0.8;
 /// Bytes per entry of an element matrix during assembly: a (row, column, value) triplet of 24
 /// bytes for each of M, K and C, held at once, and faer's conversion of one of them (fitted to
 /// the measured peaks: 4 × 24).
