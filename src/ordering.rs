@@ -4,20 +4,21 @@
 //!
 //! AMD is local: on a 3-D mesh as thick as it is wide its factor grows faster than the
 //! n^{4/3} of nested dissection (George; Lipton–Rose–Tarjan). Measured on academic3d's boxes:
-//! the factor of A_k holds 62.4 M entries under AMD and 48.1 M under the dissection below at
-//! 48×24×16 (61,200 unknowns), 323.5 M and 188.9 M at 64×32×24 (158,400), and with the contact
-//! unknowns ordered last (the Schur complement's factor) 103.7 M and 77.4 M, 498.2 M and 280.1 M.
+//! the factor of A_k holds 62.4 M entries under AMD and 45.0 M under the dissection below at
+//! 48×24×16 (61,200 unknowns), 323.5 M and 173.8 M at 64×32×24 (158,400), and with the contact
+//! unknowns ordered last (the Schur complement's factor) 103.7 M and 71.7 M, 498.2 M and 263.9 M.
 //! On thin, slender or 2-D meshes AMD's factor is the smaller one (a column of 1,212 unknowns:
 //! 16,878 entries against 57,522), and small problems keep it: the dissection is taken only when
 //! its factor holds at most
 //! [`NESTED_DISSECTION_ADVANTAGE`](crate::defaults::NESTED_DISSECTION_ADVANTAGE) of AMD's.
 //!
-//! The dissection is geometric: bisect the unknowns at the median of their positions along the
-//! longest side of their bounding box; the unknowns of the lower half that couple (in A's
-//! pattern) with the upper half form the separator, ordered after both halves, which are
-//! dissected in turn down to [`LEAF`] unknowns. Removing the separator leaves no coupling between
-//! the halves whatever the mesh (a P1 mesh of a box cut along a layer of nodes: that layer). A
-//! node's unknowns share its position, so they stay together.
+//! The dissection is geometric: bisect the unknowns at the median of their positions along one
+//! side of their bounding box — of the three, the one whose separator is the smallest; the
+//! unknowns of the lower half that couple (in A's pattern) with the upper half form the
+//! separator, ordered after both halves, which are dissected in turn down to [`LEAF`] unknowns.
+//! Removing the separator leaves no coupling between the halves whatever the mesh (a P1 mesh of
+//! a box cut along a layer of nodes: that layer). A node's unknowns share its position, so they
+//! stay together.
 //!
 //! Written by hand (README, design notes): faer orders by AMD or COLAMD only; METIS (the
 //! `metis` crate) builds a C library, and a geometric bisection of a mesh whose positions are
@@ -32,8 +33,8 @@ use faer::sparse::{FaerError, SymbolicSparseColMatRef};
 use faer::{Side as Triangle, dyn_stack::MemBuffer, dyn_stack::MemStack};
 
 /// Most unknowns of a part the dissection does not cut again (four 3-D nodes: measured on
-/// academic3d 48×24×16, leaves of 4, 16 and 64 nodes give factors of 48.1 M, 48.5 M and 50.2 M
-/// entries; on smaller meshes the small leaves win by more).
+/// academic3d 48×24×16, leaves of 12, 48 and 192 unknowns give factors of 45.0 M, 45.4 M and
+/// 47.1 M entries, hertz3d 12.2 M, 12.4 M and 13.1 M).
 pub const LEAF: usize = 12;
 
 /// How a factor's unknowns are ordered.
@@ -60,7 +61,13 @@ impl FillOrder {
 /// empty: no constraint), the others in the order of AMD or, when `positions` (one per unknown)
 /// are given and its factor holds at most NESTED_DISSECTION_ADVANTAGE of AMD's entries, of the
 /// nested dissection. Without `last`, AMD is faer's own ordering of the pattern (the factor
-/// `linalg::Cholesky` had before this choice existed).
+/// `linalg::Cholesky` had before this choice existed). The entries compared are the stored
+/// values of each factor as faer lays it out (what a solve reads). Should the dissection's own
+/// analysis fail (memory), AMD's stands.
+///
+/// # Panics
+/// When `last` holds an unknown twice or one ≥ n (its callers pass distinct contact unknowns:
+/// `schur::contact_block_of_factor` checks them first).
 pub fn analyse(
     pattern: SymbolicSparseColMatRef<'_, usize>,
     positions: Option<&[[f64; 3]]>,
@@ -94,12 +101,13 @@ pub fn analyse(
         amd::order(&mut order, &mut order_inv, pattern, amd::Control::default(), MemStack::new(&mut mem))?;
         constrained(&order)?
     };
-    let Some(positions) = positions else { return Ok((by_degree, FillOrder::MinimumDegree)) };
-    let dissected = constrained(&nested_dissection(pattern, positions))?;
-    Ok(if dissected.len_val() as f64 <= crate::defaults::NESTED_DISSECTION_ADVANTAGE * by_degree.len_val() as f64 {
-        (dissected, FillOrder::NestedDissection)
-    } else {
-        (by_degree, FillOrder::MinimumDegree)
+    let dissected = positions
+        .filter(|_| n > LEAF)
+        .and_then(|positions| constrained(&nested_dissection(pattern, positions)).ok())
+        .filter(|d| d.len_val() as f64 <= crate::defaults::NESTED_DISSECTION_ADVANTAGE * by_degree.len_val() as f64);
+    Ok(match dissected {
+        Some(d) => (d, FillOrder::NestedDissection),
+        None => (by_degree, FillOrder::MinimumDegree),
     })
 }
 
@@ -142,7 +150,17 @@ fn symmetric_adjacency(pattern: SymbolicSparseColMatRef<'_, usize>) -> Vec<Vec<u
     adjacency
 }
 
-/// Append `part`'s unknowns to `order`: its two halves dissected, then their separator.
+/// What `dissect` still has to do, kept on an explicit stack (no recursion, whatever the mesh):
+/// dissect a part, or append a separator once both halves before it are ordered.
+enum Task {
+    Dissect(Vec<usize>),
+    Append(Vec<usize>),
+}
+
+/// Append `part`'s unknowns to `order`: its two halves dissected, then their separator. A part
+/// is cut at the median position across the side (of the three) whose cut has the smallest
+/// separator — the upper half above the median, or at and above it when nothing lies above —
+/// and stays whole when all its positions coincide or it holds at most LEAF unknowns.
 fn dissect(
     part: Vec<usize>,
     positions: &[[f64; 3]],
@@ -150,49 +168,87 @@ fn dissect(
     side: &mut [Side],
     order: &mut Vec<usize>,
 ) {
-    if part.len() <= LEAF {
-        order.extend(part);
-        return;
+    let mut tasks = vec![Task::Dissect(part)];
+    while let Some(task) = tasks.pop() {
+        let part = match task {
+            Task::Append(separator) => {
+                order.extend(separator);
+                continue;
+            }
+            Task::Dissect(part) if part.len() <= LEAF => {
+                order.extend(part);
+                continue;
+            }
+            Task::Dissect(part) => part,
+        };
+        // every side that can be cut, the smallest separator kept (the longest side on a tie):
+        // a side of few node layers but great length (stretched cells) would cut across the
+        // whole part
+        let mut best: Option<(Vec<usize>, Vec<usize>, Vec<usize>)> = None;
+        for (axis, median, strictly) in cuts(&part, positions) {
+            let above = |x: f64| if strictly { x > median } else { x >= median };
+            for &i in &part {
+                if above(positions[i][axis]) {
+                    side[i] = Side::Upper;
+                }
+            }
+            let (mut lower, mut upper, mut separator) = (Vec::new(), Vec::new(), Vec::new());
+            for &i in &part {
+                if side[i] == Side::Upper {
+                    upper.push(i);
+                } else if adjacency[i].iter().any(|&j| side[j] == Side::Upper) {
+                    separator.push(i);
+                } else {
+                    lower.push(i);
+                }
+            }
+            for &i in &upper {
+                side[i] = Side::Unset;
+            }
+            if best.as_ref().is_none_or(|b| separator.len() < b.2.len()) {
+                best = Some((lower, upper, separator));
+            }
+        }
+        let Some((lower, upper, separator)) = best else {
+            order.extend(part);
+            continue;
+        };
+        // last in, first out: the lower half, then the upper one, then the separator
+        tasks.push(Task::Append(separator));
+        tasks.push(Task::Dissect(upper));
+        tasks.push(Task::Dissect(lower));
     }
+}
+
+/// Where `part` can be cut, longest side first: per side of non-zero length, the axis, the
+/// median position along it, and whether the upper half lies strictly above it (else at and
+/// above it: more than half the positions share the largest coordinate). Both halves of such a
+/// cut are non-empty, so every part the dissection makes is smaller than the one it cut; no cut
+/// when all the positions coincide.
+fn cuts(part: &[usize], positions: &[[f64; 3]]) -> Vec<(usize, f64, bool)> {
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for &i in &part {
+    for &i in part {
         for k in 0..3 {
             lo[k] = lo[k].min(positions[i][k]);
             hi[k] = hi[k].max(positions[i][k]);
         }
     }
-    let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap_or(0);
-    let mut along: Vec<f64> = part.iter().map(|&i| positions[i][axis]).collect();
-    let half = along.len() / 2;
-    let median = *along.select_nth_unstable_by(half, f64::total_cmp).1;
-    for &i in &part {
-        if positions[i][axis] > median {
-            side[i] = Side::Upper;
-        }
-    }
-    let (mut lower, mut upper, mut separator) = (Vec::new(), Vec::new(), Vec::new());
-    for &i in &part {
-        if side[i] == Side::Upper {
-            upper.push(i);
-        } else if adjacency[i].iter().any(|&j| side[j] == Side::Upper) {
-            separator.push(i);
-        } else {
-            lower.push(i);
-        }
-    }
-    for &i in &upper {
-        side[i] = Side::Unset;
-    }
-    // no position above the median along the longest side (coincident points): nothing to cut
-    // (otherwise both the upper half and the rest are smaller than the part)
-    if upper.is_empty() {
-        order.extend(part);
-        return;
-    }
-    drop(part);
-    dissect(lower, positions, adjacency, side, order);
-    dissect(upper, positions, adjacency, side, order);
-    order.extend(separator);
+    let mut axes = [0, 1, 2];
+    axes.sort_by(|&a, &b| (hi[b] - lo[b]).total_cmp(&(hi[a] - lo[a])));
+    axes.into_iter()
+        .filter(|&k| hi[k] > lo[k])
+        .filter_map(|axis| {
+            let mut along: Vec<f64> = part.iter().map(|&i| positions[i][axis]).collect();
+            let half = along.len() / 2;
+            let median = *along.select_nth_unstable_by(half, f64::total_cmp).1;
+            if along.iter().any(|&x| x > median) {
+                Some((axis, median, true))
+            } else {
+                // the median is the largest coordinate, and the smallest lies below it
+                (lo[axis] < median).then_some((axis, median, false))
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -261,10 +317,39 @@ mod tests {
             entries(SymmetricOrdering::Custom(PermRef::new_checked(&order, &inverse, n))),
             entries(SymmetricOrdering::Amd),
         );
-        // measured: natural 10,836,477, dissection 5,375,916, AMD 8,119,431 entries — the cube
+        // measured: natural 10,836,477, dissection 5,376,060, AMD 8,119,431 entries — the cube
         // of a P1-like pattern is where the dissection wins (0.66 of AMD's; academic3d 64×32×24:
-        // 0.58)
+        // 0.54)
         assert!(dissection < amd && amd < natural, "natural {natural}, dissection {dissection}, AMD {amd}");
+    }
+
+    /// A stretched grid (two node layers along its longest side, 16 × 16 nodes across): a cut
+    /// along that side would put a whole layer in the separator, so the dissection cuts across
+    /// a shorter side and its factor holds fewer entries than the natural order's (a band of two
+    /// layers' width).
+    #[test]
+    fn a_stretched_part_is_still_cut() {
+        use faer::perm::PermRef;
+        use faer::sparse::linalg::cholesky::{SymmetricOrdering, factorize_symbolic_cholesky};
+        let (pattern, mut positions) = grid(2, 16, 16, 3);
+        for p in &mut positions {
+            p[0] *= 100.0; // the x side (two layers) is now the longest
+        }
+        let n = pattern.nrows();
+        let order = nested_dissection(pattern.as_ref(), &positions);
+        let mut inverse = vec![0; n];
+        for (k, &i) in order.iter().enumerate() {
+            inverse[i] = k;
+        }
+        let entries = |ord| {
+            factorize_symbolic_cholesky(pattern.as_ref(), faer::Side::Lower, ord, Default::default())
+                .expect("symbolic")
+                .len_val()
+        };
+        let natural = entries(SymmetricOrdering::Identity);
+        let dissection = entries(SymmetricOrdering::Custom(PermRef::new_checked(&order, &inverse, n)));
+        // measured: natural 186,480, dissection 140,931 (a cut along the two layers: 796,284)
+        assert!(dissection < natural, "natural {natural}, dissection {dissection}");
     }
 
     /// Coincident positions (nothing to bisect) and a part smaller than a leaf are kept whole.

@@ -126,7 +126,22 @@ pub fn penalty_study(
     }
     let plan = Plan::resolve_with(&sweep, base, overrides)?;
     let done = plan.write(work)?;
-    runner::run_points(&plan, work, &done, &RunnerOptions { jobs: jobs.max(1), progress: false, interrupt: None })?;
+    let outcomes =
+        runner::run_points(&plan, work, &done, &RunnerOptions { jobs: jobs.max(1), progress: false, interrupt: None })?;
+    // a point that failed before its run wrote a summary (its folder refused, say): the
+    // runner's reason, which `collect` cannot read from the folder
+    for (point, outcome) in plan.points.iter().zip(&outcomes) {
+        let pd = Plan::point_dir(work, &point.id);
+        if let runner::Outcome::Failed(reason) = outcome
+            && crate::sweep::collect::point_status(&pd).is_none()
+        {
+            return Err(Error::Study(format!(
+                "point {} of the penalty study failed without a summary: {reason} ({})",
+                point.id,
+                pd.display()
+            )));
+        }
+    }
     collect(&plan, work)
 }
 
