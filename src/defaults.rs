@@ -214,5 +214,5 @@ pub const MODIFIED_MASS_FLOOR: f64 = 0.01;
 /// at most this share of the entries of faer's approximate minimum degree: a solve pair costs
 /// about in proportion to the entries (a factorization falls faster: 28.0 → 10.5 s for 0.56 of
 /// them at academic3d 64×32×24), so above this share the gain is within the machine's spread
-/// and faer's default stays (academic3d's fixture, 24×12×8: 0.84, taken; 8×4×4: 0.94, not).
+/// and faer's default stays (academic3d's fixture, 24×12×8: 0.80, taken; 8×4×4: 0.94, not).
 pub const NESTED_DISSECTION_ADVANTAGE: f64 = 0.85;

@@ -4,11 +4,11 @@
 //!
 //! AMD is local: on a 3-D mesh as thick as it is wide its factor grows faster than the
 //! n^{4/3} of nested dissection (George; Lipton–Rose–Tarjan). Measured on academic3d's boxes:
-//! the factor of A_k holds 62.4 M entries under AMD and 45.0 M under the dissection below at
-//! 48×24×16 (61,200 unknowns), 323.5 M and 173.8 M at 64×32×24 (158,400), and with the contact
-//! unknowns ordered last (the Schur complement's factor) 103.7 M and 71.7 M, 498.2 M and 263.9 M.
+//! the factor of A_k holds 62.4 M entries under AMD and 42.4 M under the dissection below at
+//! 48×24×16 (61,200 unknowns), 323.5 M and 167.2 M at 64×32×24 (158,400), and with the contact
+//! unknowns ordered last (the Schur complement's factor) 103.7 M and 68.3 M at 48×24×16.
 //! On thin, slender or 2-D meshes AMD's factor is the smaller one (a column of 1,212 unknowns:
-//! 16,878 entries against 57,522), and small problems keep it: the dissection is taken only when
+//! 16,878 entries against ~33,000), and small problems keep it: the dissection is taken only when
 //! its factor holds at most
 //! [`NESTED_DISSECTION_ADVANTAGE`](crate::defaults::NESTED_DISSECTION_ADVANTAGE) of AMD's.
 //!
@@ -33,8 +33,9 @@ use faer::sparse::{FaerError, SymbolicSparseColMatRef};
 use faer::{Side as Triangle, dyn_stack::MemBuffer, dyn_stack::MemStack};
 
 /// Most unknowns of a part the dissection does not cut again (four 3-D nodes: measured on
-/// academic3d 48×24×16, leaves of 12, 48 and 192 unknowns give factors of 45.0 M, 45.4 M and
-/// 47.1 M entries, hertz3d 12.2 M, 12.4 M and 13.1 M).
+/// academic3d 48×24×16 with each part cut across its longest side, leaves of 12, 48 and 192
+/// unknowns gave factors of 45.0 M, 45.4 M and 47.1 M entries, hertz3d 12.2 M, 12.4 M and
+/// 13.1 M).
 pub const LEAF: usize = 12;
 
 /// How a factor's unknowns are ordered.

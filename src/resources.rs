@@ -37,15 +37,16 @@ const OPERATORS: f64 = 5.0;
 /// The process before it holds a problem: the program, its libraries, the allocator, the
 /// output buffers (measured: a run of 1,088 unknowns peaks at 12.6 MB).
 pub const BASELINE: f64 = 8e6;
-/// The factor of A_k with the contact unknowns ordered last (the Schur complement's route to W)
-/// against the estimated factor of A_k. In the thick boxes that take this route both factors
-/// are ordered by nested dissection (`ordering`): measured 48.1 M and 181.7 M entries for A_k's
-/// (academic3d 48×24×16 and 64×32×24; the estimate says 32.5 M and 112 M) and the ratio is fitted
-/// to the measured peaks of the thick bench: 4,569 MB at 64×32×24 (estimate 4.5 GiB, ~4.8 GB;
-/// 7,428 MB under AMD, when this was 2.3) and 1,464 MB at 48×24×16 (estimate 1.4 GiB, the
-/// assembly's phase there). A body whose second factor is larger (AMD kept) has it sized exactly
-/// before it is computed (`schur::contact_block_of_factor`'s budget), so the estimate errs only
-/// in what `check` prints.
+/// The second factor of the Schur complement's route to W (A_k with the contact unknowns ordered
+/// last), in units of the estimated factor of A_k: a fitted constant, not a ratio of factors.
+/// The bodies that take this route are thick, where both factors are ordered by nested
+/// dissection (`ordering`); fitted to the measured peaks of the thick bench: 4,301–4,569 MB at
+/// 64×32×24 (two runs; estimate 4.5 GiB, ~4.8 GB) and 1,464–1,482 MB at 48×24×16 (estimate
+/// 1.4 GiB, the assembly's phase there); 2.3 fitted the peaks under AMD (7,428 MB at 64×32×24). Where the order keeps AMD,
+/// its factor holds less than 1/NESTED_DISSECTION_ADVANTAGE (1.18) of the dissection's, so
+/// this term is then at most ~18% low. `run` sizes the second factor exactly before computing it
+/// (`schur::contact_block_of_factor`'s budget); a sweep's memory request and how many of its
+/// points run at once read this estimate.
 const SCHUR_FACTOR: f64 = 0.8;
 /// Bytes per entry of an element matrix during assembly: a (row, column, value) triplet of 24
 /// bytes for each of M, K and C, held at once, and faer's conversion of one of them (fitted to

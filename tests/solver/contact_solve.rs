@@ -458,7 +458,7 @@ fn a_thick_box_is_factored_under_the_nested_dissection() {
         "≤ 1e-12",
     );
     assert!(dx <= 1e-12 && dw <= 1e-12 && dwinv <= 1e-12, "solve {dx:.3e}, W {dw:.3e}, W⁻¹ {dwinv:.3e}");
-    // a slender column keeps AMD: its dissection would hold more entries (measured 3.4× as many)
+    // a slender column keeps AMD: its dissection would hold more entries (measured 1.96× as many)
     let column = problem(fixture("column_impact3d"));
     let slender = Simulation::new(&column).expect("setup");
     assert_eq!(slender.stepper.factor().fill_order(), FillOrder::MinimumDegree);
