@@ -394,8 +394,21 @@ enum Stop {
 
 /// As [`run`] with explicit solver settings.
 pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Result<Summary> {
+    let lock = folder::lock_run(&opts.out)?;
+    run_locked(problem, settings, opts, lock)
+}
+
+/// As [`run_with`] in a folder whose lock (`folder::lock_run(&opts.out)`) the caller already
+/// holds: a sweep's point is cleared and run under one lock, never released between the two
+/// (released, it could stay held a moment longer by a child process another thread is
+/// starting, which inherits the descriptor until it executes, and the run would be refused).
+pub(crate) fn run_locked(
+    problem: &Problem,
+    settings: Settings,
+    opts: &RunOptions,
+    _lock: folder::Lock,
+) -> Result<Summary> {
     let start = Instant::now();
-    let _lock = folder::lock_run(&opts.out)?;
     // everything that can refuse the folder, before anything in it changes
     let (checkpoint, replaced) = if opts.resume {
         (Some(resumable(&opts.out, problem)?), false)

@@ -84,14 +84,30 @@ pub struct Lock {
     _file: File,
 }
 
+/// How long [`lock`] waits for a held lock before it refuses the folder. A lock released by
+/// this process can stay held a moment longer: a child process that another thread is starting
+/// inherits every descriptor between its fork and its exec (which closes them), the lock's
+/// among them. Under load that moment has been long enough to refuse a sweep's point (its
+/// folder then held only run.lock and scene.toml). A second run in the folder waits this long
+/// and is then refused as before.
+const LOCK_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
+
 /// Lock `dir` for this process through `dir/<name>` (created with `dir` if missing). Refused
-/// when another process holds it. On a file system without locks (some network file systems)
-/// the run goes on unlocked: nothing else could be done there.
+/// when another process holds it for longer than [`LOCK_WAIT`]. On a file system without locks
+/// (some network file systems) the run goes on unlocked: nothing else could be done there.
 pub fn lock(dir: &Path, name: &str) -> Result<Lock> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let p = dir.join(name);
     let file = OpenOptions::new().create(true).truncate(false).write(true).open(&p).map_err(|e| Error::io(&p, e))?;
-    match file.try_lock() {
+    let start = std::time::Instant::now();
+    let mut pause = std::time::Duration::from_millis(1);
+    let mut attempt = file.try_lock();
+    while matches!(attempt, Err(std::fs::TryLockError::WouldBlock)) && start.elapsed() < LOCK_WAIT {
+        std::thread::sleep(pause);
+        pause = (pause * 2).min(std::time::Duration::from_millis(100));
+        attempt = file.try_lock();
+    }
+    match attempt {
         Ok(()) => Ok(Lock { _file: file }),
         Err(std::fs::TryLockError::WouldBlock) => Err(Error::folder(
             dir,
@@ -165,4 +181,34 @@ pub fn clear(dir: &Path) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// (a sweep point's folder) A lock this process released but a copy of whose descriptor is
+    /// still open for a moment — a child process between fork and exec — is taken once the copy
+    /// closes (here after 50 ms, well inside LOCK_WAIT); one held throughout is refused.
+    #[test]
+    fn a_lock_held_a_moment_by_an_inherited_descriptor_is_waited_for() {
+        let dir = std::env::temp_dir().join(format!("dyncontact-lock-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let first = lock_run(&dir).expect("a fresh folder locks");
+        // the descriptor a child would inherit: the same open file description as the lock's
+        let inherited = first._file.try_clone().expect("the descriptor duplicates");
+        drop(first);
+        let closes = std::thread::spawn(move || {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+            drop(inherited);
+        });
+        let second = lock_run(&dir);
+        closes.join().expect("the closing thread ends");
+        assert!(second.is_ok(), "the lock was not taken once the inherited copy closed: {second:?}");
+        // held throughout (by another open file description): refused after the wait, naming it
+        let refused = lock_run(&dir).expect_err("a held lock refuses");
+        assert!(refused.to_string().contains("another dyncontact process"), "{refused}");
+        drop(second);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

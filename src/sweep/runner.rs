@@ -19,8 +19,9 @@ use std::sync::{Arc, Mutex};
 use super::Plan;
 use crate::error::{Error, FailureKind, Result};
 use crate::problem::Problem;
-use crate::run::{RunOptions, run, write_failed_start};
+use crate::run::{RunOptions, run_locked, write_failed_start};
 use crate::scene::Scene;
+use crate::simulation::Settings;
 
 /// How a sweep runs here.
 #[derive(Debug, Clone, Default)]
@@ -192,16 +193,15 @@ fn run_point(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> Outco
 
 /// [`run_point`] without the marker: the outcome and, for a failure, its kind.
 fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> (Outcome, Option<FailureKind>) {
-    // the point's folder is the sweep's: cleared under its lock (another process running this
-    // point keeps it), then run (which locks it again)
-    let cleared = crate::output::folder::lock_run(pd).and_then(|lock| {
+    // the point's folder is the sweep's: cleared and run under one lock (another process
+    // running this point keeps it), held from here to the run's end
+    let lock = match crate::output::folder::lock_run(pd).and_then(|lock| {
         super::clear_outputs(pd)?;
-        drop(lock);
-        Ok(())
-    });
-    if let Err(e) = cleared {
-        return (Outcome::Failed(e.to_string()), Some(e.kind()));
-    }
+        Ok(lock)
+    }) {
+        Ok(lock) => lock,
+        Err(e) => return (Outcome::Failed(e.to_string()), Some(e.kind())),
+    };
     let scene = Scene::from_toml(text, &pd.join("scene.toml").display().to_string());
     let name = scene.as_ref().map(|s| s.name.clone()).unwrap_or_default();
     let problem = scene.and_then(|s| s.validate()).and_then(|model| Problem::new(model, pd));
@@ -225,7 +225,7 @@ fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> 
         stop_after: None,
         interrupt,
     };
-    match run(&problem, &opts) {
+    match run_locked(&problem, Settings::from_problem(&problem), &opts, lock) {
         Ok(_) => (Outcome::Completed, None),
         Err(Error::Interrupted { .. }) => (Outcome::Interrupted, Some(FailureKind::Interrupted)),
         Err(e) => (Outcome::Failed(e.to_string()), Some(e.kind())),
