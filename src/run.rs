@@ -399,9 +399,8 @@ pub fn run_with(problem: &Problem, settings: Settings, opts: &RunOptions) -> Res
 }
 
 /// As [`run_with`] in a folder whose lock (`folder::lock_run(&opts.out)`) the caller already
-/// holds: a sweep's point is cleared and run under one lock, never released between the two
-/// (released, it could stay held a moment longer by a child process another thread is
-/// starting, which inherits the descriptor until it executes, and the run would be refused).
+/// holds: a sweep's point is cleared and run under one lock, so no other process can take the
+/// folder between the two.
 pub(crate) fn run_locked(
     problem: &Problem,
     settings: Settings,

@@ -81,41 +81,36 @@ pub fn foreign(dir: &Path, limit: usize) -> Result<Vec<String>> {
 /// when the process ends, however it ends.
 #[derive(Debug)]
 pub struct Lock {
-    _file: File,
+    file: File,
 }
 
-/// How long [`lock`] waits for a held lock before it refuses the folder. A lock released by
-/// this process can stay held a moment longer: a child process that another thread is starting
-/// inherits every descriptor between its fork and its exec (which closes them), the lock's
-/// among them. Under load that moment has been long enough to refuse a sweep's point (its
-/// folder then held only run.lock and scene.toml). A second run in the folder waits this long
-/// and is then refused as before.
-const LOCK_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
+impl Drop for Lock {
+    /// Unlock explicitly: closing this descriptor alone would leave the lock held by any copy of
+    /// it — a child process that another thread is starting holds every descriptor of its
+    /// parent between fork and exec (Python's `os.fork` until it exits) — and this process's
+    /// next lock of the folder would be refused. (That refused a sweep's point at random: its
+    /// folder was left with only run.lock and scene.toml.)
+    fn drop(&mut self) {
+        let _ = self.file.unlock();
+    }
+}
 
 /// Lock `dir` for this process through `dir/<name>` (created with `dir` if missing). Refused
-/// when another process holds it for longer than [`LOCK_WAIT`]. On a file system without locks
-/// (some network file systems) the run goes on unlocked: nothing else could be done there.
+/// when another process holds it. On a file system without locks (some network file systems)
+/// the run goes on unlocked: nothing else could be done there.
 pub fn lock(dir: &Path, name: &str) -> Result<Lock> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let p = dir.join(name);
     let file = OpenOptions::new().create(true).truncate(false).write(true).open(&p).map_err(|e| Error::io(&p, e))?;
-    let start = std::time::Instant::now();
-    let mut pause = std::time::Duration::from_millis(1);
-    let mut attempt = file.try_lock();
-    while matches!(attempt, Err(std::fs::TryLockError::WouldBlock)) && start.elapsed() < LOCK_WAIT {
-        std::thread::sleep(pause);
-        pause = (pause * 2).min(std::time::Duration::from_millis(100));
-        attempt = file.try_lock();
-    }
-    match attempt {
-        Ok(()) => Ok(Lock { _file: file }),
+    match file.try_lock() {
+        Ok(()) => Ok(Lock { file }),
         Err(std::fs::TryLockError::WouldBlock) => Err(Error::folder(
             dir,
             format!(
                 "another dyncontact process is writing this folder (it holds {name}); wait for it to end or choose another folder"
             ),
         )),
-        Err(std::fs::TryLockError::Error(_)) => Ok(Lock { _file: file }),
+        Err(std::fs::TryLockError::Error(_)) => Ok(Lock { file }),
     }
 }
 
@@ -187,28 +182,22 @@ pub fn clear(dir: &Path) -> Result<()> {
 mod tests {
     use super::*;
 
-    /// (a sweep point's folder) A lock this process released but a copy of whose descriptor is
-    /// still open for a moment — a child process between fork and exec — is taken once the copy
-    /// closes (here after 50 ms, well inside LOCK_WAIT); one held throughout is refused.
+    /// (the run folder contract) A lock this process released is free at once although a copy
+    /// of its descriptor stays open — as a child process between fork and exec holds it —
+    /// and a lock that is held is refused, naming the lock file.
     #[test]
-    fn a_lock_held_a_moment_by_an_inherited_descriptor_is_waited_for() {
+    fn a_released_lock_is_free_while_a_copy_of_its_descriptor_is_open() {
         let dir = std::env::temp_dir().join(format!("dyncontact-lock-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         let first = lock_run(&dir).expect("a fresh folder locks");
         // the descriptor a child would inherit: the same open file description as the lock's
-        let inherited = first._file.try_clone().expect("the descriptor duplicates");
+        let inherited = first.file.try_clone().expect("the descriptor duplicates");
+        let held = lock_run(&dir).expect_err("a held lock refuses");
         drop(first);
-        let closes = std::thread::spawn(move || {
-            std::thread::sleep(std::time::Duration::from_millis(50));
-            drop(inherited);
-        });
         let second = lock_run(&dir);
-        closes.join().expect("the closing thread ends");
-        assert!(second.is_ok(), "the lock was not taken once the inherited copy closed: {second:?}");
-        // held throughout (by another open file description): refused after the wait, naming it
-        let refused = lock_run(&dir).expect_err("a held lock refuses");
-        assert!(refused.to_string().contains("another dyncontact process"), "{refused}");
-        drop(second);
+        drop(inherited);
         let _ = std::fs::remove_dir_all(&dir);
+        assert!(held.to_string().contains("another dyncontact process") && held.to_string().contains(LOCK), "{held}");
+        assert!(second.is_ok(), "the released lock stayed held by the open copy: {second:?}");
     }
 }

@@ -236,30 +236,41 @@ fn six_point_sweep_matches_separate_runs_and_resumes() {
 
 /// (sweep) No point is refused while other threads of the process start child processes: a
 /// child holds every descriptor of its parent between fork and exec, a point's folder lock
-/// among them, so a lock released and taken again by the same point was refused for a moment
-/// ("another dyncontact process is writing this folder", the folder left with run.lock and
-/// scene.toml: seen once in CI, where tests start the binary beside in-process sweeps; a probe
-/// that re-takes a released lock while two threads start `true` was refused 12,307 times in
-/// 20,000). Each point now clears and runs under one lock. Five times, the six points run
-/// with 2 jobs into a new folder while two threads start processes without pause; every point
-/// must complete (the code before refused a point in 1 of 3 such sweeps here).
+/// among them, and a released lock stayed held by that copy, so the point that released its
+/// lock and took it again to run was refused ("another dyncontact process is writing this
+/// folder", the folder left with run.lock and scene.toml: seen once in CI, where tests start
+/// the binary beside in-process sweeps). Locks are now unlocked when released, and a point is
+/// cleared and run under one lock. Five times, the six points run with 2 jobs into a new folder
+/// while two threads start processes without pause; every point must complete (the code before
+/// failed 8 of 41 runs of this test: a regression guard; the deterministic test is
+/// `output::folder`'s).
 #[test]
 fn no_point_is_refused_while_other_threads_start_processes() {
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    /// Stops the spawning threads however the sweeps end (a panic too: the scope would wait).
+    struct Stop<'a>(&'a AtomicBool);
+    impl Drop for Stop<'_> {
+        fn drop(&mut self) {
+            self.0.store(true, Ordering::SeqCst);
+        }
+    }
     let plan = Plan::from_file(&six_points(), &[]).expect("the plan");
-    let stop = std::sync::atomic::AtomicBool::new(false);
+    let (stop, spawned) = (AtomicBool::new(false), AtomicUsize::new(0));
     let outcomes = std::thread::scope(|s| {
         for _ in 0..2 {
             s.spawn(|| {
-                while !stop.load(std::sync::atomic::Ordering::SeqCst) {
-                    let _ = Command::new("true").status();
+                while !stop.load(Ordering::SeqCst) {
+                    // `true`: the quickest child, so the most fork–exec windows a second
+                    if Command::new("true").status().is_ok() {
+                        spawned.fetch_add(1, Ordering::SeqCst);
+                    }
                 }
             });
         }
-        let outcomes: Vec<Outcome> =
-            (0..5).flat_map(|round| run_sweep(&plan, &tmp(&format!("sweep_spawning_{round}")), 2)).collect();
-        stop.store(true, std::sync::atomic::Ordering::SeqCst);
-        outcomes
+        let _stop = Stop(&stop);
+        (0..5).flat_map(|round| run_sweep(&plan, &tmp(&format!("sweep_spawning_{round}")), 2)).collect::<Vec<_>>()
     });
+    assert!(spawned.load(Ordering::SeqCst) > 0, "no child process (`true`) was started beside the sweeps");
     assert!(outcomes.iter().all(|o| *o == Outcome::Completed), "{outcomes:?}");
 }
 
