@@ -26,15 +26,17 @@ fn scene_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/scenes")
 }
 
-/// Run a fixture scene (optionally shortened) into a fresh folder under the target tmpdir.
-fn run_scene(name: &str, end: Option<f64>, every: i64) -> (PathBuf, Problem) {
+/// Run a fixture scene (optionally shortened) into a fresh folder under the target tmpdir, named
+/// by the calling test's `tag` too (two tests running one scene differently at once must not
+/// share a folder).
+fn run_scene(tag: &str, name: &str, end: Option<f64>, every: i64) -> (PathBuf, Problem) {
     let mut scene = Scene::from_file(&scene_dir().join(format!("{name}.toml"))).expect("scene");
     if let Some(end) = end {
         scene.time.end = end;
     }
     scene.output.every = every;
     let problem = Problem::from_scene(&scene, &scene_dir()).expect("problem");
-    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("charts_{name}"));
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("charts_{tag}_{name}"));
     let _ = std::fs::remove_dir_all(&out);
     run(&problem, &RunOptions { out: out.clone(), progress: false, ..RunOptions::default() }).expect("run");
     (out, problem)
@@ -44,7 +46,7 @@ fn run_scene(name: &str, end: Option<f64>, every: i64) -> (PathBuf, Problem) {
 fn impact() -> &'static Fixture {
     static RUN: OnceLock<Fixture> = OnceLock::new();
     RUN.get_or_init(|| {
-        let (out, problem) = run_scene("impact_friction", Some(0.1), 10);
+        let (out, problem) = run_scene("shared", "impact_friction", Some(0.1), 10);
         let contact_nodes = problem.contact.as_ref().expect("contact").n();
         Fixture { out, triangles: problem.mesh.plane().expect("a 2-D mesh").cells.len(), contact_nodes }
     })
@@ -279,7 +281,7 @@ fn charts_use_the_units_of_the_dimension() {
     };
     for name in ["academic3d", "cantilever3d", "column_impact3d", "sliding_block3d", "hertz3d", "gmsh_block3d"] {
         let scene = Scene::from_file(&scene_dir().join(format!("{name}.toml"))).expect("scene");
-        let (out, problem) = run_scene(name, Some(3.0 * scene.time.step), 1000);
+        let (out, problem) = run_scene("units", name, Some(3.0 * scene.time.step), 1000);
         assert_eq!(problem.mesh.dim(), 3, "{name}");
         let all = charts(&out);
         for (chart, text) in &all {
@@ -324,7 +326,7 @@ fn vtu_status_codes(vtu: &str) -> Vec<i32> {
 /// says stick and slip.
 #[test]
 fn frictionless_contact_is_neither_stick_nor_slip() {
-    let (out, _) = run_scene("bar_impact", None, 10);
+    let (out, _) = run_scene("bar", "bar_impact", None, 10);
     let (_, cats) = contact_categories(&out);
     let contact = read(&out.join("contact.csv"));
     let statuses: BTreeSet<&str> = contact.lines().skip(1).map(|l| l.split(',').nth(11).expect("status")).collect();
@@ -455,7 +457,7 @@ fn every_chart_is_well_formed() {
 /// A scene without contact writes energy.svg and deformed.svg and none of the contact charts.
 #[test]
 fn no_contact_scene_writes_only_energy_and_deformed() {
-    let (out, problem) = run_scene("gmsh_square", None, 5);
+    let (out, problem) = run_scene("gmsh", "gmsh_square", None, 5);
     assert!(problem.contact.is_none());
     let energy = svg(&out, "energy.svg");
     let deformed = svg(&out, "deformed.svg");
@@ -679,7 +681,7 @@ fn status_map_regions_tile_the_gmsh_contact_surface() {
     // the bottom of the 1 × 0.5 block less its hole (the faces cover a box of that size)
     assert!(faces_area > 0.3 && faces_area <= 0.5 * (1.0 + 1e-12), "{faces_area}");
 
-    let (out, _) = run_scene("gmsh_block3d", None, 20);
+    let (out, _) = run_scene("status_map", "gmsh_block3d", None, 20);
     let map = svg(&out, "contact_status.svg");
     let labels = texts(&map);
     assert!(labels.iter().any(|t| t == "x [m]") && labels.iter().any(|t| t == "y [m]"), "axes in metres: {labels:?}");

@@ -133,11 +133,26 @@ fn a_hostile_binary_path_is_quoted_in_generated_files() {
     let odd = dir.join("we\"ird $(touch PWNED) `id` dir");
     std::fs::create_dir_all(&odd).expect("odd dir");
     let bin = odd.join("dyncontact");
-    std::fs::copy(BIN, &bin).expect("copy the binary");
+    // a hard link, not a copy: a copy's write descriptor, inherited by a child that another
+    // test thread is starting, makes running it fail with "Text file busy" until that child
+    // executes; a link never opens the file for writing (a copy only where linking fails, and
+    // then its run is retried while busy)
+    if std::fs::hard_link(BIN, &bin).is_err() {
+        std::fs::copy(BIN, &bin).expect("copy the binary");
+    }
     let out = dir.join("sweep");
     let sweep = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/sweeps/six_points.toml");
-    let o =
-        Command::new(&bin).arg("sweep").arg(&sweep).arg("--plan-only").arg("--out").arg(&out).output().expect("sweep");
+    let run = || Command::new(&bin).arg("sweep").arg(&sweep).arg("--plan-only").arg("--out").arg(&out).output();
+    const ETXTBSY: i32 = 26;
+    let mut o = run();
+    for _ in 0..50 {
+        if !matches!(&o, Err(e) if e.raw_os_error() == Some(ETXTBSY)) {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+        o = run();
+    }
+    let o = o.expect("sweep");
     assert!(o.status.success(), "{}", err(&o));
     let config = std::fs::read_to_string(out.join("config.yaml")).expect("config.yaml");
     let line = config.lines().find_map(|l| l.strip_prefix("dyncontact: ")).expect("the binary's line");
