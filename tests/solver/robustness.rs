@@ -171,28 +171,46 @@ fn resume_refuses_another_scene() {
 }
 
 /// SIGINT stops the run at the end of the current step: exit 130, summary "interrupted" with
-/// the step, and files consistent with it.
+/// the step, and files consistent with it. The academic scene runs to t = 1000 s (2 million
+/// steps, which no machine finishes first) and is interrupted once history.csv holds 50 rows,
+/// mid-run on any machine (a fixed sleep before the signal let a fast run end first).
 #[test]
 fn sigint_leaves_valid_files() {
     let dir = tmp("sigint");
     let scene = dir.join("scene.toml");
-    // the academic scene takes a few seconds: long enough to be interrupted mid-run
     std::fs::write(&scene, fixture_text("academic")).expect("write");
     let out = dir.join("out");
-    let mut child = Command::new(BIN).arg("run").arg(&scene).arg("--out").arg(&out).spawn().expect("spawn");
-    std::thread::sleep(std::time::Duration::from_millis(1500));
+    /// Kills the run if the test fails before it ends (it would run for minutes).
+    struct Run(std::process::Child);
+    impl Drop for Run {
+        fn drop(&mut self) {
+            let _ = self.0.kill();
+            let _ = self.0.wait();
+        }
+    }
+    let mut run = Run(Command::new(BIN)
+        .arg("run")
+        .arg(&scene)
+        .args(["--set", "time.end=1000.0", "--out"])
+        .arg(&out)
+        .spawn()
+        .expect("spawn"));
+    let child = &mut run.0;
+    let start = std::time::Instant::now();
+    while !std::fs::read_to_string(out.join("history.csv")).is_ok_and(|t| t.lines().count() > 50) {
+        assert!(child.try_wait().expect("try_wait").is_none(), "the run ended before it could be interrupted");
+        assert!(start.elapsed() < std::time::Duration::from_secs(60), "history.csv did not reach 50 steps in 60 s");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
     let killed = Command::new("kill").args(["-INT", &child.id().to_string()]).status().expect("kill");
     assert!(killed.success());
     let status = child.wait().expect("wait");
     let s = summary(&out);
-    if status.success() {
-        // a very fast machine finished before the signal: nothing to check
-        println!("the run completed before SIGINT arrived");
-        return;
-    }
     assert_eq!(status.code(), Some(130));
     assert_eq!(s["status"], "interrupted");
     let done = s["steps_completed"].as_u64().expect("steps") as usize;
+    // 51 lines: the header and steps 0 … 49 written; the step under way completes
+    assert!(done >= 49, "interrupted at step {done}, before history.csv held 50 rows");
     println!("interrupted after step {done}: {}", s["failure"]);
     check_files_valid(&out, done);
     assert!(out.join("checkpoint.json").exists());
