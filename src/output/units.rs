@@ -23,6 +23,38 @@ pub fn force_axis(dim: usize) -> String {
     if dim == 3 { format!("force [{}]", force(dim)) } else { format!("force per unit thickness [{}]", force(dim)) }
 }
 
+/// The unit of a figure of sweep.csv (`FIGURES`) or of refine.csv's impulses
+/// (`normal_impulse`, `friction_impulse_x_w2`, …) in dimension `dim`; None for counts, ratios
+/// and names it does not know. Impulses are forces times time: N·s/m in 2-D, N·s in 3-D.
+pub fn figure(name: &str, dim: usize) -> Option<String> {
+    let impulse = name.starts_with("normal_impulse") || name.starts_with("friction_impulse_");
+    let unit = match name {
+        _ if impulse => return Some(if dim == 3 { "N·s".to_string() } else { "N·s/m".to_string() }),
+        "final_kinetic"
+        | "final_elastic"
+        | "final_compliance"
+        | "external_work"
+        | "viscous_dissipation"
+        | "friction_dissipation"
+        | "constraint_dissipation"
+        | "persistency_dissipation"
+        | "max_abs_energy_residual" => energy(dim),
+        "max_normal_force" | "max_tangential_force" => force(dim),
+        "max_penetration" => "m",
+        "final_time" => "s",
+        _ => return None,
+    };
+    Some(unit.to_string())
+}
+
+/// A chart's axis for a figure: `name [unit]`, or the name alone where it has none.
+pub fn figure_axis(name: &str, dim: usize) -> String {
+    match figure(name, dim) {
+        Some(u) => format!("{name} [{u}]"),
+        None => name.to_string(),
+    }
+}
+
 /// The history.csv column families: (family, unit in 2-D, unit in 3-D, columns). "1" is a
 /// count or a ratio.
 const HISTORY_FAMILIES: [(&str, &str, &str, &[&str]); 7] = [
@@ -147,6 +179,17 @@ mod tests {
                 assert_eq!(n, 1, "contact.csv {name} is in {n} families");
             }
             assert_eq!(u.history_unit("normal_force"), Some(force(dim)));
+            // every sweep figure with a unit has the unit of its history.csv column, and the
+            // counts and ratios have none
+            for name in crate::sweep::collect::FIGURES {
+                let column = name.trim_start_matches("final_").trim_start_matches("max_");
+                let expected = match column {
+                    "abs_energy_residual" => u.history_unit("energy_residual"),
+                    "time" => u.history_unit("t"),
+                    _ => u.history_unit(name).or(u.history_unit(column)).filter(|unit| *unit != "1"),
+                };
+                assert_eq!(figure(name, dim).as_deref(), expected, "{name}");
+            }
             assert_eq!(u.history_unit("kinetic"), Some(energy(dim)));
         }
         assert_eq!((force(2), force(3), energy(2), energy(3)), ("N/m", "N", "J/m", "J"));

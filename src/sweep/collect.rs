@@ -406,9 +406,18 @@ pub fn collect(dir: &Path) -> Result<(Plan, Vec<Row>)> {
     write_atomic(&dir.join("sweep.csv"), csv(&plan, &rows).as_bytes())?;
     let plots = dir.join("plots");
     std::fs::create_dir_all(&plots).map_err(|e| Error::io(&plots, e))?;
+    // the figures' units: those of the completed points' dimension, where they share one
+    let dims: Vec<usize> = plan
+        .points
+        .iter()
+        .zip(&rows)
+        .filter(|(_, r)| r.status.is_completed())
+        .filter_map(|(p, _)| Summary::read(&Plan::point_dir(dir, &p.id))?.run.map(|d| d.model.dim))
+        .collect();
+    let dim = dims.first().copied().filter(|d| dims.iter().all(|e| e == d));
     for (a, axis) in plan.axes.iter().enumerate() {
         if axis.numbers.is_some() && !plan.figures.is_empty() {
-            let svg = chart(&plan, &rows, a)?;
+            let svg = chart(&plan, &rows, a, dim)?;
             write_atomic(&plots.join(format!("{}.svg", file_name(&axis.column))), svg.as_bytes())?;
         }
     }
@@ -432,8 +441,9 @@ fn spans_decades(v: &[f64]) -> bool {
 }
 
 /// plots/<axis>.svg: one panel per chosen figure against the axis' numbers, a line per
-/// combination of the other axes' values (completed points only).
-fn chart(plan: &Plan, rows: &[Row], a: usize) -> Result<String> {
+/// combination of the other axes' values (completed points only); the figures' axes in the
+/// units of dimension `dim` (the name alone where the points do not share one).
+fn chart(plan: &Plan, rows: &[Row], a: usize, dim: Option<usize>) -> Result<String> {
     let axis = &plan.axes[a];
     let numbers = axis.numbers.as_deref().unwrap_or_default();
     let log_x = spans_decades(numbers);
@@ -463,10 +473,15 @@ fn chart(plan: &Plan, rows: &[Row], a: usize) -> Result<String> {
         let log_y = spans_decades(&all);
         panels_data.push((fig.clone(), series, log_y));
     }
+    let y_descs: Vec<String> = panels_data
+        .iter()
+        .map(|(fig, _, _)| dim.map_or_else(|| fig.clone(), |d| crate::output::units::figure_axis(fig, d)))
+        .collect();
     let panels: Vec<(Panel, f64)> = panels_data
         .iter()
-        .map(|(fig, series, log_y)| {
-            (Panel { title: fig, x_desc: &axis.column, y_desc: fig, series, hlines: &[], log: (log_x, *log_y) }, 1.0)
+        .zip(&y_descs)
+        .map(|((fig, series, log_y), y_desc)| {
+            (Panel { title: fig, x_desc: &axis.column, y_desc, series, hlines: &[], log: (log_x, *log_y) }, 1.0)
         })
         .collect();
     let opts = Options { markers: true, ..Options::default() };

@@ -464,7 +464,7 @@ impl Refinement {
         let plots = dir.join("plots");
         std::fs::create_dir_all(&plots).map_err(|e| Error::io(&plots, e))?;
         for row in &table {
-            if let Some(svg) = chart(row, &self.sizes, self.size_name)? {
+            if let Some(svg) = chart(row, &self.sizes, self.size_name, self.dim)? {
                 write_atomic(&plots.join(format!("refine_{}.svg", row.figure)), svg.as_bytes())?;
             }
         }
@@ -572,7 +572,7 @@ pub fn csv(table: &[RefineRow], levels: usize) -> String {
 /// span a decade, else linear), with
 /// the extrapolated value and its band f_ext ± GCI·|f1| as horizontal lines. None when no level
 /// has a value.
-fn chart(row: &RefineRow, sizes: &[f64], size_name: &str) -> Result<Option<String>> {
+fn chart(row: &RefineRow, sizes: &[f64], size_name: &str, dim: usize) -> Result<Option<String>> {
     let points: Vec<(f64, f64)> =
         sizes.iter().zip(&row.values).filter_map(|(&x, v)| Some((x, v.parse::<f64>().ok()?))).collect();
     if points.is_empty() {
@@ -598,16 +598,27 @@ fn chart(row: &RefineRow, sizes: &[f64], size_name: &str) -> Result<Option<Strin
     // has no decade tick and its labels repeat, so the axis is linear
     let (lo, hi) = points.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| (lo.min(p.0), hi.max(p.0)));
     let log_x = lo > 0.0 && hi >= 10.0 * lo;
+    // the legend on the right (the finest levels, which approach f_ext, sit at the left), on
+    // the side of the range the coarsest level leaves free
+    let ys = points.iter().map(|p| p.1).chain(hlines.iter().map(|h| h.1)).filter(|y| y.is_finite());
+    let (y_lo, y_hi) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| (lo.min(y), hi.max(y)));
+    let coarsest = points.iter().max_by(|a, b| a.0.total_cmp(&b.0)).map_or(0.0, |p| p.1);
+    let legend = if coarsest > 0.5 * (y_lo + y_hi) {
+        crate::output::plots::SeriesLabelPosition::LowerRight
+    } else {
+        crate::output::plots::SeriesLabelPosition::UpperRight
+    };
     let series = [Series { name: row.figure.clone(), points }];
+    let y_desc = crate::output::units::figure_axis(&row.figure, dim);
     let panel = Panel {
         title: &title,
         x_desc: size_name,
-        y_desc: &row.figure,
+        y_desc: &y_desc,
         series: &series,
         hlines: &hlines,
         log: (log_x, false),
     };
-    let opts = Options { markers: true, ..Options::default() };
+    let opts = Options { markers: true, legend, ..Options::default() };
     stacked_chart(&[(panel, 1.0)], &opts)
         .map(Some)
         .map_err(|e| Error::Output(format!("plots/refine_{}.svg: {e}", row.figure)))

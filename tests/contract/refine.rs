@@ -204,6 +204,11 @@ fn g1_g2_g3_refine_the_compliant_layer_bands_hold_the_closed_form() {
         assert_eq!(rows.iter().find(|r| r[0] == f).map(|r| r[7].as_str()), Some("true"), "{f} asymptotic");
         assert!(out.join(format!("plots/refine_{f}.svg")).is_file(), "chart of {f}");
     }
+    // the charts' value axes carry the 2-D units (per unit thickness)
+    for (f, axis) in [("max_penetration", "max_penetration [m]"), ("normal_impulse", "normal_impulse [N·s/m]")] {
+        let svg = std::fs::read_to_string(out.join(format!("plots/refine_{f}.svg"))).expect("chart");
+        assert!(svg.contains(axis), "refine_{f}.svg has no axis {axis:?}");
+    }
     assert!(out.join("sweep.csv").is_file() && out.join("Snakefile").is_file());
     // resumable: the levels are not run again, the file is the same
     let summary = out.join("points/p000/summary.json");

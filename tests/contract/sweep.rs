@@ -444,6 +444,11 @@ fn cli_sweep_plan_run_and_collect() {
     for axis in ["contact.penalty", "time.step"] {
         let svg = std::fs::read_to_string(dir.join("plots").join(format!("{axis}.svg"))).expect("chart");
         assert!(svg.starts_with("<svg") && svg.contains("max_penetration"), "{axis}.svg");
+        // the figures' axes in the points' (2-D) units; counts have none
+        for label in ["max_penetration [m]", "friction_dissipation [J/m]"] {
+            assert!(svg.contains(label), "{axis}.svg has no axis {label:?}");
+        }
+        assert!(!svg.contains("newton_iterations_per_step ["), "{axis}.svg gives a count a unit");
     }
     let o = Command::new(BIN).args(["sweep", "collect"]).arg(&dir).output().expect("spawn");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
