@@ -179,17 +179,6 @@ mod tests {
                 assert_eq!(n, 1, "contact.csv {name} is in {n} families");
             }
             assert_eq!(u.history_unit("normal_force"), Some(force(dim)));
-            // every sweep figure with a unit has the unit of its history.csv column, and the
-            // counts and ratios have none
-            for name in crate::sweep::collect::FIGURES {
-                let column = name.trim_start_matches("final_").trim_start_matches("max_");
-                let expected = match column {
-                    "abs_energy_residual" => u.history_unit("energy_residual"),
-                    "time" => u.history_unit("t"),
-                    _ => u.history_unit(name).or(u.history_unit(column)).filter(|unit| *unit != "1"),
-                };
-                assert_eq!(figure(name, dim).as_deref(), expected, "{name}");
-            }
             assert_eq!(u.history_unit("kinetic"), Some(energy(dim)));
         }
         assert_eq!((force(2), force(3), energy(2), energy(3)), ("N/m", "N", "J/m", "J"));

@@ -274,6 +274,30 @@ fn no_point_is_refused_while_other_threads_start_processes() {
     assert!(outcomes.iter().all(|o| *o == Outcome::Completed), "{outcomes:?}");
 }
 
+/// (units) Every sweep figure with a unit has the unit of its history.csv column for the
+/// dimension, counts and ratios have none, and refine's impulses (whole run and windows) are a
+/// force times a time: N·s/m in 2-D, N·s in 3-D. The charts' axes read these.
+#[test]
+fn every_figure_has_the_unit_of_its_column() {
+    use dyncontact::output::units::{Units, figure};
+    for dim in [2, 3] {
+        let u = Units::of(dim);
+        for name in FIGURES {
+            let column = name.trim_start_matches("final_").trim_start_matches("max_");
+            let expected = match column {
+                "abs_energy_residual" => u.history_unit("energy_residual"),
+                "time" => u.history_unit("t"),
+                _ => u.history_unit(name).or(u.history_unit(column)).filter(|unit| *unit != "1"),
+            };
+            assert_eq!(figure(name, dim).as_deref(), expected, "{name} in {dim}-D");
+        }
+        let impulse = if dim == 3 { "N·s" } else { "N·s/m" };
+        for name in dyncontact::sweep::refine::impulse_figures(dim, 4) {
+            assert_eq!(figure(&name, dim).as_deref(), Some(impulse), "{name} in {dim}-D");
+        }
+    }
+}
+
 /// A point that fails at run time (Newton capped at one iteration on the frictional impact) is
 /// recorded — status failed and its reason in sweep.csv, summary.json saying why — and the other
 /// points complete.
