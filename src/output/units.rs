@@ -27,9 +27,14 @@ pub fn force_axis(dim: usize) -> String {
 /// (`normal_impulse`, `friction_impulse_x_w2`, …) in dimension `dim`; None for counts, ratios
 /// and names it does not know. Impulses are forces times time: N·s/m in 2-D, N·s in 3-D.
 pub fn figure(name: &str, dim: usize) -> Option<String> {
-    let impulse = name.starts_with("normal_impulse") || name.starts_with("friction_impulse_");
     let unit = match name {
-        _ if impulse => return Some(if dim == 3 { "N·s".to_string() } else { "N·s/m".to_string() }),
+        n if n.starts_with("normal_impulse") || n.starts_with("friction_impulse_") => {
+            if dim == 3 {
+                "N·s"
+            } else {
+                "N·s/m"
+            }
+        }
         "final_kinetic"
         | "final_elastic"
         | "final_compliance"

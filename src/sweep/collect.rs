@@ -98,6 +98,8 @@ pub struct Row {
     pub axes: Vec<String>,
     pub status: PointStatus,
     pub wall_time_s: Option<f64>,
+    /// the run's space dimension (2 or 3), where its summary.json says it
+    pub dim: Option<usize>,
     /// the figures of [`FIGURES`], as written (empty: not available)
     pub figures: Vec<String>,
     pub reason: String,
@@ -165,6 +167,7 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
         axes: axes.clone(),
         status,
         wall_time_s: None,
+        dim: None,
         figures: vec![String::new(); FIGURES.len()],
         reason,
         warnings: Vec::new(),
@@ -248,6 +251,7 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
         axes,
         status: PointStatus::Run(summary.status),
         wall_time_s: summary.run.as_ref().map(|d| d.wall_time_s),
+        dim: summary.run.as_ref().map(|d| d.model.dim),
         figures: FIGURES.iter().map(|f| figures.remove(f).unwrap_or_default()).collect(),
         reason,
         warnings: summary.run.as_ref().map(|d| d.warnings.clone()).unwrap_or_default(),
@@ -407,13 +411,7 @@ pub fn collect(dir: &Path) -> Result<(Plan, Vec<Row>)> {
     let plots = dir.join("plots");
     std::fs::create_dir_all(&plots).map_err(|e| Error::io(&plots, e))?;
     // the figures' units: those of the completed points' dimension, where they share one
-    let dims: Vec<usize> = plan
-        .points
-        .iter()
-        .zip(&rows)
-        .filter(|(_, r)| r.status.is_completed())
-        .filter_map(|(p, _)| Summary::read(&Plan::point_dir(dir, &p.id))?.run.map(|d| d.model.dim))
-        .collect();
+    let dims: Vec<usize> = rows.iter().filter(|r| r.status.is_completed()).filter_map(|r| r.dim).collect();
     let dim = dims.first().copied().filter(|d| dims.iter().all(|e| e == d));
     for (a, axis) in plan.axes.iter().enumerate() {
         if axis.numbers.is_some() && !plan.figures.is_empty() {
