@@ -32,6 +32,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
 
 pub mod checkpoint;
+pub mod cli;
 pub mod defaults;
 pub mod energy;
 pub mod error;

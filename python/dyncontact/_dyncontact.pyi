@@ -135,3 +135,7 @@ def run_refine(
     progress: bool = False,
 ) -> str:
     """Run a refinement study; returns the path of refine.csv (`dyncontact.refine` wraps it)."""
+
+def cli_main(argv: Sequence[str]) -> int:
+    """The command line with `argv` (the program's name first): the CLI's exit code
+    (`python -m dyncontact` and the `dyncontact` console script call it)."""

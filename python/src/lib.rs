@@ -33,6 +33,33 @@ fn origin(scene: &PyScene) -> Origin {
     Origin { scene_file: Some(scene.file.clone()), overrides: scene.overrides.clone() }
 }
 
+/// The command a sweep's Snakefile runs `dyncontact` with when the sweep is written from Python:
+/// this interpreter with `-m dyncontact` (python/dyncontact/__main__.py, the command line of
+/// [`dyncontact::cli`]). This process's executable would be the interpreter itself, and
+/// `python sweep point …` is not a command; without a known interpreter, `dyncontact` on the
+/// PATH (the package's console script).
+fn launcher(py: Python<'_>) -> Vec<String> {
+    let executable = py
+        .import("sys")
+        .and_then(|sys| sys.getattr("executable"))
+        .and_then(|e| e.extract::<String>())
+        .unwrap_or_default();
+    if executable.is_empty() {
+        vec!["dyncontact".to_string()]
+    } else {
+        vec![executable, "-m".to_string(), "dyncontact".to_string()]
+    }
+}
+
+/// The command line: `python -m dyncontact ARGS…` and the `dyncontact` console script run
+/// `cli_main(["dyncontact", *ARGS])` — the CLI's own code (its signal handling included), the
+/// GIL released; returns the exit code.
+#[pyfunction]
+fn cli_main(py: Python<'_>, argv: Vec<std::ffi::OsString>) -> u8 {
+    let launcher = launcher(py);
+    py.detach(|| dyncontact::cli::main(argv, Some(&launcher)))
+}
+
 /// An (n, d) float64 array of the first `d` components of 3-vectors.
 pub fn vectors<'py>(py: Python<'py>, x: &[[f64; 3]], d: usize) -> Bound<'py, PyAny> {
     let flat: Vec<f64> = x.iter().flat_map(|p| p[..d].iter().copied()).collect();
@@ -224,10 +251,11 @@ fn run_sweep(
         ));
     }
     let dir = out.unwrap_or_else(|| PathBuf::from("out").join(&plan.name));
+    let launcher = launcher(py);
     let (result, signal) = interruptible(py, |flag| -> dyncontact::Result<PathBuf> {
         use dyncontact::sweep::{collect, runner};
         let _lock = sweep::lock(&dir)?;
-        let done = plan.write(&dir)?;
+        let done = plan.write(&dir, &launcher)?;
         if plan_only {
             return Ok(dir.join("sweep.csv"));
         }
@@ -294,10 +322,11 @@ fn run_refine(
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
     let jobs = jobs.unwrap_or(cores).max(1);
     let dir = out.unwrap_or_else(|| refine::default_dir(&scene.name));
+    let launcher = launcher(py);
     let (result, signal) = interruptible(py, |flag| -> dyncontact::Result<PathBuf> {
         let _lock = sweep::lock(&dir)?;
         let ropts = sweep::runner::RunnerOptions { jobs, progress, interrupt: Some(flag.clone()) };
-        let (outcomes, _) = refinement.run(&dir, &ropts)?;
+        let (outcomes, _) = refinement.run(&dir, &ropts, &launcher)?;
         if flag.load(std::sync::atomic::Ordering::SeqCst) {
             let finished = outcomes
                 .iter()
@@ -312,7 +341,7 @@ fn run_refine(
 
 #[pymodule]
 fn _dyncontact(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    // as the command line (src/main.rs says why): faer's thread pool costs more than it gains here
+    // as the command line (src/cli.rs says why): faer's thread pool costs more than it gains here
     faer::set_global_parallelism(faer::Par::Seq);
     m.add_class::<PyScene>()?;
     m.add_class::<simulation::PySimulation>()?;
@@ -323,6 +352,7 @@ fn _dyncontact(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run_folder, m)?)?;
     m.add_function(wrap_pyfunction!(run_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(run_refine, m)?)?;
+    m.add_function(wrap_pyfunction!(cli_main, m)?)?;
     m.add("DEFAULT_SCENE", dyncontact::scene::DEFAULT_SCENE)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -105,12 +105,14 @@ pub fn sweep_file(eps_list: Option<&[f64]>) -> Result<SweepFile> {
 /// Run the study: the sweep of the ε list (default: the file's) on `base` with `overrides`,
 /// its points in `work` (`jobs` at once; points completed earlier with the same scene are
 /// skipped), then the collector. The scene must have contact with a finite penetration bound.
+/// `launcher`: the command the sweep's Snakefile runs `dyncontact` with.
 pub fn penalty_study(
     base: &Base,
     overrides: &[Override],
     eps_list: Option<&[f64]>,
     work: &Path,
     jobs: usize,
+    launcher: &[String],
 ) -> Result<PenaltyStudy> {
     let sweep = sweep_file(eps_list)?;
     let scene = crate::sweep::scene_for(&sweep, base, overrides)?;
@@ -125,7 +127,7 @@ pub fn penalty_study(
         ));
     }
     let plan = Plan::resolve_with(&sweep, base, overrides)?;
-    let done = plan.write(work)?;
+    let done = plan.write(work, launcher)?;
     let outcomes =
         runner::run_points(&plan, work, &done, &RunnerOptions { jobs: jobs.max(1), progress: false, interrupt: None })?;
     // a point that failed before its run wrote a summary (its folder refused, say): the

@@ -237,8 +237,9 @@ impl Plan {
     /// Lay the sweep out in `dir`: sweep.json (what the collector reads), every point's
     /// scene.toml (rewritten only when it changed — a changed scene also drops the point's old
     /// summary.json, so the point runs again), the Snakefile and config.yaml. Returns, per point,
-    /// whether its folder already holds a completed run of the same scene.
-    pub fn write(&self, dir: &Path) -> Result<Vec<bool>> {
+    /// whether its folder already holds a completed run of the same scene. `launcher`: the
+    /// command the Snakefile runs `dyncontact` with ([`snakemake::this_executable`] for the CLI).
+    pub fn write(&self, dir: &Path, launcher: &[String]) -> Result<Vec<bool>> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let json = serde_json::to_string_pretty(self).map_err(|e| Error::Output(format!("sweep.json: {e}")))?;
         write_atomic(&dir.join("sweep.json"), json.as_bytes())?;
@@ -307,7 +308,7 @@ impl Plan {
             }
             done.push(same && collect::completed_with(&pd, &p.scene_text));
         }
-        snakemake::write(self, dir)?;
+        snakemake::write(self, dir, launcher)?;
         Ok(done)
     }
 

@@ -446,9 +446,10 @@ pub fn plan(base: &Base, extra: &[Override], name: &str, opts: &RefineOptions) -
 impl Refinement {
     /// Lay the levels out in `dir`, run those not completed with the same scene (`jobs` at
     /// once), collect sweep.csv, and write refine.csv and the charts. Returns the points'
-    /// outcomes and refine.csv's rows.
-    pub fn run(&self, dir: &Path, opts: &RunnerOptions) -> Result<(Vec<Outcome>, Vec<RefineRow>)> {
-        let done = self.plan.write(dir)?;
+    /// outcomes and refine.csv's rows. `launcher`: the command the Snakefile runs `dyncontact`
+    /// with.
+    pub fn run(&self, dir: &Path, opts: &RunnerOptions, launcher: &[String]) -> Result<(Vec<Outcome>, Vec<RefineRow>)> {
+        let done = self.plan.write(dir, launcher)?;
         let outcomes = runner::run_points(&self.plan, dir, &done, opts)?;
         let rows = self.collect(dir)?;
         Ok((outcomes, rows))

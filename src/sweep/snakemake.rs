@@ -67,14 +67,20 @@ rule collect:
     )
 }
 
-/// config.yaml: the binary that wrote the sweep (edit it where the cluster's copy lives) and
+/// config.yaml: the command that runs `dyncontact` (the binary that wrote the sweep — edit it
+/// where the cluster's copy lives — as a string; a command of several words, such as the Python
+/// package's `[python, "-m", "dyncontact"]`, as a list, which Snakemake quotes word by word) and
 /// each point's resources.
-pub fn config(plan: &Plan, binary: &str) -> String {
+pub fn config(plan: &Plan, launcher: &[String]) -> String {
     let mut s =
-        String::from("# written by `dyncontact sweep`: the binary that runs a point, and each point's resources\n");
+        String::from("# written by `dyncontact sweep`: the command that runs a point, and each point's resources\n");
     s.push_str("# (mem_mb: the memory estimate of `dyncontact check`; runtime: minutes, a conservative bound)\n");
     // a JSON string is a YAML double-quoted scalar with every special character escaped
-    let _ = writeln!(s, "dyncontact: {}", serde_json::to_string(binary).unwrap_or_else(|_| "\"dyncontact\"".into()));
+    let command = match launcher {
+        [binary] => serde_json::to_string(binary),
+        words => serde_json::to_string(words),
+    };
+    let _ = writeln!(s, "dyncontact: {}", command.unwrap_or_else(|_| "\"dyncontact\"".into()));
     s.push_str("points:\n");
     for p in &plan.points {
         let _ = writeln!(s, "  {}: {{mem_mb: {}, runtime: {}}}", p.id, p.mem_mb, p.runtime_min);
@@ -82,13 +88,19 @@ pub fn config(plan: &Plan, binary: &str) -> String {
     s
 }
 
-/// Write DIR/Snakefile and DIR/config.yaml (the binary: this process's executable).
-pub fn write(plan: &Plan, dir: &Path) -> Result<()> {
-    let binary = std::env::current_exe().map(|p| p.display().to_string()).unwrap_or_else(|_| "dyncontact".into());
-    // a test binary is not the CLI: point at the CLI built beside it when there is one
-    let binary = cli_beside(&binary).unwrap_or(binary);
+/// Write DIR/Snakefile and DIR/config.yaml; `launcher`: the command that runs `dyncontact`
+/// ([`this_executable`] for the CLI).
+pub fn write(plan: &Plan, dir: &Path, launcher: &[String]) -> Result<()> {
     write_atomic(&dir.join("Snakefile"), snakefile(plan).as_bytes())?;
-    write_atomic(&dir.join("config.yaml"), config(plan, &binary).as_bytes())
+    write_atomic(&dir.join("config.yaml"), config(plan, launcher).as_bytes())
+}
+
+/// This process's executable as the command that runs `dyncontact` — for a test binary
+/// (target/<profile>/deps/…), the CLI built beside it when there is one. Not for a process that
+/// is not the CLI (the Python interpreter): the Python package gives its own command.
+pub fn this_executable() -> Vec<String> {
+    let binary = std::env::current_exe().map(|p| p.display().to_string()).unwrap_or_else(|_| "dyncontact".into());
+    vec![cli_beside(&binary).unwrap_or(binary)]
 }
 
 /// The `dyncontact` executable of the build a test binary (target/<profile>/deps/…) belongs to.

@@ -666,7 +666,7 @@ pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
     let mut found: Vec<RunResult> = Vec::new();
     for (sweep, base, plan) in plans(opts.quick)? {
         let dir = out.join("sweeps").join(&plan.name);
-        let done = plan.write(&dir)?;
+        let done = plan.write(&dir, &dyncontact::sweep::snakemake::this_executable())?;
         runner::run_points(&plan, &dir, &done, &RunnerOptions { jobs, progress: false, interrupt: None })?;
         for p in &plan.points {
             let case_label = &plan.axes[0].labels[p.choice[0]];

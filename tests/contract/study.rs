@@ -14,6 +14,7 @@ use crate::common;
 use dyncontact::overrides::Override;
 use dyncontact::study::penalty::penalty_study;
 use dyncontact::sweep::Base;
+use dyncontact::sweep::snakemake::this_executable;
 
 /// A fixture scene as a sweep's base.
 fn base(name: &str) -> Base {
@@ -35,7 +36,7 @@ fn e0_penalty_study_penetration_and_error_fall_with_eps() {
     let _ = std::fs::remove_dir_all(&work);
     // each point's numerics sequential, as `dyncontact`'s main sets them (the sweep runner sets no global state)
     faer::set_global_parallelism(faer::Par::Seq);
-    let st = penalty_study(&base("academic"), &coarse, Some(&eps), &work, 2).expect("study");
+    let st = penalty_study(&base("academic"), &coarse, Some(&eps), &work, 2, &this_executable()).expect("study");
     for r in &st.rows {
         println!("ε = {:.0e}: e_V {:.4e}, e_H {:.4e}, δ {:.4e}, {:.2} s", r.eps, r.e_v, r.e_h, r.delta, r.wall_time_s);
     }
@@ -78,7 +79,7 @@ fn e0_penalty_study_penetration_and_error_fall_with_eps() {
 fn penalty_study_needs_a_finite_bound() {
     let work = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("penalty_sweep_refused");
     let short = [Override::parse("time.end=0.01").expect("override")];
-    let e = penalty_study(&base("sliding_block"), &short, Some(&[1e-3]), &work, 1)
+    let e = penalty_study(&base("sliding_block"), &short, Some(&[1e-3]), &work, 1, &this_executable())
         .expect_err("must refuse g = inf")
         .to_string();
     assert!(e.starts_with("contact.penetration_bound"), "{e}");

@@ -124,8 +124,30 @@ fn six_points() -> PathBuf {
 fn run_sweep(plan: &Plan, dir: &Path, jobs: usize) -> Vec<Outcome> {
     // each point's numerics sequential, as `dyncontact`'s main sets them (the runner sets no global state)
     faer::set_global_parallelism(faer::Par::Seq);
-    let done = plan.write(dir).expect("the folder");
+    let done = plan.write(dir, &dyncontact::sweep::snakemake::this_executable()).expect("the folder");
     run_points(plan, dir, &done, &RunnerOptions { jobs, progress: false, interrupt: None }).expect("run")
+}
+
+/// (sweep, Python) The command a sweep's Snakefile runs `dyncontact` with: one word (the CLI's
+/// binary) is written as a JSON string, several (the Python package's `[python, "-m",
+/// "dyncontact"]`) as a JSON list that decodes to those words exactly — a word with a quote,
+/// `$(…)` and a space among them — which Snakemake's `:q` quotes word by word.
+#[test]
+fn the_snakefile_command_is_the_launcher_given() {
+    let plan = Plan::from_file(&six_points(), &[]).expect("plan");
+    let dir = tmp("sweep_launcher");
+    let words = |dir: &Path| {
+        let config = std::fs::read_to_string(dir.join("config.yaml")).expect("config.yaml");
+        let line = config.lines().find_map(|l| l.strip_prefix("dyncontact: ")).expect("the command's line").to_string();
+        serde_json::from_str::<serde_json::Value>(&line).expect("JSON")
+    };
+    plan.write(&dir.join("cli"), &["/opt/dyncontact".to_string()]).expect("the folder");
+    assert_eq!(words(&dir.join("cli")), serde_json::json!("/opt/dyncontact"));
+    let python = ["/v env/bin/py\"thon $(id)".to_string(), "-m".to_string(), "dyncontact".to_string()];
+    plan.write(&dir.join("py"), &python).expect("the folder");
+    assert_eq!(words(&dir.join("py")), serde_json::json!(python));
+    let snakefile = std::fs::read_to_string(dir.join("py").join("Snakefile")).expect("Snakefile");
+    assert!(snakefile.contains("{config[dyncontact]:q} sweep point"), "{snakefile}");
 }
 
 /// A 6-point sweep (3 penalties × 2 steps) run in-process with 2 jobs gives sweep.csv with one
