@@ -185,11 +185,28 @@ mod tests {
         }
     }
 
-    fn dir(name: &str) -> std::path::PathBuf {
+    /// A fresh folder under the system's temporary folder, removed when the test ends (passed
+    /// or not: each run of these tests left three folders behind before).
+    struct Scratch(std::path::PathBuf);
+
+    impl std::ops::Deref for Scratch {
+        type Target = std::path::Path;
+        fn deref(&self) -> &std::path::Path {
+            &self.0
+        }
+    }
+
+    impl Drop for Scratch {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+
+    fn dir(name: &str) -> Scratch {
         let d = std::env::temp_dir().join(format!("dyncontact-checkpoint-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(&d).expect("dir");
-        d
+        Scratch(d)
     }
 
     /// (issue 22) A checkpoint reads back to the state it was written from, bit for bit.

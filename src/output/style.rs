@@ -119,6 +119,20 @@ pub fn tick_label(v: f64, lo: f64, hi: f64) -> String {
     if s == "-0" { "0".into() } else { s }
 }
 
+/// A value in a legend with `digits` significant digits: plain between 1e-3 and 1e5 (51.50798,
+/// 0.3493750), scientific outside (6.022141e23, 1.270000e-3).
+pub fn significant(v: f64, digits: usize) -> String {
+    let digits = digits.max(1);
+    let big = v.abs();
+    if v == 0.0 || !v.is_finite() || !(1e-3..1e5).contains(&big) {
+        return if v == 0.0 { "0".into() } else { format!("{v:.prec$e}", prec = digits - 1) };
+    }
+    // digits before the point: 1 + floor(log10 |v|) (≤ 0 below 1)
+    let before = big.log10().floor() as i64 + 1;
+    let decimals = (digits as i64 - before).max(0) as usize;
+    format!("{v:.decimals$}")
+}
+
 /// A tick label on a logarithmic axis: the power of ten (1e-3, 1e2).
 pub fn log_tick_label(v: f64) -> String {
     format!("{v:.0e}")
@@ -156,4 +170,21 @@ pub fn number(v: f64) -> String {
     let s = format!("{v:.4}");
     let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
     if s == "-0" { "0".into() } else { s }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A legend's value keeps its significant digits, plain in the range people read plainly.
+    #[test]
+    fn significant_digits_are_kept() {
+        assert_eq!(significant(51.5079812, 7), "51.50798");
+        assert_eq!(significant(0.34937504, 7), "0.3493750");
+        assert_eq!(significant(-2.8934, 5), "-2.8934");
+        assert_eq!(significant(1.27e-4, 3), "1.27e-4");
+        assert_eq!(significant(6.02214076e23, 4), "6.022e23");
+        assert_eq!(significant(0.0, 7), "0");
+        assert_eq!(significant(99999.4, 3), "99999");
+    }
 }

@@ -583,7 +583,7 @@ fn chart(row: &RefineRow, sizes: &[f64], size_name: &str, dim: usize) -> Result<
     let f1 = points.last().map(|p| p.1).unwrap_or(0.0);
     let mut hlines = Vec::new();
     if let Some(fx) = e.extrapolated {
-        hlines.push((format!("extrapolated (G.2) {fx:.6e}"), fx));
+        hlines.push((format!("extrapolated (G.2) {}", crate::output::style::significant(fx, 7)), fx));
         if let Some(g) = e.gci.filter(|g| *g > 0.0) {
             let u = g * f1.abs();
             hlines.push((format!("+ GCI (G.3) {:.2}%", 100.0 * g), fx + u));
