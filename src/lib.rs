@@ -22,6 +22,7 @@
 //! - [`sweep`]: many runs of one scene (axes, `[set]`), in parallel here or as Snakemake jobs; sweep.csv
 //! - [`study`]: the user's studies (`dyncontact study penalty`: the ε → 0 study), on the public API only;
 //!   the developers' studies (benchmarks, stability map) are the `dyncontact-studies` crate (studies/)
+//! - [`cli`]: the command line (the `dyncontact` executable and `python -m dyncontact` run it)
 //! - [`linalg`]: thin wrappers over faer; [`ordering`]: the factors' fill-reducing orders; [`reference`]: closed forms; [`variational`]: V.1/V.2 checks
 
 // Two lints this crate does not follow, on purpose:

@@ -138,4 +138,5 @@ def run_refine(
 
 def cli_main(argv: Sequence[str]) -> int:
     """The command line with `argv` (the program's name first): the CLI's exit code
-    (`python -m dyncontact` and the `dyncontact` console script call it)."""
+    (`python -m dyncontact` and the `dyncontact` console script call it; not for a running
+    session: the CLI's signal handlers stay installed after it returns)."""

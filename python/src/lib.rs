@@ -53,11 +53,17 @@ fn launcher(py: Python<'_>) -> Vec<String> {
 
 /// The command line: `python -m dyncontact ARGS…` and the `dyncontact` console script run
 /// `cli_main(["dyncontact", *ARGS])` — the CLI's own code (its signal handling included), the
-/// GIL released; returns the exit code.
+/// GIL released; returns the exit code — 101 for a panic, as the executable exits (the panic's
+/// message is printed as there), not a Python exception. For `__main__` only: the CLI's signal
+/// handlers stay installed after it returns.
 #[pyfunction]
 fn cli_main(py: Python<'_>, argv: Vec<std::ffi::OsString>) -> u8 {
+    const PANICKED: u8 = 101;
     let launcher = launcher(py);
-    py.detach(|| dyncontact::cli::main(argv, Some(&launcher)))
+    py.detach(|| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| dyncontact::cli::main(argv, Some(&launcher))))
+            .unwrap_or(PANICKED)
+    })
 }
 
 /// An (n, d) float64 array of the first `d` components of 3-vectors.

@@ -42,3 +42,34 @@ def test_the_console_script_is_installed():
     assert script.is_file(), script
     p = subprocess.run([script, "--version"], capture_output=True, text=True)
     assert p.returncode == 0 and dc.__version__ in p.stdout, p.stdout + p.stderr
+
+
+def test_ctrl_c_stops_a_run_from_python_m_as_the_clis(root, tmp_path):
+    """(Python) SIGINT to `python -m dyncontact run` reaches the CLI's own handling (Python's
+    is set aside): the run stops after its step, exit 130, summary `interrupted` with the steps
+    done, checkpoint.json written — not a KeyboardInterrupt traceback. The run lasts to
+    t = 1000 s; the signal goes once history.csv has 50 rows."""
+    import json
+    import signal
+    import time
+
+    out = tmp_path / "run"
+    p = subprocess.Popen([sys.executable, "-m", "dyncontact", "run", "--set", "time.end=1000", "--set",
+                          "output.every=0", "--out", str(out)], cwd=root, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    try:
+        start = time.monotonic()
+        history = out / "history.csv"
+        while not (history.is_file() and history.read_text().count("\n") > 50):
+            assert p.poll() is None and time.monotonic() - start < 120, "the run ended or never wrote 50 rows"
+            time.sleep(0.01)
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 130, err
+    assert "KeyboardInterrupt" not in err, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and summary["steps_completed"] >= 49, summary
+    assert (out / "checkpoint.json").is_file()

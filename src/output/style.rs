@@ -119,17 +119,24 @@ pub fn tick_label(v: f64, lo: f64, hi: f64) -> String {
     if s == "-0" { "0".into() } else { s }
 }
 
-/// A value in a legend with `digits` significant digits: plain between 1e-3 and 1e5 (51.50798,
-/// 0.3493750), scientific outside (6.022141e23, 1.270000e-3).
+/// A value in a legend with `digits` significant digits (as C's %g): plain when its decimal
+/// exponent e, after rounding to those digits, has −3 ≤ e < min(digits, 5) (51.50798,
+/// 0.3493750, 10.00000 for 9.9999999), scientific otherwise (6.022141e23, 1.27e-4, 1.00e5).
 pub fn significant(v: f64, digits: usize) -> String {
     let digits = digits.max(1);
-    let big = v.abs();
-    if v == 0.0 || !v.is_finite() || !(1e-3..1e5).contains(&big) {
-        return if v == 0.0 { "0".into() } else { format!("{v:.prec$e}", prec = digits - 1) };
+    if v == 0.0 {
+        return "0".into();
     }
-    // digits before the point: 1 + floor(log10 |v|) (≤ 0 below 1)
-    let before = big.log10().floor() as i64 + 1;
-    let decimals = (digits as i64 - before).max(0) as usize;
+    let scientific = format!("{v:.prec$e}", prec = digits - 1);
+    // the exponent of the value as rounded (9.9999999 to 7 digits is 1.000000e1)
+    let e: i64 = match scientific.rsplit_once('e').map(|(_, e)| e.parse()) {
+        Some(Ok(e)) => e,
+        _ => return scientific, // inf, NaN
+    };
+    if e < -3 || e >= (digits as i64).min(5) {
+        return scientific;
+    }
+    let decimals = (digits as i64 - 1 - e).max(0) as usize;
     format!("{v:.decimals$}")
 }
 
@@ -185,6 +192,13 @@ mod tests {
         assert_eq!(significant(1.27e-4, 3), "1.27e-4");
         assert_eq!(significant(6.02214076e23, 4), "6.022e23");
         assert_eq!(significant(0.0, 7), "0");
-        assert_eq!(significant(99999.4, 3), "99999");
+        // rounding carries into the next power of ten before the form is chosen
+        assert_eq!(significant(9.9999999, 7), "10.00000");
+        assert_eq!(significant(99999.999999, 7), "1.000000e5");
+        assert_eq!(significant(0.00099999, 3), "0.00100");
+        // an integer part wider than the digits asked for is not printed plain
+        assert_eq!(significant(99999.4, 3), "1.00e5");
+        assert_eq!(significant(4321.0, 3), "4.32e3");
+        assert_eq!(significant(f64::INFINITY, 3), "inf");
     }
 }

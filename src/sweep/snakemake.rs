@@ -4,13 +4,15 @@
 //! (`dyncontact sweep point points/<id>`, the in-process sweep's code), whose output is the
 //! marker `points/<id>.done` that only a final outcome writes (completed, or a failure that a
 //! rerun would repeat, recorded in the point's summary.json): an interrupted or killed point has
-//! none, so Snakemake runs it again. One rule collects. config.yaml names the binary and each
+//! none, so Snakemake runs it again. One rule collects. config.yaml names the command that runs
+//! `dyncontact` (the CLI's binary, or the Python package's `python -m dyncontact`) and each
 //! point's resources: `mem_mb` from `check`'s memory estimate (×1.5 + 100 MB of headroom) and a
 //! conservative `runtime` in minutes.
 //!
 //! No user text reaches the Snakefile but the sweep's name, which is a safe name (letters,
-//! digits, `._-+`); the binary's path is quoted for the shell by Snakemake (`:q`) and written
-//! in config.yaml as a JSON string (valid YAML, every character escaped).
+//! digits, `._-+`); the command is quoted for the shell by Snakemake (`:q`, word by word for a
+//! list) and written in config.yaml as a JSON string or list of strings (valid YAML, every
+//! character escaped).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -77,6 +79,8 @@ pub fn config(plan: &Plan, launcher: &[String]) -> String {
     s.push_str("# (mem_mb: the memory estimate of `dyncontact check`; runtime: minutes, a conservative bound)\n");
     // a JSON string is a YAML double-quoted scalar with every special character escaped
     let command = match launcher {
+        // no command given: `dyncontact` on the PATH
+        [] => serde_json::to_string("dyncontact"),
         [binary] => serde_json::to_string(binary),
         words => serde_json::to_string(words),
     };
