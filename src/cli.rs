@@ -42,7 +42,7 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
         /// write DIR/checkpoint.json every N steps
-        #[arg(long, value_name = "N")]
+        #[arg(long, value_name = "N", value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
         checkpoint_every: Option<usize>,
         /// continue the run in DIR from its checkpoint.json: its scene is DIR/scene.toml (the
         /// effective scene the run wrote); `--set time.end=T` with a later T extends the run
@@ -82,7 +82,7 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
         /// points run at once (default: the number of cores)
-        #[arg(long, value_name = "N")]
+        #[arg(long, value_name = "N", value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
         jobs: Option<usize>,
         /// validate every point and write the folder (scenes, Snakefile), without running
         #[arg(long)]
@@ -119,7 +119,7 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
         /// levels run at once (default: the number of cores)
-        #[arg(long, value_name = "N")]
+        #[arg(long, value_name = "N", value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
         jobs: Option<usize>,
         /// override a scene key by its dotted path, the value in TOML (repeatable)
         #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -165,7 +165,7 @@ enum StudyKind {
         #[arg(long)]
         out: Option<PathBuf>,
         /// runs at once (default: the number of cores)
-        #[arg(long, value_name = "N")]
+        #[arg(long, value_name = "N", value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
         jobs: Option<usize>,
     },
 }
@@ -306,8 +306,19 @@ fn cmd_run(
     // `--resume DIR` alone continues the run of DIR/scene.toml, the effective scene that run
     // wrote (its overrides applied); a folder from before scene.toml was written needs the scene
     let kept = resume.map(|d| d.join("scene.toml")).filter(|p| scene.is_none() && p.is_file());
+    if let Some(d) = resume
+        && scene.is_none()
+        && kept.is_none()
+        && d.is_dir()
+    {
+        return Err(Error::folder(
+            d,
+            "holds no scene.toml, the scene its run was computed from: give that scene, `dyncontact run SCENE --resume DIR`",
+        ));
+    }
     let (s, dir, effective) = load(scene.or(kept.as_deref()), set)?;
     let out = resume.or(out).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&s.name));
+    crate::output::folder::check_target(&out)?;
     let prepared = s.validate().and_then(|model| {
         // refuse before anything large is built
         let estimate = resources::estimate(&model, &dir)?;

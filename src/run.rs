@@ -405,15 +405,24 @@ pub(crate) fn run_locked(
     problem: &Problem,
     settings: Settings,
     opts: &RunOptions,
-    _lock: folder::Lock,
+    lock: folder::Lock,
 ) -> Result<Summary> {
     let start = Instant::now();
-    // everything that can refuse the folder, before anything in it changes
-    let (checkpoint, replaced) = if opts.resume {
-        (Some(resumable(&opts.out, problem)?), false)
+    // everything that can refuse the folder, before anything in it changes (a refusal leaves it
+    // as it was: no run.lock either)
+    let prepared = if opts.resume {
+        resumable(&opts.out, problem).map(|cp| (Some(cp), false))
     } else {
-        (None, folder::check_fresh(&opts.out)?)
+        folder::check_fresh(&opts.out).map(|replaced| (None, replaced))
     };
+    let (checkpoint, replaced) = match prepared {
+        Ok(p) => p,
+        Err(e) => {
+            lock.discard();
+            return Err(e);
+        }
+    };
+    let _lock = lock;
     let mut sim = match Simulation::with_settings(problem, settings) {
         Ok(sim) => sim,
         Err(e) => {
@@ -443,8 +452,20 @@ pub(crate) fn run_locked(
             }
             finish_warnings(problem, summary.details(), first_cap);
             summary.status = RunStatus::Completed;
-            writer.finish(&summary, problem, &sim.state)?;
-            Ok(summary)
+            match writer.finish(&summary, problem, &sim.state) {
+                Ok(()) => Ok(summary),
+                // every step is done, but an output is missing (a full disk while the charts
+                // were written): summary.json must not say `completed`
+                Err(e) => {
+                    summary.status = RunStatus::Failed;
+                    summary.failure = Some(format!("every step completed, but an output could not be written: {e}"));
+                    summary.failure_kind = Some(e.kind());
+                    if writer.write_summary(&summary).is_err() {
+                        writer.write_summary_in_place(&summary);
+                    }
+                    Err(e)
+                }
+            }
         }
         Err(stop) => {
             let e = match stop {
@@ -526,8 +547,8 @@ fn steps_loop(
         let last = state.n == problem.steps;
         let stopping = !last && stop_now(state.n);
         writer.record(&rec, problem, state, last).map_err(Stop::Failed)?;
-        // the last step too, when checkpoints were asked for: a later time.end can extend the run
-        let asked = opts.checkpoint_every.is_some_and(|c| c > 0 && (state.n.is_multiple_of(c) || last));
+        // the last step always: `--resume DIR` with a later time.end extends a completed run
+        let asked = last || opts.checkpoint_every.is_some_and(|c| c > 0 && state.n.is_multiple_of(c));
         if asked || stopping {
             checkpoint(steps.simulation(), summary.details(), *first_cap, writer).map_err(Stop::Failed)?;
         }

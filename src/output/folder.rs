@@ -2,8 +2,8 @@
 //!
 //! A run owns the files it writes ([`OWNED`], the frames in `frames/` and the charts in
 //! `plots/`, and their temporaries). Besides those a run folder may hold only scene files
-//! (`*.toml`, such as the scene a sweep or the user put there) and `run.log`, which a run
-//! neither reads nor removes. A fresh run
+//! (`*.toml`, such as the scene a sweep or the user put there), `run.log` and the folder
+//! `study/` (`dyncontact study penalty`'s files), which a run neither reads nor removes. A fresh run
 //! 1. takes the folder's lock (`run.lock`: one process writes a folder at a time; the lock
 //!    goes with the process, so a killed run leaves none behind);
 //! 2. refuses a folder that holds anything else, naming it (so `--out ~` never deletes a file
@@ -31,6 +31,9 @@ const OWNED_IN: [(&str, &str); 2] = [("frames", "vtu"), ("plots", "svg")];
 fn kept(name: &str) -> bool {
     name == "run.log" || Path::new(name).extension().is_some_and(|x| x == "toml")
 }
+/// Subfolders a run keeps without owning them: `study/`, where `dyncontact study penalty` writes
+/// by default (its OUT is the scene's run folder, out/<name>).
+const KEPT_DIRS: [&str; 1] = ["study"];
 /// The lock file.
 const LOCK: &str = "run.lock";
 
@@ -66,6 +69,8 @@ pub fn foreign(dir: &Path, limit: usize) -> Result<Vec<String>> {
                     }
                 }
             }
+        } else if KEPT_DIRS.contains(&name.as_str()) && path.is_dir() {
+            continue;
         } else if !((owned_top(&name) || kept(&name)) && path.is_file()) {
             found.push(name);
         }
@@ -82,6 +87,23 @@ pub fn foreign(dir: &Path, limit: usize) -> Result<Vec<String>> {
 #[derive(Debug)]
 pub struct Lock {
     file: File,
+    /// the lock file and the folder, when this process created them (see [`Lock::discard`])
+    created: (Option<PathBuf>, Option<PathBuf>),
+}
+
+impl Lock {
+    /// Release the lock of a run that was refused before it wrote anything, removing the lock
+    /// file (and the folder) when this process created them, so the folder is left as it was.
+    /// The file is removed while still locked: a process that opened it meanwhile was refused.
+    pub fn discard(self) {
+        if let Some(file) = &self.created.0 {
+            let _ = std::fs::remove_file(file);
+        }
+        if let Some(dir) = &self.created.1 {
+            // only if empty: never a file of anyone else's
+            let _ = std::fs::remove_dir(dir);
+        }
+    }
 }
 
 impl Drop for Lock {
@@ -99,18 +121,21 @@ impl Drop for Lock {
 /// when another process holds it. On a file system without locks (some network file systems)
 /// the run goes on unlocked: nothing else could be done there.
 pub fn lock(dir: &Path, name: &str) -> Result<Lock> {
+    let new_dir = (!dir.exists()).then(|| dir.to_path_buf());
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let p = dir.join(name);
+    let new_file = (!p.exists()).then(|| p.clone());
     let file = OpenOptions::new().create(true).truncate(false).write(true).open(&p).map_err(|e| Error::io(&p, e))?;
+    let created = (new_file, new_dir);
     match file.try_lock() {
-        Ok(()) => Ok(Lock { file }),
+        Ok(()) => Ok(Lock { file, created }),
         Err(std::fs::TryLockError::WouldBlock) => Err(Error::folder(
             dir,
             format!(
                 "another dyncontact process is writing this folder (it holds {name}); wait for it to end or choose another folder"
             ),
         )),
-        Err(std::fs::TryLockError::Error(_)) => Ok(Lock { file }),
+        Err(std::fs::TryLockError::Error(_)) => Ok(Lock { file, created }),
     }
 }
 
@@ -141,6 +166,38 @@ pub fn check_fresh(dir: &Path) -> Result<bool> {
         }
     }
     Ok(OWNED.iter().any(|f| *f != LOCK && dir.join(f).exists()) || OWNED_IN.iter().any(|(d, _)| dir.join(d).is_dir()))
+}
+
+/// Before anything is validated or built: `dir` must be a folder, or be creatable as one — Err
+/// (a folder error, naming the path) for a file or a device given as the folder, or a missing
+/// folder below a file or in a place that cannot be written (`/proc/x`).
+pub fn check_target(dir: &Path) -> Result<()> {
+    if dir.exists() {
+        return if dir.is_dir() {
+            Ok(())
+        } else {
+            Err(Error::folder(
+                dir,
+                "is not a folder (a file or a device): the run folder must be a new folder or a run's",
+            ))
+        };
+    }
+    let mut at = dir;
+    while let Some(parent) = at.parent().filter(|p| !p.as_os_str().is_empty()) {
+        at = parent;
+        if at.exists() {
+            break;
+        }
+    }
+    if at == dir || !at.exists() {
+        return Ok(()); // relative to the working directory, which the run creates it in
+    }
+    if !at.is_dir() {
+        return Err(Error::folder(at, format!("is a file: the folder {} cannot be created below it", dir.display())));
+    }
+    probe(at).map_err(|_| {
+        Error::folder(at, format!("cannot be written: the folder {} cannot be created there", dir.display()))
+    })
 }
 
 /// Create and remove a file in `dir`: Err (naming `dir`) when the folder cannot be written.

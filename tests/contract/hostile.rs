@@ -589,6 +589,54 @@ fn a_full_disk_fails_cleanly() {
     }
 }
 
+/// A disk that fills while the charts are written, after every step: exit 3, and summary.json
+/// says `failed` (failure_kind `output`, the chart named), not `completed`. The tmpfs is sized
+/// from the same run on a roomy disk: its files but the charts (4 KiB pages, and 4 more for the
+/// temporaries of summary.json and checkpoint.json, written by rename; history.csv is appended)
+/// plus half of the charts' pages. Needs root (as above).
+#[test]
+fn a_disk_full_of_charts_is_not_completed() {
+    let dir = tmp("full_disk_charts");
+    let args = ["--set", "domain.cells=[8,4]", "--set", "time.end=0.25", "--set", "output.every=0"];
+    let roomy = dir.join("roomy");
+    assert!(run_into(&roomy, &args).status.success());
+    let pages = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len().div_ceil(4096));
+    let (mut rest, mut charts) = (0u64, 0u64);
+    for (p, _) in snapshot(&roomy) {
+        if p.parent().is_some_and(|d| d.ends_with("plots")) {
+            charts += pages(&p);
+        } else {
+            rest += pages(&p);
+        }
+    }
+    assert!(charts >= 4, "the charts take {charts} pages");
+    let mnt = dir.join("mnt");
+    std::fs::create_dir_all(&mnt).expect("mnt");
+    let size = format!("size={}k", 4 * (rest + 4 + charts / 2));
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "-o", &size, "tmpfs"])
+        .arg(&mnt)
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !mounted {
+        println!("skipped: mounting a tmpfs needs root");
+        return;
+    }
+    let out = mnt.join("out");
+    let o = run_into(&out, &args);
+    let result = std::panic::catch_unwind(|| {
+        assert_eq!(o.status.code(), Some(3), "{}", err(&o));
+        assert!(err(&o).contains("plots/"), "the disk filled before the charts: {}", err(&o));
+        let s = summary(&out);
+        assert_eq!((s["status"].as_str(), s["failure_kind"].as_str()), (Some("failed"), Some("output")), "{s}");
+        assert!(s["failure"].as_str().is_some_and(|f| f.contains("every step completed")), "{s}");
+    });
+    let _ = Command::new("umount").arg(&mnt).status();
+    if let Err(p) = result {
+        std::panic::resume_unwind(p);
+    }
+}
+
 // ---- 8. physics that breaks is not "completed" ------------------------------------------------
 
 /// (issue 22, defect 8) (E.1) is a run-time guard of a midpoint run: with a limit that only an
@@ -831,14 +879,16 @@ fn resume_needs_only_the_run_folder() {
     assert_eq!(h(&a), h(&b), "the resumed run's history is the uninterrupted one's");
 }
 
-/// (issue 24, item 9) A later time.end extends a finished run (checkpointed with
-/// --checkpoint-every, so its last step is): the history equals a run to the later end; any
-/// other change is refused (exit 4), the folder unchanged.
+/// (issue 24, item 9) A later time.end extends a finished run — a plain one, without
+/// --checkpoint-every: "run --resume DIR needs nothing else" (its last step is always
+/// checkpointed): the history equals a run to the later end; any other change is refused
+/// (exit 4), the folder unchanged.
 #[test]
 fn a_later_end_extends_a_finished_run() {
     let dir = tmp("resume_extend");
     let (a, b) = (dir.join("a"), dir.join("b"));
-    assert!(run_into(&a, &[&["--checkpoint-every", "1000"][..], &SMALL[..]].concat()).status.success());
+    assert!(run_into(&a, &SMALL).status.success());
+    assert!(a.join("checkpoint.json").exists(), "a completed run checkpoints its last step");
     let before = snapshot(&a);
     let o = cli(&["run", "--resume", a.to_str().expect("path"), "--set", "time.step=1e-3"]);
     assert_eq!(o.status.code(), Some(4), "{}", err(&o));
@@ -851,4 +901,129 @@ fn a_later_end_extends_a_finished_run() {
     let h = |d: &Path| std::fs::read(d.join("history.csv")).expect("history");
     assert_eq!(h(&a), h(&b), "the extended run's history is that of a run to the later end");
     assert!(std::fs::read_to_string(a.join("scene.toml")).expect("scene.toml").contains("end = 0.2"));
+}
+
+// ---- the audit of 2026-11-27: bad folders, overflowing inputs, the penalty study ----------
+
+/// A run refused for a folder that is not a run's leaves it as it was: no run.lock either (the
+/// lock the run took is removed again when it created it).
+#[test]
+fn a_refused_folder_gets_no_lock_file() {
+    let dir = tmp("refused_no_lock");
+    let out = dir.join("mine");
+    std::fs::create_dir_all(&out).expect("mkdir");
+    std::fs::write(out.join("notes.txt"), "mine").expect("write");
+    let o = run_into(&out, &SMALL);
+    assert_eq!(o.status.code(), Some(4), "{}", err(&o));
+    let names: Vec<String> = std::fs::read_dir(&out)
+        .expect("read_dir")
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .collect();
+    assert_eq!(names, ["notes.txt"], "the refused run left files behind");
+}
+
+/// `--out` naming a file, a device or a folder below a file is refused as a folder error
+/// (exit 4) that names the path, before anything is built — not an I/O error "File exists".
+#[test]
+fn an_out_that_is_not_a_folder_is_refused_by_name() {
+    let dir = tmp("out_not_folder");
+    let file = dir.join("afile");
+    std::fs::write(&file, "x").expect("write");
+    for (out, says) in [
+        (file.clone(), "is not a folder"),
+        (PathBuf::from("/dev/null"), "is not a folder"),
+        (file.join("sub"), "is a file"),
+    ] {
+        let o = run_into(&out, &SMALL);
+        assert_eq!(o.status.code(), Some(4), "{}: {}", out.display(), err(&o));
+        assert!(err(&o).contains(says), "{}: {}", out.display(), err(&o));
+    }
+    assert_eq!(std::fs::read(&file).expect("read"), b"x", "the file was changed");
+}
+
+/// Finite inputs whose energies overflow f64 never reach history.csv as inf or NaN: an initial
+/// velocity of 1e300 is refused as input naming `initial.velocity` (exit 1), a body load of
+/// 1e308 stops step 1 as a non-finite failure (exit 2, failure_kind non_finite), and every
+/// number history.csv holds is finite.
+#[test]
+fn overflowing_energies_are_named_not_written() {
+    let dir = tmp("overflow");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let o = run_into(&a, &[&SMALL[..], &["--set", "initial.velocity=[\"1e300\",\"-1e300\"]"][..]].concat());
+    assert_eq!(o.status.code(), Some(1), "{}", err(&o));
+    assert!(err(&o).contains("initial.velocity") && err(&o).contains("kinetic energy"), "{}", err(&o));
+    let o = run_into(&b, &[&SMALL[..], &["--set", "loads.body=[\"1e308\",\"-1e308\"]"][..]].concat());
+    assert_eq!(o.status.code(), Some(2), "{}", err(&o));
+    assert_eq!(summary(&b)["failure_kind"], "non_finite", "{}", err(&o));
+    let history = std::fs::read_to_string(b.join("history.csv")).expect("history.csv");
+    for line in history.lines().skip(1) {
+        for v in line.split(',') {
+            let x: f64 = v.parse().expect("a number");
+            assert!(x.is_finite(), "history.csv holds {v}: {line}");
+        }
+    }
+}
+
+/// `plane` is a 2-D key: a Gmsh scene whose mesh is three-dimensional refuses it (exit 1,
+/// naming `domain.plane`), as a box does.
+#[test]
+fn plane_is_refused_for_a_3d_gmsh_mesh() {
+    let scene = fixture("gmsh_block3d");
+    let o = cli(&["check", scene.to_str().expect("path"), "--set", "domain.plane=\"strain\""]);
+    assert_eq!(o.status.code(), Some(1), "{}", err(&o));
+    assert!(err(&o).contains("domain.plane") && err(&o).contains("three-dimensional"), "{}", err(&o));
+}
+
+/// `check` of a 2-D scene states its dimension, as of a 3-D one.
+#[test]
+fn check_states_the_dimension_in_2d() {
+    let o = cli(&["check", fixture("academic").to_str().expect("path")]);
+    assert!(o.status.success(), "{}", err(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("dimension      : 2 (P1 triangles), plane strain"), "{text}");
+}
+
+/// Counts of 0 for --jobs and --checkpoint-every are usage errors (exit 64), not silently 1 or
+/// "never".
+#[test]
+fn zero_jobs_and_checkpoints_are_refused() {
+    let scene = fixture("academic");
+    let o = cli(&["run", scene.to_str().expect("path"), "--checkpoint-every", "0"]);
+    assert_eq!(o.status.code(), Some(64), "{}", err(&o));
+    let o = cli(&["study", "penalty", scene.to_str().expect("path"), "--jobs", "0"]);
+    assert_eq!(o.status.code(), Some(64), "{}", err(&o));
+}
+
+/// The penalty study runs on a scene that uses the penalty method itself (its exact reference
+/// drops the scene's own ε), refuses an ε list without two different values (no NaN slope),
+/// and its default folder, the scene's run folder's study/, does not stop the next `run`
+/// there (a run keeps study/).
+#[test]
+fn the_penalty_study_takes_penalty_scenes_and_shares_the_run_folder() {
+    let dir = tmp("penalty_study");
+    let scene = dir.join("pen.toml");
+    let text = std::fs::read_to_string(fixture("academic"))
+        .expect("academic.toml")
+        .replace("cells = [32, 16]", "cells = [8, 4]")
+        .replace("end = 1.0", "end = 0.4")
+        .replace("enforcement = \"exact\"", "enforcement = \"penalty\"\npenalty = 1.0e-3");
+    assert!(text.contains("penalty = 1.0e-3") && text.contains("end = 0.4"), "the edit missed:\n{text}");
+    std::fs::write(&scene, &text).expect("write");
+    let s = scene.to_str().expect("path");
+    for bad in ["1e-3", "1e-3,1e-3"] {
+        let o = cli(&["study", "penalty", s, "--eps", bad]);
+        assert_eq!(o.status.code(), Some(1), "--eps {bad}: {}", err(&o));
+        assert!(err(&o).contains("--eps"), "{}", err(&o));
+    }
+    let out = dir.join("out");
+    let o = run_into(&out, &[s]);
+    assert!(o.status.success(), "{}", err(&o));
+    let o = cli(&["study", "penalty", s, "--eps", "1e-2,1e-3", "--jobs", "1", "--out", out.to_str().expect("path")]);
+    assert!(o.status.success(), "{}", err(&o));
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("NaN"), "{}", String::from_utf8_lossy(&o.stdout));
+    assert!(out.join("study/penalty.csv").is_file());
+    let o = run_into(&out, &[s]);
+    assert!(o.status.success(), "a run after the study in its folder: {}", err(&o));
+    assert!(out.join("study/penalty.csv").is_file(), "the run removed the study");
 }
