@@ -161,7 +161,13 @@ impl Error {
     /// study's unmet precondition is bad input.
     pub fn kind(&self) -> FailureKind {
         match self {
-            Error::Solver(f) if matches!(f.cause, crate::failure::StepFailureCause::NonFinite { .. }) => {
+            Error::Solver(f)
+                if matches!(
+                    f.cause,
+                    crate::failure::StepFailureCause::NonFinite { .. }
+                        | crate::failure::StepFailureCause::NonFiniteEnergy
+                ) =>
+            {
                 FailureKind::NonFinite
             }
             Error::Solver(_) => FailureKind::Solver,

@@ -98,6 +98,9 @@ pub enum StepFailureCause {
     /// scale (midpoint scheme, where the balance is an identity): the step's equations were not
     /// solved, whatever the solvers reported
     EnergyBalance { relative: f64, limit: f64 },
+    /// a term of (E.1) is not finite while the state is: the scene's magnitudes (initial data,
+    /// loads) are beyond the range of f64 once squared
+    NonFiniteEnergy,
 }
 
 /// The full report of a failed step: where, and why.
@@ -245,10 +248,19 @@ impl StepFailureCause {
     /// What to try instead.
     pub fn suggestion(&self) -> &'static str {
         match self {
-            StepFailureCause::Contact(_) => {
-                "a smaller time.step, solver.relaxation < 1, a larger contact.penalty, or more solver.max_newton_iterations"
-            }
+            StepFailureCause::Contact(c) => match c.inner {
+                InnerFailure::Newton(_) => {
+                    "a smaller time.step, solver.relaxation < 1 or more solver.max_newton_iterations (with enforcement = \"penalty\": \
+                     a larger contact.penalty)"
+                }
+                InnerFailure::Conic(_) => {
+                    "a smaller time.step or solver.relaxation < 1 (with enforcement = \"penalty\": a larger contact.penalty)"
+                }
+            },
             StepFailureCause::NonFinite { .. } => "check the load expressions and use a smaller time.step",
+            StepFailureCause::NonFiniteEnergy => {
+                "check the magnitudes of the initial data and the loads: their energies overflow f64 (beyond ~1e308)"
+            }
             StepFailureCause::EnergyBalance { .. } => {
                 "check the scene's magnitudes (friction coefficients, compliances, loads) and use a smaller time.step; \
                  solver.energy_residual_action = \"warn\" lets the run go on"
@@ -272,6 +284,10 @@ impl fmt::Display for StepFailureCause {
             StepFailureCause::NonFinite { entry } => write!(
                 f,
                 "a non-finite value appeared in the solution (entry {entry}); the loads or the step produced NaN or infinity"
+            ),
+            StepFailureCause::NonFiniteEnergy => write!(
+                f,
+                "an energy term of (E.1) is not finite: the step's displacement and velocity are finite, but their energies overflow"
             ),
             StepFailureCause::EnergyBalance { relative, limit } => write!(
                 f,

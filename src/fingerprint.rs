@@ -31,7 +31,7 @@ pub fn text(text: &str) -> String {
 /// (`scene_dir` resolves a relative path as the problem does).
 pub fn inputs(model: &Model, scene_dir: &Path) -> Result<String> {
     let mut h = fnv1a(START, format!("{model:?}").as_bytes());
-    if let Some(path) = model.domain.mesh_path(scene_dir) {
+    if let Some(path) = model.domain.mesh_file(scene_dir)? {
         let bytes = std::fs::read(&path).map_err(|e| Error::read(&path, e))?;
         h = fnv1a(h, path.display().to_string().as_bytes());
         h = fnv1a(h, &(bytes.len() as u64).to_le_bytes());

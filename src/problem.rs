@@ -52,7 +52,7 @@ impl Problem {
         let inputs_fingerprint = crate::fingerprint::inputs(&model, scene_dir)?;
         match_dimension(&mut model, &mesh)?;
         check_sides(&model, &mesh)?;
-        let material = Material::new(&model.material, model.plane);
+        let material = Material::new(&model.material, model.plane.unwrap_or_default());
         let clamped = mesh.nodes_on(&model.dirichlet)?;
         let dofs = Dofs::with_dim(mesh.n_nodes(), &clamped, mesh.dim());
         if dofs.n_free == 0 {
@@ -122,6 +122,15 @@ pub enum ConvexityLimit {
 /// mesh's, one that gives d-component vectors must match it.
 fn match_dimension(model: &mut Model, mesh: &Geometry) -> Result<()> {
     let d = mesh.dim();
+    if d == 3 && model.plane.is_some() {
+        return Err(Error::scene(
+            "domain.plane",
+            format!(
+                "is a 2-D key (plane strain or stress); the mesh is three-dimensional ({} tetrahedra): remove it",
+                mesh.n_cells()
+            ),
+        ));
+    }
     if model.dim == d {
         return Ok(());
     }
@@ -241,20 +250,14 @@ fn at(mesh: &Geometry, v: usize) -> String {
     if mesh.dim() == 3 { format!("({}, {}, {})", p[0], p[1], p[2]) } else { format!("({}, {})", p[0], p[1]) }
 }
 
-fn build_mesh(domain: &Domain, scene_dir: &Path) -> Result<Geometry> {
+pub(crate) fn build_mesh(domain: &Domain, scene_dir: &Path) -> Result<Geometry> {
     let mesh = match domain {
         Domain::Rectangle { size, cells } => {
             Geometry::Plane(PlaneMesh::rectangle(size[0], size[1], cells[0], cells[1]))
         }
         Domain::Box { size, cells } => Geometry::Solid(SolidMesh::cuboid(*size, *cells)),
         Domain::Gmsh { .. } => {
-            let path = domain.mesh_path(scene_dir).unwrap_or_default();
-            if !path.exists() {
-                return Err(Error::scene(
-                    "domain.file",
-                    format!("mesh file {:?} does not exist", path.display().to_string()),
-                ));
-            }
+            let path = domain.mesh_file(scene_dir)?.unwrap_or_default();
             mesh::gmsh::read_any(&path)?
         }
     };

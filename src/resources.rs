@@ -263,13 +263,7 @@ pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
             ((nx + 1) * (ny + 1) * (nz + 1), 6 * nx * ny * nz, model.contact_sides.iter().map(|s| side(s)).sum())
         }
         Domain::Gmsh { .. } => {
-            let path = model.domain.mesh_path(scene_dir).unwrap_or_default();
-            if !path.exists() {
-                return Err(Error::scene(
-                    "domain.file",
-                    format!("mesh file {:?} does not exist", path.display().to_string()),
-                ));
-            }
+            let path = model.domain.mesh_file(scene_dir)?.unwrap_or_default();
             match mesh::gmsh::read_any(&path)? {
                 mesh::Geometry::Plane(mesh) => {
                     let on_contact: usize =

@@ -312,6 +312,19 @@ impl<'p> Simulation<'p> {
         if let Some(c) = &problem.contact {
             energy.compliance = c.penetration(&u).iter().zip(&c.omega).map(|(d, w)| w * c.normal.energy(*d)).sum();
         }
+        // finite fields whose energies overflow: refused as input, before a row of history.csv
+        for (value, key, what) in [
+            (energy.kinetic, "initial.velocity", "kinetic energy ½ vᵀ M v"),
+            (energy.elastic, "initial.displacement", "elastic energy ½ uᵀ K u"),
+            (energy.compliance, "initial.displacement", "compliance energy"),
+        ] {
+            if !value.is_finite() {
+                return Err(Error::scene(
+                    key,
+                    format!("the initial {what} is {value}: the values are too large for f64 once squared"),
+                ));
+            }
+        }
         let state = State {
             n: 0,
             u,
@@ -512,6 +525,10 @@ impl<'p> Simulation<'p> {
         }
         let energy = self.state.energy.advance(&se);
         let scale = self.state.energy_scale.max(energy.scale());
+        // no NaN or infinity in history.csv, whichever scheme (the guard below is the midpoint's)
+        if !(scale.is_finite() && energy.residual.is_finite()) {
+            return Err(self.failure(StepFailureCause::NonFiniteEnergy));
+        }
         if let Some(guard) = self.settings.energy_guard {
             let relative = if scale > 0.0 { energy.residual.abs() / scale } else { energy.residual.abs() };
             // NaN fails too

@@ -25,8 +25,8 @@ pub struct Model {
     pub domain: Domain,
     /// the space dimension d (2 or 3)
     pub dim: usize,
-    /// the plane reduction (2-D only)
-    pub plane: Plane,
+    /// the plane reduction as the scene gave it (2-D only: refused for a 3-D mesh; None: strain)
+    pub plane: Option<Plane>,
     /// Γ1: clamped sides
     pub dirichlet: Vec<String>,
     /// Γ3: contact sides (empty: no contact)
@@ -68,6 +68,23 @@ impl Domain {
             }
             _ => None,
         }
+    }
+
+    /// The mesh file of a Gmsh domain, checked to be a file (refused naming `domain.file`
+    /// otherwise); None for the structured domains.
+    pub fn mesh_file(&self, scene_dir: &std::path::Path) -> crate::error::Result<Option<std::path::PathBuf>> {
+        let Some(path) = self.mesh_path(scene_dir) else { return Ok(None) };
+        let shown = path.display().to_string();
+        if !path.exists() {
+            return Err(crate::error::Error::scene("domain.file", format!("mesh file {shown:?} does not exist")));
+        }
+        if !path.is_file() {
+            return Err(crate::error::Error::scene(
+                "domain.file",
+                format!("{shown:?} is a folder, not a Gmsh .msh file"),
+            ));
+        }
+        Ok(Some(path))
     }
 }
 

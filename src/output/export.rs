@@ -65,7 +65,7 @@ pub fn export_operators(p: &Problem, dir: &Path) -> Result<()> {
     let params = serde_json::json!({
         "young": mat.young, "poisson": mat.poisson, "density": mat.density,
         "theta": mat.theta, "zeta": mat.zeta,
-        "plane": kinds::name(&model.plane),
+        "plane": kinds::name(&model.plane.unwrap_or_default()),
         "mass": kinds::name(&model.solver.mass),
         "body": model.loads.body.sources(), "tractions": tractions, "t": 0.0,
     });

@@ -69,7 +69,7 @@ impl ModelInfo {
             format!("elastic (no viscosity): E = {}, ν = {}, ρ = {}", m.young, m.poisson, m.density)
         };
         let mut info = ModelInfo {
-            plane: if s.dim == 3 { "-".into() } else { kinds::name(&s.plane) },
+            plane: if s.dim == 3 { "-".into() } else { kinds::name(&s.plane.unwrap_or_default()) },
             material,
             contact: "none (no contact side): one linear solve per step".into(),
             normal_law: "-".into(),
@@ -209,7 +209,7 @@ impl ModelInfo {
             if self.dim == 3 {
                 "dimension      : 3 (P1 tetrahedra)".to_string()
             } else {
-                format!("plane          : {}", self.plane)
+                format!("dimension      : 2 (P1 triangles), plane {}", self.plane)
             },
             format!("material       : {}", self.material),
             format!("contact        : {}", self.contact),

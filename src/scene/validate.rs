@@ -42,7 +42,7 @@ impl Scene {
             description: self.description.clone(),
             domain,
             dim: self.dim(),
-            plane: self.domain.plane.unwrap_or_default(),
+            plane: self.domain.plane,
             dirichlet: self.boundary.dirichlet.clone(),
             // a [contact] section without contact sides switches nothing on
             contact_sides: if contact.is_some() { self.boundary.contact.clone() } else { Vec::new() },
@@ -105,17 +105,24 @@ impl Scene {
         match self.domain.kind {
             DomainKind::Box => 3,
             DomainKind::Rectangle => 2,
-            DomainKind::Gmsh => {
-                let (l, i) = (&self.loads, &self.initial);
-                [l.body.as_ref(), l.contact_surface.as_ref(), i.displacement.as_ref(), i.velocity.as_ref()]
-                    .into_iter()
-                    .flatten()
-                    .chain(l.traction.iter().map(|t| &t.value))
-                    .map(|v| v.len())
-                    .next()
-                    .unwrap_or(2)
-            }
+            DomainKind::Gmsh => self.first_vector().map_or(2, |(_, d)| d),
         }
+    }
+
+    /// (Gmsh scenes) The first vector the scene gives, by key path, and its number of
+    /// components: the dimension the scene's vectors have (the mesh's must match).
+    fn first_vector(&self) -> Option<(String, usize)> {
+        let (l, i) = (&self.loads, &self.initial);
+        [
+            ("loads.body", l.body.as_ref()),
+            ("loads.contact_surface", l.contact_surface.as_ref()),
+            ("initial.displacement", i.displacement.as_ref()),
+            ("initial.velocity", i.velocity.as_ref()),
+        ]
+        .into_iter()
+        .filter_map(|(k, v)| v.map(|v| (k.to_string(), v.len())))
+        .chain(l.traction.iter().enumerate().map(|(j, t)| (format!("loads.traction[{j}].value"), t.value.len())))
+        .next()
     }
 
     /// The coordinates expressions may use: x, y (, z), and t when `with_t`.
@@ -136,11 +143,18 @@ impl Scene {
             None => Ok(VecExpr::zero(d)),
             Some(v) if v.len() != d => Err(Error::scene(
                 path,
-                format!(
-                    "has {} components; the {d}-D domain (kind = {:?}) needs {d}",
-                    v.len(),
-                    kinds::name(&self.domain.kind)
-                ),
+                match (self.domain.kind, self.first_vector()) {
+                    (DomainKind::Gmsh, Some((first, _))) => format!(
+                        "has {} components, but {first} has {d}: every vector of a Gmsh scene has the mesh's \
+                         dimension (2 or 3 components)",
+                        v.len()
+                    ),
+                    _ => format!(
+                        "has {} components; the {d}-D domain (kind = {:?}) needs {d}",
+                        v.len(),
+                        kinds::name(&self.domain.kind)
+                    ),
+                },
             )),
             Some(v) => VecExpr::parse(v, self.space_vars(with_t), path),
         }

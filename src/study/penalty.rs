@@ -86,7 +86,19 @@ pub fn sweep_file(eps_list: Option<&[f64]>) -> Result<SweepFile> {
     let mut sweep = crate::sweep::parse(SWEEP, "fixtures/sweeps/penalty.toml")?;
     if let Some(eps) = eps_list {
         if let Some(e) = eps.iter().find(|e| !(e.is_finite() && **e > 0.0)) {
-            return Err(Error::scene("--eps", format!("every ε must be > 0, got {e}")));
+            return Err(Error::scene("--eps", format!("every ε must be a finite number > 0, got {e}")));
+        }
+        let mut distinct = eps.to_vec();
+        distinct.sort_by(f64::total_cmp);
+        distinct.dedup();
+        if distinct.len() < 2 {
+            return Err(Error::scene(
+                "--eps",
+                format!("the study fits log–log slopes: it needs at least two different values of ε, got {eps:?}"),
+            ));
+        }
+        if distinct.len() < eps.len() {
+            return Err(Error::scene("--eps", format!("a value of ε is given twice: {eps:?}")));
         }
         let axis = &mut sweep.axes[0];
         axis.sets.truncate(1);
@@ -102,6 +114,20 @@ pub fn sweep_file(eps_list: Option<&[f64]>) -> Result<SweepFile> {
     Ok(sweep)
 }
 
+/// The base scene without `contact.enforcement` and `contact.penalty` (the study's points set
+/// them); its text unchanged when it has neither.
+fn without_penalty(base: &Base) -> Result<Base> {
+    let mut table: toml::Table =
+        base.text.parse().map_err(|e: toml::de::Error| crate::scene::parse::syntax_error(&base.label, "", &e))?;
+    let Some(toml::Value::Table(contact)) = table.get_mut("contact") else { return Ok(base.clone()) };
+    let (had_enforcement, had_penalty) = (contact.remove("enforcement").is_some(), contact.remove("penalty").is_some());
+    if !had_enforcement && !had_penalty {
+        return Ok(base.clone());
+    }
+    let text = toml::to_string(&table).map_err(|e| Error::Output(format!("{}: {e}", base.label)))?;
+    Ok(Base { text, label: base.label.clone(), dir: base.dir.clone() })
+}
+
 /// Run the study: the sweep of the ε list (default: the file's) on `base` with `overrides`,
 /// its points in `work` (`jobs` at once; points completed earlier with the same scene are
 /// skipped), then the collector. The scene must have contact with a finite penetration bound.
@@ -115,7 +141,13 @@ pub fn penalty_study(
     launcher: &[String],
 ) -> Result<PenaltyStudy> {
     let sweep = sweep_file(eps_list)?;
+    // the study sets the enforcement and ε of every point: a base scene's own penalty would
+    // make its exact reference point invalid
+    let base = &without_penalty(base)?;
     let scene = crate::sweep::scene_for(&sweep, base, overrides)?;
+    if scene.boundary.contact.is_empty() {
+        return Err(Error::scene("boundary.contact", "the penalty study needs a scene with a contact side"));
+    }
     let c = scene
         .contact
         .as_ref()

@@ -320,7 +320,7 @@ pub struct RefineRow {
 
 /// Build the refinement sweep of `base` with `extra` overrides (`--set`, applied to the base
 /// before the levels refine it): refuses a Gmsh
-/// mesh (`domain.file`), fewer than 3 or more than [`MAX_LEVELS`] levels, a ratio ≤ 1, a cell
+/// mesh (`domain.file`) when h is refined, fewer than 3 or more than [`MAX_LEVELS`] levels, a ratio ≤ 1, a cell
 /// count or step count that r^ℓ does not keep whole.
 pub fn plan(base: &Base, extra: &[Override], name: &str, opts: &RefineOptions) -> Result<Refinement> {
     if !(3..=MAX_LEVELS).contains(&opts.levels) {
@@ -347,19 +347,31 @@ pub fn plan(base: &Base, extra: &[Override], name: &str, opts: &RefineOptions) -
     let text = toml::to_string(&table).map_err(|e| Error::Output(format!("{}: {e}", base.label)))?;
     let base = &Base { text, label: base.label.clone(), dir: base.dir.clone() };
     let scene = super::scene_for(&probe, base, &[])?;
-    if let Some(f) = &scene.domain.file {
+    if let Some(f) = &scene.domain.file
+        && opts.what.refines_h()
+    {
         return Err(Error::scene(
             "domain.file",
             format!(
-                "is the Gmsh mesh {f:?}: `refine` refines domain.cells and cannot refine a mesh file; give a rectangle or box domain with cells"
+                "is the Gmsh mesh {f:?}: `refine` refines domain.cells and cannot refine a mesh file; give a rectangle or box domain with cells (or refine the time step only: --what k)"
             ),
         ));
     }
-    let Some(cells) = scene.domain.cells.clone() else {
-        return Err(Error::scene(
-            "domain.cells",
-            "is missing: `refine` refines the cells of a rectangle or box domain",
-        ));
+    let cells = match scene.domain.cells.clone() {
+        Some(cells) => cells,
+        None if opts.what.refines_h() => {
+            return Err(Error::scene(
+                "domain.cells",
+                "is missing: `refine` refines the cells of a rectangle or box domain",
+            ));
+        }
+        None => Vec::new(),
+    };
+    // the dimension: the cells' count, or a mesh file's own (--what k)
+    let dim = if cells.is_empty() {
+        crate::problem::build_mesh(&scene.validate()?.domain, &base.dir)?.dim()
+    } else {
+        cells.len()
     };
     let (end, step) = (scene.time.end, scene.time.step);
     let whole = |x: f64| (x - x.round()).abs() <= 1e-9 * x.abs().max(1.0);
@@ -438,7 +450,7 @@ pub fn plan(base: &Base, extra: &[Override], name: &str, opts: &RefineOptions) -
         sizes,
         size_name: if opts.what.refines_h() { "h [m]" } else { "k [s]" },
         expected_order: expected_order(opts.what, scene.time.scheme),
-        dim: cells.len(),
+        dim,
         windows,
     })
 }

@@ -362,6 +362,27 @@ fn refine_refuses_a_gmsh_mesh_and_fractional_steps_or_cells() {
     }
 }
 
+/// A Gmsh mesh is refused for h only: `--what k` refines the time step of a mesh file (three
+/// levels of gmsh_square, each k halved, orders near 2 for the midpoint rule's smooth energies).
+#[test]
+fn refine_k_runs_on_a_gmsh_mesh() {
+    let out = tmp("refine-gmsh-k");
+    let scene = root().join("fixtures/scenes/gmsh_square.toml");
+    let r = Command::new(BIN)
+        .arg("refine")
+        .arg(&scene)
+        .args(["--what", "k", "--set", "time.end=0.02", "--jobs", "1", "--out"])
+        .arg(&out)
+        .output()
+        .expect("run refine");
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let csv = std::fs::read_to_string(out.join("refine.csv")).expect("refine.csv");
+    let row = csv.lines().find(|l| l.starts_with("final_kinetic,")).expect("a final_kinetic row");
+    let order: f64 = split_csv(row)[4].parse().expect("an order");
+    // the midpoint rule is second order in k; 1.5 leaves room for the levels' pre-asymptotic part
+    assert!(order > 1.5, "observed order {order}: {row}");
+}
+
 /// Without `--windows` the impulses take 4 windows when 4 divides the coarsest level's steps,
 /// else the largest of 3, 2, 1 that does: the B.2 layer with t = 0.041 (41 steps of 1e-3, a
 /// prime) has the whole-run impulses alone and says so on its first line; with t = 0.042 (42

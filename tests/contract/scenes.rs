@@ -684,7 +684,7 @@ step = 0.1
     let s = Scene::from_toml(text, "minimal.toml").expect("a minimal scene is valid");
     assert_eq!(s.domain.kind, DomainKind::Rectangle);
     assert_eq!(s.domain.plane, None);
-    assert_eq!(s.validate().expect("valid").plane, Plane::Strain);
+    assert_eq!(s.validate().expect("valid").plane.unwrap_or_default(), Plane::Strain);
     assert!(s.boundary.dirichlet.is_empty());
     assert!(s.boundary.contact.is_empty());
     assert!(s.contact.is_none());

@@ -79,7 +79,7 @@ fn e0_penalty_study_penetration_and_error_fall_with_eps() {
 fn penalty_study_needs_a_finite_bound() {
     let work = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("penalty_sweep_refused");
     let short = [Override::parse("time.end=0.01").expect("override")];
-    let e = penalty_study(&base("sliding_block"), &short, Some(&[1e-3]), &work, 1, &this_executable())
+    let e = penalty_study(&base("sliding_block"), &short, Some(&[1e-3, 1e-4]), &work, 1, &this_executable())
         .expect_err("must refuse g = inf")
         .to_string();
     assert!(e.starts_with("contact.penetration_bound"), "{e}");
