@@ -129,6 +129,12 @@ class Result:
         (cells, 6) in VTK's order XX, YY, ZZ, XY, YZ, XZ. The values of the VTU frame."""
         if not self.frames:
             raise IndexError("this run stored no frames (output.every = 0)")
+        n = len(self.frames)
+        if not -n <= i < n:
+            raise IndexError(
+                f"frame {i} out of range: {n} stored frames (steps {self.frames[0][0]} … {self.frames[-1][0]}; "
+                f"-1 is the last)"
+            )
         step, _ = self.frames[i]
         if self._frame_fields is not None:
             f = self._frame_fields[i if i >= 0 else len(self.frames) + i]
@@ -179,7 +185,17 @@ class Result:
 
 
 def _scene(scene: Union[Scene, PathLike]) -> Scene:
-    return scene if isinstance(scene, Scene) else Scene.from_file(os.fspath(scene))
+    if isinstance(scene, Scene):
+        return scene
+    if not isinstance(scene, (str, os.PathLike)):
+        raise TypeError(f"scene: expected a dyncontact.Scene or the path of a scene file, got {type(scene).__name__}")
+    return Scene.from_file(os.fspath(scene))
+
+
+def _jobs(jobs: Optional[int]) -> Optional[int]:
+    if jobs is not None and (not isinstance(jobs, int) or isinstance(jobs, bool) or jobs < 1):
+        raise ValueError(f"jobs: must be an integer >= 1 (or None: the number of cores), got {jobs!r}")
+    return jobs
 
 
 def run(
@@ -224,6 +240,10 @@ def run(
 
 def _run(scene, out, progress, checkpoint_every, _stop_after) -> Result:
     s = _scene(scene)
+    if out is not None and os.fspath(out) == "":
+        raise ValueError("out: an empty path; give the run's folder, or None to write nothing")
+    if checkpoint_every is not None and (not isinstance(checkpoint_every, int) or checkpoint_every < 1):
+        raise ValueError(f"checkpoint_every: must be an integer >= 1 (or None), got {checkpoint_every!r}")
     if out is None:
         r = _native.run_memory(s, progress)
         frames = [(int(f["step"]), float(f["t"])) for f in r["frames"]]
@@ -338,9 +358,11 @@ def sweep(
         SceneError: the sweep or a point's scene is refused.
         KeyboardInterrupt: Ctrl-C; running points stop after their step, finished ones stay.
     """
+    if not isinstance(sweep, (dict, str, os.PathLike)):
+        raise TypeError(f"sweep: expected the path of a sweep file or a dict of its tables, got {type(sweep).__name__}")
     target = sweep if isinstance(sweep, dict) else os.fspath(sweep)
-    path = _native.run_sweep(target, None if out is None else os.fspath(out), jobs, set, plan_only, oversubscribe,
-                             progress)
+    folder = None if out is None else os.fspath(out)
+    path = _native.run_sweep(target, folder, _jobs(jobs), set, plan_only, oversubscribe, progress)
     if plan_only or not Path(path).is_file():
         return []
     with open(path, newline="") as f:
@@ -384,8 +406,8 @@ def refine(
             ``time.step``, ``--levels``, ``--windows`` ...).
         KeyboardInterrupt: Ctrl-C; running levels stop after their step, finished ones stay.
     """
-    path = _native.run_refine(scene, levels, ratio, what, windows, None if out is None else os.fspath(out), jobs,
-                              progress)
+    folder = None if out is None else os.fspath(out)
+    path = _native.run_refine(_scene(scene), levels, ratio, what, windows, folder, _jobs(jobs), progress)
     with open(path, newline="") as f:
         rows = []
         for row in csv.DictReader(f):

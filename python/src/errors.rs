@@ -61,6 +61,7 @@ fn residuals_of(d: &Bound<'_, PyDict>, cause: &StepFailureCause) -> PyResult<()>
             d.set_item("inner_residual", c.inner.residual())?;
         }
         StepFailureCause::NonFinite { entry } => d.set_item("non_finite_entry", *entry)?,
+        StepFailureCause::NonFiniteEnergy => d.set_item("non_finite_energy", true)?,
         StepFailureCause::EnergyBalance { relative, limit } => {
             d.set_item("energy_residual_relative", *relative)?;
             d.set_item("energy_residual_limit", *limit)?;

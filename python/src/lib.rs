@@ -95,11 +95,13 @@ fn history_columns() -> Vec<&'static str> {
     HISTORY.iter().map(|(name, _)| *name).collect()
 }
 
-/// Raise what stopped a run: the signal's KeyboardInterrupt (with the library's message when
-/// the run stopped on it), else the run's error.
+/// Raise what stopped a run: a KeyboardInterrupt from the signal handlers as the library's
+/// interruption (its message says where the run stopped), any other exception a handler raised
+/// (a user's SIGALRM handler's TimeoutError) as it is, else the run's error.
 fn outcome<T>(py: Python<'_>, r: dyncontact::Result<T>, signal: Option<PyErr>) -> PyResult<T> {
+    let keyboard = signal.as_ref().is_none_or(|s| s.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py));
     match (r, signal) {
-        (Err(e @ (Error::Interrupted { .. } | Error::SweepInterrupted { .. })), _) => Err(to_py(py, &e)),
+        (Err(e @ (Error::Interrupted { .. } | Error::SweepInterrupted { .. })), _) if keyboard => Err(to_py(py, &e)),
         (_, Some(sig)) => Err(sig),
         (r, None) => py_result(py, r),
     }
@@ -126,6 +128,14 @@ fn run_memory<'py>(py: Python<'py>, scene: &PyScene, progress: bool) -> PyResult
         let json = summary.and_then(|s| s.to_json());
         json.map(|j| (problem, collected, j))
     })?;
+    // nothing was written: the library's message would point at outputs and a checkpoint
+    if let Err(Error::Interrupted { step, time }) = &result
+        && signal.as_ref().is_none_or(|s| s.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py))
+    {
+        return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(format!(
+            "interrupted after step {step} (t = {time}); nothing was written (out=None)"
+        )));
+    }
     let (problem, collected, json) = outcome(py, result, signal)?;
     let out = PyDict::new(py);
     let history = PyDict::new(py);

@@ -59,6 +59,7 @@ impl PyScene {
         let estimate = resources::estimate(&model, &self.dir)?;
         resources::check_fits(&estimate, resources::available_memory())?;
         if let Some(out) = out {
+            dyncontact::output::folder::check_target(out)?;
             resources::check_disk(&estimate, out)?;
         }
         Problem::new(model, &self.dir)
@@ -129,8 +130,9 @@ impl PyScene {
         let estimate = py_result(py, resources::estimate(&model, &self.dir))?;
         let d = PyDict::new(py);
         d.set_item("name", &model.name)?;
-        d.set_item("memory_estimate_bytes", estimate.total())?;
-        d.set_item("output_estimate_bytes", estimate.outputs.total())?;
+        // whole bytes (the estimates are reals)
+        d.set_item("memory_estimate_bytes", estimate.total().round() as u64)?;
+        d.set_item("output_estimate_bytes", estimate.outputs.total().round() as u64)?;
         if let Err(e) = resources::check_fits(&estimate, resources::available_memory()) {
             d.set_item("dimension", estimate.dim)?;
             d.set_item("fits", false)?;

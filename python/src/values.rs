@@ -31,6 +31,13 @@ pub fn to_toml(v: &Bound<'_, PyAny>, at: &str) -> PyResult<toml::Value> {
         let items = v.try_iter()?.enumerate().map(|(k, x)| to_toml(&x?, &format!("{at}[{k}]")));
         return Ok(toml::Value::Array(items.collect::<PyResult<_>>()?));
     }
+    // numpy arrays (and anything else with a plain-Python `tolist`): their values
+    if !v.is_instance_of::<PyString>()
+        && let Ok(plain) = v.call_method0("tolist")
+        && (plain.is_instance_of::<PyList>() || plain.is_instance_of::<PyFloat>() || plain.extract::<i64>().is_ok())
+    {
+        return to_toml(&plain, at);
+    }
     Err(PyTypeError::new_err(format!(
         "{at}: a {} is not a TOML value (give a bool, int, float, str, list or dict)",
         v.get_type().name()?
@@ -56,7 +63,16 @@ pub fn set_arguments(values: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
         let mut args = Vec::new();
         for (k, v) in d.iter() {
             let key: String = k.extract().map_err(|_| PyTypeError::new_err("with_set: keys must be strings"))?;
-            let text = if v.is_instance_of::<PyString>() { v.extract()? } else { to_toml(&v, &key)?.to_string() };
+            let text = if v.is_instance_of::<PyString>() {
+                v.extract()?
+            } else {
+                match to_toml(&v, &key)? {
+                    // the shortest text that reads back as the same f64 (1e300, not 301 digits)
+                    toml::Value::Float(x) if x.is_nan() => "nan".to_string(),
+                    toml::Value::Float(x) => format!("{x:?}"),
+                    value => value.to_string(),
+                }
+            };
             args.push(format!("{key}={text}"));
         }
         return Ok(args);

@@ -169,12 +169,47 @@ def test_ctrl_c_raises_keyboard_interrupt_after_the_checkpoint(tmp_path):
     assert summary["status"] == "interrupted"
     checkpoint = json.loads((out / "checkpoint.json").read_text())
     assert checkpoint["step"] == summary["steps_completed"] > 0
-    # in memory: the same stop, without a folder
+    # in memory: the same stop, without a folder (and without a word of a checkpoint)
     timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
     timer.start()
-    with pytest.raises(KeyboardInterrupt):
+    with pytest.raises(KeyboardInterrupt) as e:
         dc.run(scene)
     timer.cancel()
+    assert "nothing was written" in str(e.value) and "checkpoint" not in str(e.value)
+
+
+def test_an_exception_of_the_users_signal_handler_is_raised_as_it_is():
+    """A SIGALRM handler that raises TimeoutError stops the run with TimeoutError, not a
+    KeyboardInterrupt."""
+    scene = dc.Scene.default().with_set({"time.end": 100.0})
+
+    def on_alarm(signum, frame):
+        raise TimeoutError("the user's deadline")
+
+    previous = signal.signal(signal.SIGALRM, on_alarm)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.5)
+        with pytest.raises(TimeoutError, match="the user's deadline"):
+            dc.run(scene)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def test_bad_arguments_are_named():
+    """Wrong types and values of run's arguments are refused naming the argument; a bad frame
+    index names the frames there are."""
+    with pytest.raises(TypeError, match="dyncontact.Scene"):
+        dc.run(3)
+    with pytest.raises(ValueError, match="out"):
+        dc.run(dc.Scene.default().with_set({"time.end": 0.01}), out="")
+    with pytest.raises(ValueError, match="jobs"):
+        dc.sweep({"name": "b", "base": "default", "axis": [{"key": "time.end", "values": [0.01]}]}, jobs=-1)
+    res = dc.run(dc.Scene.default().with_set({"time.end": 0.01, "domain.cells": [8, 4]}))
+    n = len(res.frames)
+    assert np.array_equal(res.fields(-n)["u"], res.fields(0)["u"])
+    with pytest.raises(IndexError, match=f"frame {n} out of range: {n} stored frames"):
+        res.fields(n)
 
 
 def test_the_gil_is_released_while_the_solver_runs():
@@ -215,8 +250,13 @@ def test_stop_and_resume_equal_a_straight_run(tmp_path):
     dc.run(scene, out=tmp_path / "s")
     for name in ("history.csv", "contact.csv"):
         assert (tmp_path / "r" / name).read_bytes() == (tmp_path / "s" / name).read_bytes(), name
-    with pytest.raises(OSError, match="checkpoint"):
-        dc.resume(tmp_path / "s")  # completed without a checkpoint: nothing to resume
+    with pytest.raises(OSError, match="nothing to resume"):
+        dc.resume(tmp_path / "s")  # completed, and no later time.end
+    # a completed run extends with a later time.end: as a straight run to it
+    ext = dc.resume(tmp_path / "s", set={"time.end": 0.08})
+    assert ext.summary["status"] == "completed" and ext.history["step"][-1] == 160
+    dc.run(dc.Scene.default().with_set({"time.end": 0.08}), out=tmp_path / "t")
+    assert (tmp_path / "s" / "history.csv").read_bytes() == (tmp_path / "t" / "history.csv").read_bytes()
 
 
 def test_run_warnings_are_python_warnings():

@@ -45,6 +45,16 @@ def test_check_reports_sizes_and_limit():
     assert info["fits"] is True
     assert info["ck_step_limit"] == pytest.approx(3.4722e-4, rel=1e-4)
     assert info["memory_estimate_bytes"] > 0 and any("memory" in line for line in info["lines"])
+    assert isinstance(info["memory_estimate_bytes"], int) and isinstance(info["output_estimate_bytes"], int)
+
+
+def test_numpy_values_are_toml_values():
+    """numpy arrays and scalars set keys as the lists and numbers they hold."""
+    import numpy as np
+
+    a = dc.Scene.default().with_set({"domain.cells": np.array([8, 4]), "time.end": np.float64(0.1)})
+    b = dc.Scene.default().with_set({"domain.cells": [8, 4], "time.end": 0.1})
+    assert a.to_toml() == b.to_toml()
 
 
 BAD = [
