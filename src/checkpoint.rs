@@ -42,6 +42,10 @@ pub struct Counters {
     pub max_relative_energy_residual: u64,
     #[serde(default)]
     pub energy_guard_exceeded_steps: usize,
+    /// how the contact solve's Newton systems were solved up to the checkpoint (summary.json's
+    /// contact_* counts continue from them)
+    #[serde(default)]
+    pub contact: crate::step::delassus::FactorCounts,
 }
 
 /// What a checkpoint stores.

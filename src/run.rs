@@ -24,6 +24,7 @@ use crate::output::summary::{RunDetails, Timing};
 use crate::output::{ModelInfo, Summary, Writer, folder, write_atomic};
 use crate::problem::Problem;
 use crate::simulation::{Settings, Simulation, StepRecord};
+use crate::step::delassus::FactorCounts;
 
 /// Options of a run.
 #[derive(Debug, Clone, Default)]
@@ -122,9 +123,10 @@ pub fn write_failed_start(out: &Path, scene: &str, e: &Error) -> Result<()> {
     write_summary(out, &Summary::failed_start(scene, e))
 }
 
-/// The run's counters in the form a checkpoint stores.
-fn counters(s: &RunDetails, first_cap: Option<usize>) -> Counters {
+/// The run's counters in the form a checkpoint stores (`contact`: the contact solve's counts).
+fn counters(s: &RunDetails, first_cap: Option<usize>, contact: FactorCounts) -> Counters {
     Counters {
+        contact,
         newton_iterations_total: s.newton_iterations_total,
         fixed_point_iterations_total: s.fixed_point_iterations_total,
         fixed_point_iterations_max: s.fixed_point_iterations_max,
@@ -288,6 +290,7 @@ fn start_resumed(
         )
     })?;
     summary.steps_completed = cp.step;
+    sim.delassus_factors.continue_counts(cp.counters.contact);
     let details = summary.details();
     restore_counters(details, &cp.counters);
     details.final_time = problem.time(cp.step);
@@ -516,17 +519,14 @@ fn steps_loop(
 ) -> std::result::Result<(), Stop> {
     let interrupted = || opts.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
     let stop_now = |n: usize| opts.stop_after.is_some_and(|s| n >= s) || interrupted();
-    let checkpoint = |sim: &Simulation,
-                      summary: &RunDetails,
-                      first_cap: Option<usize>,
-                      writer: &mut Writer|
-     -> Result<()> {
-        // the frames up to this step are on disk before a checkpoint says they are
-        writer.wait()?;
-        let solver = sim.solver_state();
-        Checkpoint::new(&summary.run_id, &problem.inputs_fingerprint, &sim.state, counters(summary, first_cap), solver)
-            .write(&opts.out)
-    };
+    let checkpoint =
+        |sim: &Simulation, summary: &RunDetails, first_cap: Option<usize>, writer: &mut Writer| -> Result<()> {
+            // the frames up to this step are on disk before a checkpoint says they are
+            writer.wait()?;
+            let solver = sim.solver_state();
+            let counts = counters(summary, first_cap, sim.delassus_factors.all_counts());
+            Checkpoint::new(&summary.run_id, &problem.inputs_fingerprint, &sim.state, counts, solver).write(&opts.out)
+        };
     // a signal during the setup stops the run before its first step
     if interrupted() && sim.state.n < problem.steps {
         checkpoint(sim, summary.details(), *first_cap, writer).map_err(Stop::Failed)?;

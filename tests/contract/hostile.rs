@@ -877,6 +877,17 @@ fn resume_needs_only_the_run_folder() {
     assert!(run_into(&b, &SMALL).status.success());
     let h = |d: &Path| std::fs::read(d.join("history.csv")).expect("history");
     assert_eq!(h(&a), h(&b), "the resumed run's history is the uninterrupted one's");
+    // the summary's totals are the whole run's: the contact solve's counts continue too
+    for key in [
+        "newton_iterations_total",
+        "fixed_point_iterations_total",
+        "contact_factorizations",
+        "contact_factor_reuses",
+        "contact_pcg_solves",
+        "contact_pcg_iterations",
+    ] {
+        assert_eq!(self::summary(&a)[key], self::summary(&b)[key], "{key}");
+    }
 }
 
 /// (issue 24, item 9) A later time.end extends a finished run — a plain one, without

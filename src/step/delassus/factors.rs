@@ -22,7 +22,8 @@ pub struct FactorKey {
 }
 
 /// How the Newton matrices W'_UU + D were solved so far (summary.json, the benchmark).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct FactorCounts {
     /// Cholesky factorizations computed
     pub factorizations: usize,
@@ -233,6 +234,11 @@ impl DelassusFactors {
     /// Every count so far.
     pub fn all_counts(&self) -> FactorCounts {
         self.counts
+    }
+
+    /// Continue counting from `counts` (a resumed run's counts before its checkpoint).
+    pub fn continue_counts(&mut self, counts: FactorCounts) {
+        self.counts = counts;
     }
 }
 
