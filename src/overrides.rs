@@ -120,6 +120,9 @@ pub fn parse_value(text: &str) -> toml::Value {
 
 /// `a.b[2].c` → [Key a, Key b, Index 2, Key c]; `"a.b".c` keeps the quoted key whole.
 pub fn parse_path(key: &str) -> Result<Vec<Segment>> {
+    if key.is_empty() {
+        return Err(Error::scene("--set", "the key is empty: give KEY=VALUE, e.g. --set contact.compliance=2000"));
+    }
     let bad = |m: &str| Error::scene(key, format!("is not a key path: {m}"));
     let mut out = Vec::new();
     let mut chars = key.chars().peekable();

@@ -102,6 +102,15 @@ impl PyScene {
     #[pyo3(signature = (d, dir = None))]
     fn from_dict(py: Python<'_>, d: &Bound<'_, PyDict>, dir: Option<PathBuf>) -> PyResult<PyScene> {
         let table = values::table(d, "")?;
+        if let Some(key) = dotted_key(&table, "") {
+            return py_result(
+                py,
+                Err(dyncontact::Error::scene(
+                    key,
+                    "a dotted key in a scene dict: nest it as tables ({\"contact\": {\"compliance\": 2000.0}}), or give it to with_set",
+                )),
+            );
+        }
         let text = toml::to_string(&table)
             .map_err(|e| pyo3::exceptions::PyValueError::new_err(format!("the dict is not a TOML table: {e}")))?;
         PyScene::from_text(py, text, "<dict>".to_string(), dir)
@@ -182,4 +191,17 @@ impl PyScene {
         let set = if self.overrides.is_empty() { String::new() } else { format!(", set={:?}", self.overrides) };
         format!("Scene({:?} from {}{set})", self.name, self.file)
     }
+}
+
+/// The first key of `t` (a path below `at`) that holds a dot: a `with_set` key given to
+/// `from_dict`, where keys are table names (no scene key has a dot).
+fn dotted_key(t: &toml::Table, at: &str) -> Option<String> {
+    t.iter().find_map(|(k, v)| {
+        let here = if at.is_empty() { k.clone() } else { format!("{at}.{k}") };
+        match v {
+            _ if k.contains('.') => Some(here),
+            toml::Value::Table(inner) => dotted_key(inner, &here),
+            _ => None,
+        }
+    })
 }

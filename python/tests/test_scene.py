@@ -96,3 +96,13 @@ def test_bad_scene_file_names_the_key(tmp_path):
     assert e.value.key is None and str(e.value).startswith("broken.toml: TOML parse error")
     with pytest.raises(dc.SceneError):
         dc.Scene.from_file(tmp_path / "missing.toml")
+
+
+def test_a_dotted_key_in_from_dict_is_named():
+    """from_dict takes tables: a with_set key given to it is refused naming it and the fix."""
+    d = {"name": "x", "domain": {"kind": "rectangle", "size": [2.0, 1.0], "cells": [8, 4]},
+         "material": {"density": 1.0, "young": 1000.0, "poisson": 0.3},
+         "time": {"end": 0.01, "step": 1e-3}, "contact.compliance": 5.0}
+    with pytest.raises(dc.SceneError) as e:
+        dc.Scene.from_dict(d)
+    assert e.value.key == "contact.compliance" and "with_set" in str(e.value)
