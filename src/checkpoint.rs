@@ -17,7 +17,7 @@ use crate::error::{Error, Result};
 use crate::simulation::{SolverState, State};
 
 /// The checkpoint format this version writes and reads.
-const FORMAT: u32 = 4;
+const FORMAT: u32 = 5;
 
 /// Bits of an f64 vector (JSON numbers would round-trip through decimal text).
 fn bits(x: &[f64]) -> Vec<u64> {

@@ -30,7 +30,9 @@ pub fn text(text: &str) -> String {
 /// The fingerprint of a run's inputs: the validated model and the bytes of every file it reads
 /// (`scene_dir` resolves a relative path as the problem does).
 pub fn inputs(model: &Model, scene_dir: &Path) -> Result<String> {
-    let mut h = fnv1a(START, format!("{model:?}").as_bytes());
+    // the same problem, the same fingerprint: `plane` left out is plane strain
+    let normalized = Model { plane: Some(model.plane.unwrap_or_default()), ..model.clone() };
+    let mut h = fnv1a(START, format!("{normalized:?}").as_bytes());
     if let Some(path) = model.domain.mesh_file(scene_dir)? {
         let bytes = std::fs::read(&path).map_err(|e| Error::read(&path, e))?;
         h = fnv1a(h, path.display().to_string().as_bytes());

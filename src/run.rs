@@ -293,6 +293,10 @@ fn start_resumed(
     sim.delassus_factors.continue_counts(cp.counters.contact);
     let details = summary.details();
     restore_counters(details, &cp.counters);
+    let c = cp.counters.contact;
+    (details.contact_factorizations, details.contact_factor_reuses) = (c.factorizations, c.reuses);
+    (details.contact_pcg_solves, details.contact_pcg_iterations) = (c.pcg_solves, c.pcg_iterations);
+    (details.contact_velocity_solves, details.contact_velocity_iterations) = (c.velocity_solves, c.velocity_iterations);
     details.final_time = problem.time(cp.step);
     *first_cap = cp.counters.first_cap;
     details.warnings.push(format!("resumed from the checkpoint of step {}", cp.step));
@@ -306,7 +310,7 @@ fn start_resumed(
 /// resumed is refused at once.
 ///
 /// The inputs must be the checkpoint's (its fingerprint), with one exception: a later
-/// `time.end`, which extends the run (a completed one too, when its last step was
+/// `time.end`, which extends the run (a completed one too: its last step is always
 /// checkpointed). That is proved without trusting the folder's scene.toml: the scene it holds
 /// must have the checkpoint's fingerprint (so it is the scene the checkpoint was computed
 /// from), and that scene with only its `time.end` (and so its number of steps) replaced by the

@@ -313,15 +313,15 @@ impl<'p> Simulation<'p> {
             energy.compliance = c.penetration(&u).iter().zip(&c.omega).map(|(d, w)| w * c.normal.energy(*d)).sum();
         }
         // finite fields whose energies overflow: refused as input, before a row of history.csv
-        for (value, key, what) in [
-            (energy.kinetic, "initial.velocity", "kinetic energy ½ vᵀ M v"),
-            (energy.elastic, "initial.displacement", "elastic energy ½ uᵀ K u"),
-            (energy.compliance, "initial.displacement", "compliance energy"),
+        for (value, key, what, with) in [
+            (energy.kinetic, "initial.velocity", "kinetic energy ½ vᵀ M v", "material.density"),
+            (energy.elastic, "initial.displacement", "elastic energy ½ uᵀ K u", "material.young"),
+            (energy.compliance, "initial.displacement", "compliance energy", "contact.compliance"),
         ] {
             if !value.is_finite() {
                 return Err(Error::scene(
                     key,
-                    format!("the initial {what} is {value}: the values are too large for f64 once squared"),
+                    format!("the initial {what} is {value}: {key} (with {with}) is too large for f64 once squared"),
                 ));
             }
         }

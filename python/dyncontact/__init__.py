@@ -212,10 +212,11 @@ def run(
         scene: a :class:`Scene` (or the path of a scene file).
         out: None (default): write nothing, keep everything in memory. A folder: write the run
             folder there exactly as ``dyncontact run SCENE --out OUT`` does (history.csv,
-            contact.csv, frames/, series.pvd, summary.json, plots/, scene.toml) and read the
-            results back from it.
+            contact.csv, frames/, series.pvd, summary.json, plots/, scene.toml, and checkpoint.json
+            of the last step, so :func:`resume` with a later ``time.end`` extends the run) and
+            read the results back from it.
         progress: show a progress bar (on a terminal).
-        checkpoint_every: with ``out``, write OUT/checkpoint.json every N steps.
+        checkpoint_every: with ``out``, write OUT/checkpoint.json every N steps too.
 
     The run's warnings (summary.json's ``warnings``, which the CLI prints) are issued as
     :class:`DyncontactWarning`.

@@ -106,3 +106,15 @@ def test_a_dotted_key_in_from_dict_is_named():
     with pytest.raises(dc.SceneError) as e:
         dc.Scene.from_dict(d)
     assert e.value.key == "contact.compliance" and "with_set" in str(e.value)
+
+
+def test_numpy_values_keep_their_kind_and_floats_their_text():
+    """A size-1 array stays a list, np.bool_ a bool, and floats in lists keep their shortest text."""
+    import numpy as np
+
+    s = dc.Scene.default().with_set({"domain.cells": np.array([8]).tolist() + [4]})
+    assert "cells = [8, 4]" in s.to_toml()
+    s = dc.Scene.default().with_set({"output.trajectory": np.bool_(True)})
+    assert s.overrides[-1] == "output.trajectory=true"
+    s = dc.Scene.default().with_set({"domain.size": [np.float64(2.0), 1e-300]})
+    assert s.overrides[-1] == "domain.size=[2.0, 1e-300]"

@@ -94,7 +94,9 @@ pub struct Lock {
 impl Lock {
     /// Release the lock of a run that was refused before it wrote anything, removing the lock
     /// file (and the folder) when this process created them, so the folder is left as it was.
-    /// The file is removed while still locked: a process that opened it meanwhile was refused.
+    /// The file is removed while still locked; a process that opened it meanwhile and locks it
+    /// after this one lets go finds it is no longer the folder's lock file ([`lock`] checks) and
+    /// locks the folder's new one instead.
     pub fn discard(self) {
         if let Some(file) = &self.created.0 {
             let _ = std::fs::remove_file(file);
@@ -124,19 +126,55 @@ pub fn lock(dir: &Path, name: &str) -> Result<Lock> {
     let new_dir = (!dir.exists()).then(|| dir.to_path_buf());
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let p = dir.join(name);
-    let new_file = (!p.exists()).then(|| p.clone());
-    let file = OpenOptions::new().create(true).truncate(false).write(true).open(&p).map_err(|e| Error::io(&p, e))?;
-    let created = (new_file, new_dir);
-    match file.try_lock() {
-        Ok(()) => Ok(Lock { file, created }),
-        Err(std::fs::TryLockError::WouldBlock) => Err(Error::folder(
-            dir,
-            format!(
-                "another dyncontact process is writing this folder (it holds {name}); wait for it to end or choose another folder"
-            ),
-        )),
-        Err(std::fs::TryLockError::Error(_)) => Ok(Lock { file, created }),
+    // a lock file removed by a refused run (Lock::discard) between this process's open and its
+    // lock is opened again; a few rounds at most, however the processes interleave
+    for _ in 0..16 {
+        // `create_new` says whether this process created the file
+        let (file, created) = match OpenOptions::new().write(true).create_new(true).open(&p) {
+            Ok(f) => (f, true),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => match OpenOptions::new().write(true).open(&p) {
+                Ok(f) => (f, false),
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                Err(e) => return Err(Error::io(&p, e)),
+            },
+            Err(e) => return Err(Error::io(&p, e)),
+        };
+        let created = (created.then(|| p.clone()), new_dir.clone());
+        match file.try_lock() {
+            Ok(()) if is_the_file_at(&file, &p) => return Ok(Lock { file, created }),
+            Ok(()) => {
+                let _ = file.unlock();
+            }
+            Err(std::fs::TryLockError::WouldBlock) => {
+                return Err(Error::folder(
+                    dir,
+                    format!(
+                        "another dyncontact process is writing this folder (it holds {name}); wait for it to end or choose another folder"
+                    ),
+                ));
+            }
+            Err(std::fs::TryLockError::Error(_)) => return Ok(Lock { file, created }),
+        }
     }
+    Err(Error::folder(
+        dir,
+        format!("its lock file {name} keeps being removed and created: another process is at work here"),
+    ))
+}
+
+/// Whether the open `file` is still the file at `path` (not one removed since it was opened).
+#[cfg(unix)]
+fn is_the_file_at(file: &File, path: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (file.metadata(), std::fs::metadata(path)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn is_the_file_at(_: &File, path: &Path) -> bool {
+    path.exists()
 }
 
 /// Lock a run folder ([`lock`] with `run.lock`).
@@ -202,7 +240,10 @@ pub fn check_target(dir: &Path) -> Result<()> {
 
 /// Create and remove a file in `dir`: Err (naming `dir`) when the folder cannot be written.
 fn probe(dir: &Path) -> Result<()> {
-    let p: PathBuf = dir.join(format!(".dyncontact-probe-{}", std::process::id()));
+    // one name per call: threads of one process (Python's) may probe the same folder at once
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let p: PathBuf = dir.join(format!(".dyncontact-probe-{}-{call}", std::process::id()));
     File::create(&p).map_err(|e| Error::io(dir, e))?;
     std::fs::remove_file(&p).map_err(|e| Error::io(dir, e))
 }

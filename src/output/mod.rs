@@ -275,10 +275,13 @@ impl Writer {
         Ok(())
     }
 
-    /// Write summary.json and the charts.
+    /// Write the charts, then summary.json: a summary that says `completed` follows every
+    /// output (a run killed or a disk full while the charts are written leaves `running`, and
+    /// the caller writes `failed`).
     pub fn finish(&mut self, summary: &Summary, problem: &Problem, state: &State) -> Result<()> {
-        self.write_summary(summary)?;
-        self.charts(problem, state)
+        self.wait()?;
+        self.charts(problem, state)?;
+        self.write_summary(summary)
     }
 
     /// Write only the summary (used when a run fails), after the frame in flight.

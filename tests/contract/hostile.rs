@@ -391,7 +391,7 @@ fn a_run_that_cannot_start_changes_nothing() {
 
 /// (issue 22, defect 4) A 3-D run into a folder of a 2-D run with a checkpoint, a trajectory and
 /// 2-D charts replaces all of it: the folder then holds exactly what a fresh 3-D run writes
-/// (no checkpoint.json, no trajectory.f64, the 3-D charts only, its frames only).
+/// (its own checkpoint.json, no trajectory.f64, the 3-D charts only, its frames only).
 #[test]
 fn a_3d_run_replaces_a_2d_folder_entirely() {
     let dir = tmp("replace_2d");
