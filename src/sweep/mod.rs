@@ -213,7 +213,7 @@ impl Plan {
             }
             ovs.extend(extra.iter().cloned());
             let label = describe(&axes, &choice);
-            let refuse = |e: Error| Error::scene(format!("point {id} ({label})"), e.to_string());
+            let refuse = |e: Error| point_error(&id, &label, e);
             let scene_text = point_text(base_text, base_label, base_dir, &ovs, &sweep.name).map_err(refuse)?;
             let (mem_mb, runtime_min) = check_point(&scene_text, &id).map_err(refuse)?;
             points.push(Point { id, choice, scene_text, mem_mb, runtime_min });
@@ -367,6 +367,28 @@ impl Base {
             label: p.display().to_string(),
             dir: p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")),
         })
+    }
+}
+
+/// A point's error as the sweep refuses it: the key path of the inner error kept (what
+/// [`Error::key`] and the Python package's `SceneError.key` give), the point and its axis
+/// values said in the message, and the place in the generated scene (a file never written, its
+/// line and column) left out: `contact.penaltyy: in sweep point p000 (contact.penaltyy = 0.001):
+/// unknown field …`. An error that names no key (a mesh file) is keyed `point <id>`.
+fn point_error(id: &str, label: &str, e: Error) -> Error {
+    let at = format!("in sweep point {id} ({label})");
+    match e {
+        Error::Scene { path, message } => Error::Scene { path, message: format!("{at}: {message}") },
+        Error::Expression { path, message } => Error::Expression { path, message: format!("{at}: {message}") },
+        Error::SceneSyntax { path, message, .. } if !path.is_empty() => {
+            let what = message.strip_prefix(&format!("{path}: ")).unwrap_or(&message);
+            let what = match what.split_once(": ") {
+                Some((place, rest)) if place.starts_with("TOML parse error") => rest,
+                _ => what,
+            };
+            Error::Scene { message: format!("{at}: {what}"), path }
+        }
+        other => Error::scene(format!("point {id}"), format!("({label}) {other}")),
     }
 }
 

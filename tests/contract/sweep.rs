@@ -357,8 +357,8 @@ values = [50, 1, 40]
     assert!(csv.lines().nth(2).is_some_and(|l| l.contains(",failed,") && l.contains("newton solver failed")), "{csv}");
 }
 
-/// Every point is validated before anything runs: one bad point refuses the sweep, naming its
-/// axis values and the key; a sweep file's own mistakes name their key path.
+/// Every point is validated before anything runs: one bad point refuses the sweep, naming the
+/// key, the point and its axis values; a sweep file's own mistakes name their key path.
 #[test]
 fn a_bad_point_refuses_the_sweep_before_anything_runs() {
     let dir = tmp("sweep_refused");
@@ -373,7 +373,7 @@ fn a_bad_point_refuses_the_sweep_before_anything_runs() {
     );
     println!("{e}");
     assert!(
-        e.contains("point p001 (contact.penalty = -1)") && e.contains("contact.penalty: must be a finite number > 0"),
+        e.starts_with("contact.penalty: in sweep point p001 (contact.penalty = -1): must be a finite number > 0"),
         "{e}"
     );
     assert!(!dir.join("out").exists());
@@ -417,6 +417,55 @@ fn a_bad_point_refuses_the_sweep_before_anything_runs() {
         Plan::from_file(&f, &[Override::parse("time.step=1e-3").expect("override")]).expect_err("refused").to_string();
     assert!(e.contains("of --set set the same value"), "{e}");
     assert!(Override::parse("domain.cells[1=0").is_err(), "an unclosed index");
+}
+
+/// A bad point's error keeps the key path of what is wrong ([`dyncontact::Error::key`], the
+/// Python package's `SceneError.key`): an unknown key on an axis, a bad value on an axis and an
+/// unknown key in `[set]` are keyed by that dotted key, and the message names the point and its
+/// axis values — not the point's scene.toml (never written for a refused sweep) nor a line of it.
+#[test]
+fn a_bad_point_is_keyed_by_its_key_path() {
+    let dir = tmp("sweep_bad_key");
+    let cases = [
+        (
+            "unknown",
+            "[[axis]]\nkey = \"contact.penaltyy\"\nvalues = [1e-3]\n",
+            "contact.penaltyy",
+            "p000 (contact.penaltyy = 0.001)",
+            "unknown field `penaltyy`",
+        ),
+        (
+            "value",
+            "[[axis]]\nkey = \"contact.compliance\"\nvalues = [1.0, -1.0]\n",
+            "contact.compliance",
+            "p001 (contact.compliance = -1)",
+            "must be >= 0, got -1",
+        ),
+        (
+            "set",
+            "[[axis]]\nkey = \"time.step\"\nvalues = [1e-3]\n[set]\n\"contact.penaltyy\" = 1e-3\n",
+            "contact.penaltyy",
+            "p000 (time.step = 0.001)",
+            "unknown field `penaltyy`",
+        ),
+    ];
+    for (name, body, key, point, what) in cases {
+        let f = dir.join(format!("{name}.toml"));
+        std::fs::write(&f, format!("name = \"{name}\"\n{body}")).expect("write");
+        let e = Plan::from_file(&f, &[]).expect_err("refused");
+        let shown = e.to_string();
+        println!("{name}: {shown}");
+        assert_eq!(e.key(), Some(key), "{shown}");
+        assert!(shown.starts_with(&format!("{key}: in sweep point {point}: ")) && shown.contains(what), "{shown}");
+        assert!(!shown.contains("scene.toml") && !shown.contains("line "), "{shown}");
+    }
+    // a sweep refused from the command line writes nothing and exits 1
+    let out = dir.join("out");
+    let o = Command::new(BIN).arg("sweep").arg(dir.join("set.toml")).arg("--out").arg(&out).output().expect("spawn");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("contact.penaltyy: in sweep point p000"), "{stderr}");
+    assert!(!out.join("sweep.json").exists(), "a refused sweep wrote its plan");
 }
 
 /// A table in `[set]` (an unquoted dotted key is one in TOML) is merged into the scene's table:
