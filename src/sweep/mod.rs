@@ -687,3 +687,42 @@ fn check_point(text: &str, id: &str) -> Result<(u64, u64)> {
     let minutes = ((solves + contact) * steps / 1e8 / 60.0).ceil().max(10.0);
     Ok(((1.5 * e.total() / 1e6 + 100.0).ceil() as u64, minutes.min(1e7) as u64))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A point's refusal keeps the key path of the error inside it (a key, an expression, a
+    /// key the scene's schema does not know), says the point and its axis values, and drops the
+    /// generated scene's file and place; an error without a key is keyed by the point.
+    #[test]
+    fn a_point_error_keeps_the_inner_key_path() {
+        let syntax = Error::SceneSyntax {
+            file: "points/p000/scene.toml".into(),
+            message: "contact.penaltyy: TOML parse error at line 13, column 1: unknown field `penaltyy`".into(),
+            diagram: "13 | penaltyy = 0.001".into(),
+            path: "contact.penaltyy".into(),
+        };
+        let e = point_error("p000", "contact.penaltyy = 0.001", syntax);
+        assert_eq!(e.key(), Some("contact.penaltyy"));
+        assert_eq!(
+            e.to_string(),
+            "contact.penaltyy: in sweep point p000 (contact.penaltyy = 0.001): unknown field `penaltyy`"
+        );
+        let scene = Error::scene("contact.compliance", "must be >= 0, got -1");
+        let e = point_error("p001", "contact.compliance = -1", scene);
+        assert_eq!(e.key(), Some("contact.compliance"));
+        assert_eq!(
+            e.to_string(),
+            "contact.compliance: in sweep point p001 (contact.compliance = -1): must be >= 0, got -1"
+        );
+        let expr =
+            Error::Expression { path: "loads.traction[0].value[1]".into(), message: "unknown variable z".into() };
+        let e = point_error("p002", "the base scene", expr);
+        assert!(matches!(e, Error::Expression { .. }) && e.key() == Some("loads.traction[0].value[1]"), "{e}");
+        let mesh = Error::mesh("m.msh", "no such file");
+        let e = point_error("p003", "domain.file = m.msh", mesh);
+        assert_eq!(e.key(), Some("point p003"));
+        assert_eq!(e.to_string(), "point p003: (domain.file = m.msh) mesh m.msh: no such file");
+    }
+}
