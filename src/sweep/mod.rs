@@ -239,7 +239,9 @@ impl Plan {
     /// summary.json, so the point runs again), the Snakefile and config.yaml. Returns, per point,
     /// whether its folder already holds a completed run of the same scene. `launcher`: the
     /// command the Snakefile runs `dyncontact` with ([`snakemake::this_executable`] for the CLI).
+    /// `dir` must be new, empty or a sweep's (it has sweep.json): nothing else is mixed in.
     pub fn write(&self, dir: &Path, launcher: &[String]) -> Result<Vec<bool>> {
+        check_folder(dir)?;
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let json = serde_json::to_string_pretty(self).map_err(|e| Error::Output(format!("sweep.json: {e}")))?;
         write_atomic(&dir.join("sweep.json"), json.as_bytes())?;
@@ -455,8 +457,35 @@ pub fn scene_for(sweep: &SweepFile, base: &Base, overrides: &[Override]) -> Resu
 
 /// Lock a sweep folder for this process (`DIR/sweep.lock`): two sweeps of one folder at once
 /// would run the same points into the same folders. Held while `sweep` or `sweep collect` runs.
+/// A folder that is not a sweep's (nor new or empty) is refused first, with nothing written.
 pub fn lock(dir: &Path) -> Result<crate::output::folder::Lock> {
+    check_folder(dir)?;
     crate::output::folder::lock(dir, "sweep.lock")
+}
+
+/// Refuse a folder that is neither new, empty (but for the sweep's lock, taken first) nor a
+/// sweep's (it has sweep.json), as `run` refuses a folder that is not a run's: a sweep writes
+/// points/, sweep.json, sweep.csv, plots/, Snakefile and config.yaml there, which must not mix
+/// with a user's files or another command's.
+fn check_folder(dir: &Path) -> Result<()> {
+    if dir.join("sweep.json").exists() {
+        return Ok(());
+    }
+    let Ok(rd) = std::fs::read_dir(dir) else { return Ok(()) };
+    let mut held: Vec<String> =
+        rd.flatten().map(|e| e.file_name().to_string_lossy().to_string()).filter(|n| n != "sweep.lock").collect();
+    if held.is_empty() {
+        return Ok(());
+    }
+    held.sort();
+    let more = if held.len() > 5 { ", …" } else { "" };
+    let shown = held.iter().take(5).cloned().collect::<Vec<_>>().join(", ");
+    Err(Error::folder(
+        dir,
+        format!(
+            "is not a sweep's folder (it has no sweep.json) and holds {shown}{more}: a sweep writes only into a new or empty folder or a sweep's own, so give another folder with --out"
+        ),
+    ))
 }
 
 /// A point id: `p` and digits.

@@ -506,6 +506,83 @@ fn points_moved_by_a_changed_axis_keep_their_runs() {
     );
 }
 
+/// A small sweep on `time.step` (8×4 cells, to t = 0.02), its file written as `dir/<file>`.
+fn steps_sweep(dir: &Path, file: &str, values: &str, extra: &str) -> (PathBuf, Plan) {
+    let f = dir.join(file);
+    std::fs::write(&f, format!("name = \"k\"\n[[axis]]\nkey = \"time.step\"\nvalues = {values}\n[set]\n\"domain.cells\" = [8, 4]\n\"time.end\" = 0.02\n{extra}")).expect("write");
+    let plan = Plan::from_file(&f, &[]).expect("plan");
+    (f, plan)
+}
+
+/// A folder's files (relative paths, sorted) with their bytes, but a sweep's lock (`sweep.lock`,
+/// which every sweep of the folder takes).
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut found = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("read_dir").flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let rel = p.strip_prefix(dir).expect("below").display().to_string();
+                if rel != "sweep.lock" {
+                    found.push((rel, std::fs::read(&p).expect("read")));
+                }
+            }
+        }
+    }
+    found.sort();
+    found
+}
+
+/// A sweep writes only into a new or empty folder or a sweep's own (it has sweep.json): a folder
+/// with a user's file, or a `run`'s folder, is refused (exit 4) naming what it holds, and left
+/// as it was — no lock, no plan; `sweep collect` of it is refused alike.
+#[test]
+fn a_folder_that_is_not_a_sweeps_is_refused() {
+    let dir = tmp("sweep_foreign_folder");
+    let (f, _) = steps_sweep(&dir, "one.toml", "[1e-3]", "");
+    let notes = dir.join("notes");
+    std::fs::create_dir_all(&notes).expect("mkdir");
+    std::fs::write(notes.join("notes.txt"), "my notes").expect("write");
+    let run = dir.join("run");
+    let o = Command::new(BIN)
+        .args(["run", "--set", "time.end=0.01", "--set", "domain.cells=[8,4]", "--out"])
+        .arg(&run)
+        .output()
+        .expect("spawn");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for (folder, holds) in [(&notes, "notes.txt"), (&run, "history.csv")] {
+        let before = files(folder);
+        for args in [vec!["sweep", f.to_str().expect("path"), "--plan-only", "--out"], vec!["sweep", "collect"]] {
+            let o = Command::new(BIN).args(&args).arg(folder).output().expect("spawn");
+            let stderr = String::from_utf8_lossy(&o.stderr);
+            println!("{args:?}: {stderr}");
+            assert_eq!(o.status.code(), Some(4), "{stderr}");
+            assert!(stderr.contains("is not a sweep's folder") && stderr.contains(holds), "{stderr}");
+            assert!(files(folder) == before, "{args:?} changed {}", folder.display());
+            assert!(!folder.join("sweep.lock").exists(), "{args:?} left a lock in {}", folder.display());
+        }
+    }
+    // the run's folder is still one `run` accepts
+    let o = Command::new(BIN)
+        .args(["run", "--set", "time.end=0.01", "--set", "domain.cells=[8,4]", "--out"])
+        .arg(&run)
+        .output()
+        .expect("spawn");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // an empty folder is a sweep's to write
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).expect("mkdir");
+    let o = Command::new(BIN).arg("sweep").arg(&f).arg("--plan-only").arg("--out").arg(&empty).output().expect("spawn");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // and the library refuses the same folder
+    let (_, plan) = steps_sweep(&dir, "one.toml", "[1e-3]", "");
+    let e = plan.write(&notes, &[]).expect_err("refused");
+    assert_eq!(e.exit_code(), 4, "{e}");
+}
+
 /// `dyncontact sweep` from the command line: `--plan-only` writes the folder (a scene per point,
 /// the Snakefile) without running; the run writes sweep.csv and a chart per numeric axis;
 /// `sweep collect DIR` writes the same sweep.csv.
