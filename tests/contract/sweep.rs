@@ -483,7 +483,8 @@ fn a_table_in_set_is_merged_into_the_scene() {
 }
 
 /// When the axes change, a point whose scene was run before keeps its run: its folder moves to
-/// its new id and only the new point runs.
+/// its new id with its marker (`points/<id>.done`, Snakemake's output) and only the new point
+/// runs.
 #[test]
 fn points_moved_by_a_changed_axis_keep_their_runs() {
     let dir = tmp("sweep_moved");
@@ -497,6 +498,13 @@ fn points_moved_by_a_changed_axis_keep_their_runs() {
     assert!(run_sweep(&first, &out, 2).iter().all(|o| *o == Outcome::Completed));
     let history = std::fs::read(out.join("points/p001/history.csv")).expect("history");
     let second = write("[2e-3, 1e-3, 5e-4]");
+    // laid out only (as --plan-only): the moved runs keep their markers, so Snakemake runs only
+    // the new point
+    let done = second.write(&out, &dyncontact::sweep::snakemake::this_executable()).expect("the folder");
+    assert_eq!(done, vec![false, true, true]);
+    let markers: Vec<bool> =
+        ["p000", "p001", "p002"].iter().map(|id| out.join(format!("points/{id}.done")).exists()).collect();
+    assert_eq!(markers, vec![false, true, true], "the markers follow the moved points");
     let outcomes = run_sweep(&second, &out, 2);
     assert_eq!(outcomes, vec![Outcome::Completed, Outcome::Skipped, Outcome::Skipped]);
     assert_eq!(
@@ -534,6 +542,57 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     }
     found.sort();
     found
+}
+
+/// Completed runs are never dropped: a sweep run again into its folder with fewer values, or
+/// another sweep into that folder, would drop or overwrite completed points whose scene it does
+/// not have, and is refused (exit 4) before anything is written, naming the folder, the points
+/// with their axis values and the way on (another --out, or remove them by hand); once they are
+/// removed by hand, the smaller sweep runs there, keeping the point it shares.
+#[test]
+fn completed_points_are_never_dropped() {
+    let dir = tmp("sweep_never_dropped");
+    let out = dir.join("out");
+    let (_, first) = steps_sweep(&dir, "first.toml", "[1e-3, 5e-4, 2.5e-4]", "");
+    assert!(run_sweep(&first, &out, 2).iter().all(|o| *o == Outcome::Completed));
+    let before = files(&out);
+    let launcher = dyncontact::sweep::snakemake::this_executable();
+    // fewer values: 5e-4 (p001) would be overwritten by 2.5e-4 moving there
+    let (fewer_file, fewer) = steps_sweep(&dir, "fewer.toml", "[1e-3, 2.5e-4]", "");
+    let e = fewer.write(&out, &launcher).expect_err("refused");
+    println!("{e}");
+    assert_eq!(e.exit_code(), 4, "{e}");
+    let shown = e.to_string();
+    assert!(shown.starts_with(&out.display().to_string()), "{shown}");
+    assert!(shown.contains("points/p001 (time.step = 0.0005)") && shown.contains("--out"), "{shown}");
+    assert!(!shown.contains("p000") && !shown.contains("p002"), "{shown}");
+    // fewer values at the end: the dropped p002 is refused as well
+    let (_, head) = steps_sweep(&dir, "head.toml", "[1e-3, 5e-4]", "");
+    let shown = head.write(&out, &launcher).expect_err("refused").to_string();
+    assert!(shown.contains("points/p002 (time.step = 0.00025)"), "{shown}");
+    // another sweep (another base: every scene differs) into this sweep's folder
+    let (_, other) = steps_sweep(&dir, "other.toml", "[1e-3, 5e-4, 2.5e-4]", "\"solver.relaxation\" = 0.5\n");
+    let shown = other.write(&out, &launcher).expect_err("refused").to_string();
+    assert!(shown.contains("3 completed points") && shown.contains("points/p000 (time.step = 0.001)"), "{shown}");
+    // the command line: exit 4, and the folder as it was (but the sweep's lock)
+    let o = Command::new(BIN)
+        .arg("sweep")
+        .arg(&fewer_file)
+        .args(["--jobs", "1", "--out"])
+        .arg(&out)
+        .output()
+        .expect("spawn");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(4), "{stderr}");
+    assert!(stderr.contains("would drop or overwrite it"), "{stderr}");
+    assert!(files(&out) == before, "a refused sweep changed the folder");
+    // removed by hand, the smaller sweep runs: p000 stays, 2.5e-4 moves to p001
+    let kept = std::fs::read(out.join("points/p002/history.csv")).expect("history");
+    std::fs::remove_dir_all(out.join("points/p001")).expect("remove");
+    std::fs::remove_file(out.join("points/p001.done")).expect("remove");
+    assert_eq!(run_sweep(&fewer, &out, 2), vec![Outcome::Skipped, Outcome::Skipped]);
+    assert_eq!(std::fs::read(out.join("points/p001/history.csv")).expect("moved"), kept);
+    assert!(!out.join("points/p002").exists() && !out.join("points/p002.done").exists());
 }
 
 /// A sweep writes only into a new or empty folder or a sweep's own (it has sweep.json): a folder
