@@ -237,7 +237,7 @@ impl Plan {
     /// Lay the sweep out in `dir`: sweep.json (what the collector reads), every point's
     /// scene.toml (rewritten only when it changed — a changed scene also drops the point's old
     /// outputs, so the point runs again), the Snakefile and config.yaml. Returns, per point,
-    /// whether its folder already holds a completed run of the same scene.
+    /// whether its folder already holds a completed run of the same scene whose files agree.
     /// `launcher`: the command the Snakefile runs `dyncontact` with ([`snakemake::this_executable`]
     /// for the CLI).
     ///
@@ -245,7 +245,8 @@ impl Plan {
     /// sweep.json), and every completed run in it must have its scene in this plan — one whose
     /// scene another point now has (the axes changed) moves to that point's folder with its
     /// marker; a sweep that would drop or overwrite any other is refused before anything is
-    /// written.
+    /// written. A point whose files do not agree (`corrupt`) loses its marker, so it runs again
+    /// here or under Snakemake.
     pub fn write(&self, dir: &Path, launcher: &[String]) -> Result<Vec<bool>> {
         check_folder(dir)?;
         let points = dir.join("points");
@@ -267,7 +268,12 @@ impl Plan {
                 remove_marker(&pd)?;
                 write_atomic(&sp, p.scene_text.as_bytes())?;
             }
-            done.push(same && collect::completed_with(&pd, &p.scene_text));
+            let status = collect::checked_status(&pd);
+            if status == collect::PointStatus::Corrupt {
+                // its files do not agree: it runs again, whether or not it had reached a final outcome
+                remove_marker(&pd)?;
+            }
+            done.push(same && status.is_completed());
         }
         snakemake::write(self, dir, launcher)?;
         Ok(done)

@@ -642,6 +642,31 @@ fn a_folder_that_is_not_a_sweeps_is_refused() {
     assert_eq!(e.exit_code(), 4, "{e}");
 }
 
+/// A point whose files do not agree (its history.csv cut short) is run again by the next sweep,
+/// its marker removed when the sweep is laid out (so Snakemake runs it again too); the other
+/// points are skipped.
+#[test]
+fn a_corrupt_point_runs_again() {
+    let dir = tmp("sweep_corrupt_rerun");
+    let out = dir.join("out");
+    let (_, plan) = steps_sweep(&dir, "k.toml", "[1e-3, 5e-4, 2.5e-4]", "");
+    assert!(run_sweep(&plan, &out, 2).iter().all(|o| *o == Outcome::Completed));
+    let history = out.join("points/p001/history.csv");
+    let text = std::fs::read_to_string(&history).expect("history");
+    let cut: String = text.lines().take(text.lines().count() - 1).map(|l| format!("{l}\n")).collect();
+    std::fs::write(&history, cut).expect("truncate");
+    let (_, rows) = collect::collect(&out).expect("collect");
+    assert_eq!(rows[1].status.as_str(), "corrupt");
+    let done = plan.write(&out, &dyncontact::sweep::snakemake::this_executable()).expect("the folder");
+    assert_eq!(done, vec![true, false, true]);
+    assert!(!out.join("points/p001.done").exists() && out.join("points/p000.done").exists());
+    assert_eq!(run_sweep(&plan, &out, 2), vec![Outcome::Skipped, Outcome::Completed, Outcome::Skipped]);
+    let (_, rows) = collect::collect(&out).expect("collect");
+    assert!(rows.iter().all(|r| r.status.is_completed()), "{rows:?}");
+    assert_eq!(std::fs::read_to_string(&history).expect("history"), text, "the rerun gives the same history");
+    assert!(out.join("points/p001.done").exists());
+}
+
 /// `dyncontact sweep` from the command line: `--plan-only` writes the folder (a scene per point,
 /// the Snakefile) without running; the run writes sweep.csv and a chart per numeric axis;
 /// `sweep collect DIR` writes the same sweep.csv.
