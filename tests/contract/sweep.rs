@@ -667,6 +667,38 @@ fn a_corrupt_point_runs_again() {
     assert!(out.join("points/p001.done").exists());
 }
 
+/// A point too large for this machine's memory (2.6 TiB) passes the plan (`--plan-only`, for a
+/// cluster's larger nodes; listed by `too_large_here`) but refuses a sweep run here before any
+/// point runs, naming the key, the point and the estimate (exit 1).
+#[test]
+fn a_point_too_large_for_this_machine_refuses_the_run_before_anything_runs() {
+    if dyncontact::resources::available_memory().is_none() {
+        println!("skipped: this system does not say how much memory is available");
+        return;
+    }
+    let dir = tmp("sweep_too_large");
+    let f = dir.join("big.toml");
+    std::fs::write(&f, "name = \"big\"\n[[axis]]\nkey = \"domain.cells\"\nvalues = [[8, 4], [20000, 20000]]\n[set]\n\"time.end\" = 0.02\n").expect("write");
+    let plan = Plan::from_file(&f, &[]).expect("a plan: the point may be meant for a larger node");
+    let out = dir.join("out");
+    let large = dyncontact::sweep::runner::too_large_here(&plan, &out);
+    assert_eq!(large.len(), 1, "{large:?}");
+    assert_eq!(large[0].key(), Some("domain"));
+    assert!(large[0].to_string().contains("in sweep point p001 (domain.cells = [20000, 20000])"), "{}", large[0]);
+    let o = Command::new(BIN).arg("sweep").arg(&f).args(["--plan-only", "--out"]).arg(&out).output().expect("spawn");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = Command::new(BIN).arg("sweep").arg(&f).args(["--jobs", "1", "--out"]).arg(&out).output().expect("spawn");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("domain: in sweep point p001") && stderr.contains("TiB") && stderr.contains("No point ran"),
+        "{stderr}"
+    );
+    assert!(!out.join("points/p000/summary.json").exists(), "a point ran");
+    assert!(!out.join("points/p001.done").exists() && !out.join("points/p001/summary.json").exists());
+}
+
 /// `dyncontact sweep` from the command line: `--plan-only` writes the folder (a scene per point,
 /// the Snakefile) without running; the run writes sweep.csv and a chart per numeric axis;
 /// `sweep collect DIR` writes the same sweep.csv.
