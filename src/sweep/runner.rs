@@ -48,6 +48,20 @@ pub enum Outcome {
     NotRun,
 }
 
+impl std::fmt::Display for Outcome {
+    /// The words sweep.csv uses (`completed`, `failed`, `interrupted`), a failure with its reason:
+    /// what `dyncontact sweep point` prints.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Outcome::Skipped => f.write_str("skipped (completed earlier with the same scene)"),
+            Outcome::Completed => f.write_str("completed"),
+            Outcome::Failed(reason) => write!(f, "failed: {reason}"),
+            Outcome::Interrupted => f.write_str("interrupted"),
+            Outcome::NotRun => f.write_str("not run"),
+        }
+    }
+}
+
 /// Run every point of `plan` that is not `done` (from [`Plan::write`]) into its folder below
 /// `dir`. Returns each point's outcome, in the plan's order. Each point's numerics use faer's
 /// global parallelism as the caller set it (`Par::Seq` keeps `jobs` points on `jobs` cores).

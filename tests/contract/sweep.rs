@@ -349,6 +349,14 @@ values = [50, 1, 40]
     let outcomes = run_sweep(&plan, &dir.join("out"), 2);
     assert_eq!(outcomes[0], Outcome::Completed);
     assert!(matches!(&outcomes[1], Outcome::Failed(r) if r.contains("newton solver failed")), "{outcomes:?}");
+    // shown in sweep.csv's words
+    assert_eq!(outcomes[0].to_string(), "completed");
+    assert!(
+        outcomes[1].to_string().starts_with("failed: step ")
+            && outcomes[1].to_string().contains("newton solver failed"),
+        "{}",
+        outcomes[1]
+    );
     assert_eq!(outcomes[2], Outcome::Completed);
     let (_, rows) = collect::collect(&dir.join("out")).expect("collect");
     assert_eq!(rows.iter().map(|r| r.status.as_str()).collect::<Vec<_>>(), ["completed", "failed", "completed"]);
