@@ -121,16 +121,6 @@ pub fn point_status(pd: &Path) -> Option<RunStatus> {
     Summary::read(pd).map(|s| s.status)
 }
 
-/// Whether the point folder holds a completed run of exactly `scene_text` and the files it
-/// reads now (its summary's inputs fingerprint is that of the scene and its mesh as they are).
-pub fn completed_with(pd: &Path, scene_text: &str) -> bool {
-    let Some(summary) = Summary::read(pd) else { return false };
-    let recorded = summary.run.as_ref().map(|d| d.inputs_fingerprint.as_str());
-    summary.status == RunStatus::Completed
-        && recorded.is_some()
-        && recorded == current_inputs(pd, scene_text).as_deref()
-}
-
 /// The inputs fingerprint of a point's scene with its files as they are now.
 fn current_inputs(pd: &Path, scene_text: &str) -> Option<String> {
     let model = crate::scene::Scene::from_toml(scene_text, "scene.toml").and_then(|s| s.validate()).ok()?;
@@ -159,6 +149,31 @@ pub fn rows(dir: &Path) -> Result<(Plan, Vec<Row>)> {
     Ok((plan, rows))
 }
 
+/// A point folder's summary when its files agree ([`check_point`]); otherwise its status in
+/// sweep.csv with the reason: `missing` (no summary.json) or `corrupt`.
+fn checked_summary(pd: &Path) -> std::result::Result<Summary, (PointStatus, String)> {
+    let sp = pd.join("summary.json");
+    if !sp.exists() {
+        return Err((PointStatus::Missing, String::new()));
+    }
+    let value = std::fs::read_to_string(&sp)
+        .map_err(|e| e.to_string())
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).map_err(|e| e.to_string()))
+        .map_err(|e| (PointStatus::Corrupt, format!("summary.json is not readable JSON ({e})")))?;
+    let summary = Summary::deserialize(&value).map_err(|e| (PointStatus::Corrupt, not_a_summary(&value, &e)))?;
+    check_point(&summary, pd).map_err(|reason| (PointStatus::Corrupt, reason))?;
+    Ok(summary)
+}
+
+/// A point folder's status as sweep.csv gives it: its run's, where its files agree (a completed
+/// point's inputs unchanged since it ran), else `missing` or `corrupt`.
+pub fn checked_status(pd: &Path) -> PointStatus {
+    match checked_summary(pd) {
+        Ok(s) => PointStatus::Run(s.status),
+        Err((status, _)) => status,
+    }
+}
+
 /// One point's row.
 fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
     let axes: Vec<String> = plan.axes.iter().zip(&p.choice).map(|(a, &c)| a.labels[c].clone()).collect();
@@ -172,24 +187,10 @@ fn row(plan: &Plan, p: &Point, pd: &Path) -> Result<Row> {
         reason,
         warnings: Vec::new(),
     };
-    let sp = pd.join("summary.json");
-    if !sp.exists() {
-        return Ok(bare(PointStatus::Missing, String::new()));
-    }
-    let value = match std::fs::read_to_string(&sp)
-        .map_err(|e| e.to_string())
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).map_err(|e| e.to_string()))
-    {
-        Ok(v) => v,
-        Err(e) => return Ok(bare(PointStatus::Corrupt, format!("summary.json is not readable JSON ({e})"))),
-    };
-    let summary = match Summary::deserialize(&value) {
+    let summary = match checked_summary(pd) {
         Ok(s) => s,
-        Err(e) => return Ok(bare(PointStatus::Corrupt, not_a_summary(&value, &e))),
+        Err((status, reason)) => return Ok(bare(status, reason)),
     };
-    if let Err(reason) = check_point(&summary, pd) {
-        return Ok(bare(PointStatus::Corrupt, reason));
-    }
     let mut figures: HashMap<&str, String> = HashMap::new();
     // from summary.json, each number as JSON writes it
     let json = |x: serde_json::Value| x.to_string();

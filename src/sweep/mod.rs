@@ -213,7 +213,7 @@ impl Plan {
             }
             ovs.extend(extra.iter().cloned());
             let label = describe(&axes, &choice);
-            let refuse = |e: Error| Error::scene(format!("point {id} ({label})"), e.to_string());
+            let refuse = |e: Error| point_error(&id, &label, e);
             let scene_text = point_text(base_text, base_label, base_dir, &ovs, &sweep.name).map_err(refuse)?;
             let (mem_mb, runtime_min) = check_point(&scene_text, &id).map_err(refuse)?;
             points.push(Point { id, choice, scene_text, mem_mb, runtime_min });
@@ -236,65 +236,27 @@ impl Plan {
 
     /// Lay the sweep out in `dir`: sweep.json (what the collector reads), every point's
     /// scene.toml (rewritten only when it changed — a changed scene also drops the point's old
-    /// summary.json, so the point runs again), the Snakefile and config.yaml. Returns, per point,
-    /// whether its folder already holds a completed run of the same scene. `launcher`: the
-    /// command the Snakefile runs `dyncontact` with ([`snakemake::this_executable`] for the CLI).
+    /// outputs, so the point runs again), the Snakefile and config.yaml. Returns, per point,
+    /// whether its folder already holds a completed run of the same scene whose files agree.
+    /// `launcher`: the command the Snakefile runs `dyncontact` with ([`snakemake::this_executable`]
+    /// for the CLI).
+    ///
+    /// Nothing a user computed is dropped: `dir` must be new, empty or a sweep's (it has
+    /// sweep.json), and every completed run in it must have its scene in this plan — one whose
+    /// scene another point now has (the axes changed) moves to that point's folder with its
+    /// marker; a sweep that would drop or overwrite any other is refused before anything is
+    /// written. A point whose files do not agree (`corrupt`) loses its marker, so it runs again
+    /// here or under Snakemake.
     pub fn write(&self, dir: &Path, launcher: &[String]) -> Result<Vec<bool>> {
+        check_folder(dir)?;
+        let points = dir.join("points");
+        let completed = completed_runs(&points);
+        self.refuse_dropping(dir, &completed)?;
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let json = serde_json::to_string_pretty(self).map_err(|e| Error::Output(format!("sweep.json: {e}")))?;
         write_atomic(&dir.join("sweep.json"), json.as_bytes())?;
-        let points = dir.join("points");
         std::fs::create_dir_all(&points).map_err(|e| Error::io(&points, e))?;
-        // completed folders whose scene another point now has (the axes changed): moved aside
-        // first, then into that point's place, so their runs are kept
-        let existing: Vec<(String, String)> = std::fs::read_dir(&points)
-            .map_err(|e| Error::io(&points, e))?
-            .flatten()
-            .filter_map(|e| {
-                let id = e.file_name().to_string_lossy().to_string();
-                let text = std::fs::read_to_string(e.path().join("scene.toml")).ok()?;
-                (is_id(&id) && collect::completed_with(&e.path(), &text)).then_some((id, text))
-            })
-            .collect();
-        let mut moves: Vec<(PathBuf, PathBuf)> = Vec::new();
-        for p in &self.points {
-            let own = existing.iter().any(|(id, text)| *id == p.id && *text == p.scene_text);
-            if own {
-                continue;
-            }
-            if let Some((from, _)) = existing
-                .iter()
-                .find(|(id, text)| *text == p.scene_text && !moves.iter().any(|m| m.0 == points.join(id)))
-            {
-                let aside = points.join(format!(".moving-{}", p.id));
-                std::fs::rename(points.join(from), &aside).map_err(|e| Error::io(&aside, e))?;
-                moves.push((points.join(from), aside));
-            }
-        }
-        // their markers (points/<id>.done) move with them
-        let markers: Vec<bool> = moves.iter().map(|(from, _)| runner::marker(from).exists()).collect();
-        for (_, aside) in &moves {
-            let id = aside
-                .file_name()
-                .map(|n| n.to_string_lossy().trim_start_matches(".moving-").to_string())
-                .unwrap_or_default();
-            let _ = std::fs::remove_file(runner::marker(&points.join(&id)));
-        }
-        for ((from, aside), had_marker) in moves.iter().zip(markers) {
-            let id = aside
-                .file_name()
-                .map(|n| n.to_string_lossy().trim_start_matches(".moving-").to_string())
-                .unwrap_or_default();
-            let target = points.join(&id);
-            if target.exists() {
-                std::fs::remove_dir_all(&target).map_err(|e| Error::io(&target, e))?;
-            }
-            std::fs::rename(aside, &target).map_err(|e| Error::io(&target, e))?;
-            let _ = std::fs::remove_file(runner::marker(from));
-            if had_marker {
-                write_atomic(&runner::marker(&target), b"")?;
-            }
-        }
+        self.move_completed(&points, &completed)?;
         let mut done = Vec::with_capacity(self.points.len());
         for p in &self.points {
             let pd = Plan::point_dir(dir, &p.id);
@@ -303,13 +265,95 @@ impl Plan {
             let same = std::fs::read_to_string(&sp).is_ok_and(|t| t == p.scene_text);
             if !same {
                 clear_outputs(&pd)?;
-                let _ = std::fs::remove_file(runner::marker(&pd));
+                remove_marker(&pd)?;
                 write_atomic(&sp, p.scene_text.as_bytes())?;
             }
-            done.push(same && collect::completed_with(&pd, &p.scene_text));
+            let status = collect::checked_status(&pd);
+            if status == collect::PointStatus::Corrupt {
+                // its files do not agree: it runs again, whether or not it had reached a final outcome
+                remove_marker(&pd)?;
+            }
+            done.push(same && status.is_completed());
         }
         snakemake::write(self, dir, launcher)?;
         Ok(done)
+    }
+
+    /// Refuse a plan that would drop or overwrite a completed run in `points/` (see
+    /// [`Plan::write`]): one whose scene no point of this plan has. Names them, with their
+    /// axis values in the sweep that ran them (the folder's sweep.json).
+    fn refuse_dropping(&self, dir: &Path, completed: &[Completed]) -> Result<()> {
+        let kept = |c: &Completed| c.scene.as_ref().is_some_and(|t| self.points.iter().any(|p| p.scene_text == *t));
+        let dropped: Vec<&Completed> = completed.iter().filter(|c| !kept(c)).collect();
+        if dropped.is_empty() {
+            return Ok(());
+        }
+        let before = Plan::read(dir).ok();
+        let name = |c: &Completed| {
+            let values = before
+                .as_ref()
+                .and_then(|b| b.points.iter().find(|p| p.id == c.name).map(|p| format!(" ({})", b.describe(p))));
+            format!("points/{}{}", c.name, values.unwrap_or_default())
+        };
+        let mut shown = dropped.iter().take(5).map(|c| name(c)).collect::<Vec<_>>().join(", ");
+        if dropped.len() > 5 {
+            shown.push_str(", …");
+        }
+        let n = dropped.len();
+        Err(Error::folder(
+            dir,
+            format!(
+                "holds {n} completed point{} whose scene this sweep does not have: {shown}; running this sweep here would drop or overwrite {}. Give another folder with --out, or move or remove {} (points/<id> and points/<id>.done) by hand first",
+                if n == 1 { "" } else { "s" },
+                if n == 1 { "it" } else { "them" },
+                if n == 1 { "that folder" } else { "those folders" },
+            ),
+        ))
+    }
+
+    /// Move completed runs whose scene another point now has (the axes changed) into that
+    /// point's folder, each with its marker: first all aside (`points/.moving-<id>`), then into
+    /// place, so two runs that trade places are both kept. A folder that an earlier move left
+    /// aside (interrupted) is moved on like the others.
+    fn move_completed(&self, points: &Path, completed: &[Completed]) -> Result<()> {
+        let own = |c: &Completed| self.points.iter().any(|p| p.id == c.name && c.scene.as_ref() == Some(&p.scene_text));
+        let mut moves: Vec<(&str, &str)> = Vec::new();
+        for p in &self.points {
+            if completed.iter().any(|c| c.name == p.id && own(c)) {
+                continue;
+            }
+            if let Some(c) = completed.iter().find(|c| {
+                c.scene.as_ref() == Some(&p.scene_text) && !own(c) && !moves.iter().any(|(from, _)| *from == c.name)
+            }) {
+                moves.push((&c.name, &p.id));
+            }
+        }
+        // the markers go first (a marker must not claim a folder that moved away), then the
+        // folders; a moved run gets its marker back in its new place
+        let had: Vec<bool> = moves.iter().map(|(from, _)| runner::marker(&points.join(from)).exists()).collect();
+        for (from, to) in &moves {
+            remove_marker(&points.join(from))?;
+            remove_marker(&points.join(to))?;
+        }
+        for (from, to) in &moves {
+            let aside = points.join(format!(".moving-{to}"));
+            if *from != aside.file_name().unwrap_or_default().to_string_lossy() {
+                std::fs::rename(points.join(from), &aside).map_err(|e| Error::io(&aside, e))?;
+            }
+        }
+        for ((_, to), had) in moves.iter().zip(had) {
+            let (aside, target) = (points.join(format!(".moving-{to}")), points.join(to));
+            if target.exists() {
+                // not a completed run (or a second copy of one kept elsewhere): refuse_dropping
+                // refused the plan otherwise
+                std::fs::remove_dir_all(&target).map_err(|e| Error::io(&target, e))?;
+            }
+            std::fs::rename(&aside, &target).map_err(|e| Error::io(&target, e))?;
+            if had {
+                write_atomic(&runner::marker(&target), b"")?;
+            }
+        }
+        Ok(())
     }
 
     /// Read the plan a sweep wrote to `dir` (sweep.json), checked: ids of the form p0…, one
@@ -367,6 +411,28 @@ impl Base {
             label: p.display().to_string(),
             dir: p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")),
         })
+    }
+}
+
+/// A point's error as the sweep refuses it: the key path of the inner error kept (what
+/// [`Error::key`] and the Python package's `SceneError.key` give), the point and its axis
+/// values said in the message, and the place in the generated scene (a file never written, its
+/// line and column) left out: `contact.penaltyy: in sweep point p000 (contact.penaltyy = 0.001):
+/// unknown field …`. An error that names no key (a mesh file) is keyed `point <id>`.
+fn point_error(id: &str, label: &str, e: Error) -> Error {
+    let at = format!("in sweep point {id} ({label})");
+    match e {
+        Error::Scene { path, message } => Error::Scene { path, message: format!("{at}: {message}") },
+        Error::Expression { path, message } => Error::Expression { path, message: format!("{at}: {message}") },
+        Error::SceneSyntax { path, message, .. } if !path.is_empty() => {
+            let what = message.strip_prefix(&format!("{path}: ")).unwrap_or(&message);
+            let what = match what.split_once(": ") {
+                Some((place, rest)) if place.starts_with("TOML parse error") => rest,
+                _ => what,
+            };
+            Error::Scene { message: format!("{at}: {what}"), path }
+        }
+        other => Error::scene(format!("point {id}"), format!("({label}) {other}")),
     }
 }
 
@@ -433,8 +499,69 @@ pub fn scene_for(sweep: &SweepFile, base: &Base, overrides: &[Override]) -> Resu
 
 /// Lock a sweep folder for this process (`DIR/sweep.lock`): two sweeps of one folder at once
 /// would run the same points into the same folders. Held while `sweep` or `sweep collect` runs.
+/// A folder that is not a sweep's (nor new or empty) is refused first, with nothing written.
 pub fn lock(dir: &Path) -> Result<crate::output::folder::Lock> {
+    check_folder(dir)?;
     crate::output::folder::lock(dir, "sweep.lock")
+}
+
+/// A completed run in a sweep's `points/`: its folder's name (a point id, or `.moving-<id>`
+/// where a move was interrupted) and its scene (None where scene.toml cannot be read).
+struct Completed {
+    name: String,
+    scene: Option<String>,
+}
+
+/// The completed runs in `points` (a summary.json that says `completed`, whether or not the
+/// rest of the folder agrees with it).
+fn completed_runs(points: &Path) -> Vec<Completed> {
+    let Ok(rd) = std::fs::read_dir(points) else { return Vec::new() };
+    let mut found: Vec<Completed> = rd
+        .flatten()
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().to_string();
+            let named = is_id(&name) || name.strip_prefix(".moving-").is_some_and(is_id);
+            let completed = collect::point_status(&e.path()) == Some(crate::failure::RunStatus::Completed);
+            (named && e.path().is_dir() && completed)
+                .then(|| Completed { scene: std::fs::read_to_string(e.path().join("scene.toml")).ok(), name })
+        })
+        .collect();
+    found.sort_by(|a, b| a.name.cmp(&b.name));
+    found
+}
+
+/// Refuse a folder that is neither new, empty (but for the sweep's lock, taken first) nor a
+/// sweep's (it has sweep.json), as `run` refuses a folder that is not a run's: a sweep writes
+/// points/, sweep.json, sweep.csv, plots/, Snakefile and config.yaml there, which must not mix
+/// with a user's files or another command's.
+fn check_folder(dir: &Path) -> Result<()> {
+    if dir.join("sweep.json").exists() {
+        return Ok(());
+    }
+    let Ok(rd) = std::fs::read_dir(dir) else { return Ok(()) };
+    let mut held: Vec<String> =
+        rd.flatten().map(|e| e.file_name().to_string_lossy().to_string()).filter(|n| n != "sweep.lock").collect();
+    if held.is_empty() {
+        return Ok(());
+    }
+    held.sort();
+    let more = if held.len() > 5 { ", …" } else { "" };
+    let shown = held.iter().take(5).cloned().collect::<Vec<_>>().join(", ");
+    Err(Error::folder(
+        dir,
+        format!(
+            "is not a sweep's folder (it has no sweep.json) and holds {shown}{more}: a sweep writes only into a new or empty folder or a sweep's own, so give another folder with --out"
+        ),
+    ))
+}
+
+/// Remove a point's marker (`points/<id>.done`), if it has one.
+fn remove_marker(pd: &Path) -> Result<()> {
+    let m = runner::marker(pd);
+    match std::fs::remove_file(&m) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::io(&m, e)),
+        _ => Ok(()),
+    }
 }
 
 /// A point id: `p` and digits.
@@ -664,4 +791,43 @@ fn check_point(text: &str, id: &str) -> Result<(u64, u64)> {
     let steps = model.time.steps as f64;
     let minutes = ((solves + contact) * steps / 1e8 / 60.0).ceil().max(10.0);
     Ok(((1.5 * e.total() / 1e6 + 100.0).ceil() as u64, minutes.min(1e7) as u64))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A point's refusal keeps the key path of the error inside it (a key, an expression, a
+    /// key the scene's schema does not know), says the point and its axis values, and drops the
+    /// generated scene's file and place; an error without a key is keyed by the point.
+    #[test]
+    fn a_point_error_keeps_the_inner_key_path() {
+        let syntax = Error::SceneSyntax {
+            file: "points/p000/scene.toml".into(),
+            message: "contact.penaltyy: TOML parse error at line 13, column 1: unknown field `penaltyy`".into(),
+            diagram: "13 | penaltyy = 0.001".into(),
+            path: "contact.penaltyy".into(),
+        };
+        let e = point_error("p000", "contact.penaltyy = 0.001", syntax);
+        assert_eq!(e.key(), Some("contact.penaltyy"));
+        assert_eq!(
+            e.to_string(),
+            "contact.penaltyy: in sweep point p000 (contact.penaltyy = 0.001): unknown field `penaltyy`"
+        );
+        let scene = Error::scene("contact.compliance", "must be >= 0, got -1");
+        let e = point_error("p001", "contact.compliance = -1", scene);
+        assert_eq!(e.key(), Some("contact.compliance"));
+        assert_eq!(
+            e.to_string(),
+            "contact.compliance: in sweep point p001 (contact.compliance = -1): must be >= 0, got -1"
+        );
+        let expr =
+            Error::Expression { path: "loads.traction[0].value[1]".into(), message: "unknown variable z".into() };
+        let e = point_error("p002", "the base scene", expr);
+        assert!(matches!(e, Error::Expression { .. }) && e.key() == Some("loads.traction[0].value[1]"), "{e}");
+        let mesh = Error::mesh("m.msh", "no such file");
+        let e = point_error("p003", "domain.file = m.msh", mesh);
+        assert_eq!(e.key(), Some("point p003"));
+        assert_eq!(e.to_string(), "point p003: (domain.file = m.msh) mesh m.msh: no such file");
+    }
 }

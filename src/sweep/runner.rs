@@ -48,6 +48,20 @@ pub enum Outcome {
     NotRun,
 }
 
+impl std::fmt::Display for Outcome {
+    /// The words sweep.csv uses (`completed`, `failed`, `interrupted`), a failure with its reason:
+    /// what `dyncontact sweep point` prints.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Outcome::Skipped => f.write_str("skipped (completed earlier with the same scene)"),
+            Outcome::Completed => f.write_str("completed"),
+            Outcome::Failed(reason) => write!(f, "failed: {reason}"),
+            Outcome::Interrupted => f.write_str("interrupted"),
+            Outcome::NotRun => f.write_str("not run"),
+        }
+    }
+}
+
 /// Run every point of `plan` that is not `done` (from [`Plan::write`]) into its folder below
 /// `dir`. Returns each point's outcome, in the plan's order. Each point's numerics use faer's
 /// global parallelism as the caller set it (`Par::Seq` keeps `jobs` points on `jobs` cores).
@@ -67,35 +81,47 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
         b.set_position((n - todo.len()) as u64);
         b
     });
-    // points too large for this machine (its free memory measured once, before any point runs)
-    // are refused as `run` refuses them, before anything starts
+    // the memory of each point; a point too large for this machine (its free memory measured
+    // once, before any point runs) refuses the sweep before anything starts, as `run` refuses
+    // it (it may be meant for a larger machine: `--plan-only` lays the sweep out for a cluster)
     let available = crate::resources::available_memory();
     let mut largest = 0.0f64;
+    let mut too_large = Vec::new();
     let todo: Vec<usize> = todo
         .into_iter()
-        .filter(|&i| {
-            let pd = Plan::point_dir(dir, &plan.points[i].id);
-            let fits =
-                Scene::from_toml(&plan.points[i].scene_text, "scene.toml").and_then(|s| s.validate()).and_then(|m| {
-                    let e = crate::resources::estimate(&m, &pd)?;
-                    crate::resources::check_fits(&e, available)?;
-                    largest = largest.max(e.total());
-                    Ok(())
-                });
-            match fits {
-                Ok(()) => true,
-                Err(e) => {
-                    let _ = super::clear_outputs(&pd);
-                    let _ = write_failed_start(&pd, &plan.points[i].id, &e);
-                    let _ = crate::output::write_atomic(&marker(&pd), b"");
-                    if let Ok(mut slot) = outcomes[i].lock() {
-                        *slot = Outcome::Failed(e.to_string());
-                    }
-                    false
+        .filter(|&i| match estimate(plan, dir, i) {
+            Ok(e) => {
+                if let Err(refused) = crate::resources::check_fits(&e, available) {
+                    too_large.push(super::point_error(&plan.points[i].id, &plan.describe(&plan.points[i]), refused));
                 }
+                largest = largest.max(e.total());
+                true
+            }
+            Err(e) => {
+                // its scene no longer validates (a file it reads changed): that point fails
+                let pd = Plan::point_dir(dir, &plan.points[i].id);
+                let _ = super::clear_outputs(&pd);
+                let _ = write_failed_start(&pd, &plan.points[i].id, &e);
+                let _ = crate::output::write_atomic(&marker(&pd), b"");
+                if let Ok(mut slot) = outcomes[i].lock() {
+                    *slot = Outcome::Failed(e.to_string());
+                }
+                false
             }
         })
         .collect();
+    if !too_large.is_empty() {
+        let n = too_large.len();
+        let more =
+            if n > 1 { format!(" (and {} more point{})", n - 1, if n == 2 { "" } else { "s" }) } else { String::new() };
+        let advice = format!(
+            "{more}. No point ran: run this sweep where its points fit, or lay it out with --plan-only for a cluster (config.yaml gives each point's memory)"
+        );
+        return Err(match too_large.swap_remove(0) {
+            Error::Scene { path, message } => Error::Scene { path, message: message + &advice },
+            other => other,
+        });
+    }
     // the points that run at once must fit together
     let at_once = opts.jobs.clamp(1, todo.len().max(1));
     if let Some(avail) = available.filter(|a| at_once as f64 * largest > *a) {
@@ -150,6 +176,27 @@ pub fn run_points(plan: &Plan, dir: &Path, done: &[bool], opts: &RunnerOptions) 
         b.finish();
     }
     Ok(outcomes.into_iter().map(|m| m.into_inner().unwrap_or(Outcome::NotRun)).collect())
+}
+
+/// The memory estimate of point `i` of `plan` in its folder below `dir` (its scene validated
+/// again: a file it reads may have changed since the plan).
+fn estimate(plan: &Plan, dir: &Path, i: usize) -> Result<crate::resources::Estimate> {
+    let pd = Plan::point_dir(dir, &plan.points[i].id);
+    let model = Scene::from_toml(&plan.points[i].scene_text, "scene.toml")?.validate()?;
+    crate::resources::estimate(&model, &pd)
+}
+
+/// The points of `plan` too large for the memory this machine has available now, each as the
+/// refusal that running the sweep here would give (a key path, the point, the estimate): for a
+/// warning where the sweep is only laid out (`--plan-only`, for a cluster's larger nodes).
+pub fn too_large_here(plan: &Plan, dir: &Path) -> Vec<Error> {
+    let available = crate::resources::available_memory();
+    (0..plan.points.len())
+        .filter_map(|i| {
+            let refused = crate::resources::check_fits(&estimate(plan, dir, i).ok()?, available).err()?;
+            Some(super::point_error(&plan.points[i].id, &plan.describe(&plan.points[i]), refused))
+        })
+        .collect()
 }
 
 /// The marker of a point's final outcome: `points/<id>.done` beside its folder.

@@ -349,6 +349,14 @@ values = [50, 1, 40]
     let outcomes = run_sweep(&plan, &dir.join("out"), 2);
     assert_eq!(outcomes[0], Outcome::Completed);
     assert!(matches!(&outcomes[1], Outcome::Failed(r) if r.contains("newton solver failed")), "{outcomes:?}");
+    // shown in sweep.csv's words
+    assert_eq!(outcomes[0].to_string(), "completed");
+    assert!(
+        outcomes[1].to_string().starts_with("failed: step ")
+            && outcomes[1].to_string().contains("newton solver failed"),
+        "{}",
+        outcomes[1]
+    );
     assert_eq!(outcomes[2], Outcome::Completed);
     let (_, rows) = collect::collect(&dir.join("out")).expect("collect");
     assert_eq!(rows.iter().map(|r| r.status.as_str()).collect::<Vec<_>>(), ["completed", "failed", "completed"]);
@@ -357,8 +365,8 @@ values = [50, 1, 40]
     assert!(csv.lines().nth(2).is_some_and(|l| l.contains(",failed,") && l.contains("newton solver failed")), "{csv}");
 }
 
-/// Every point is validated before anything runs: one bad point refuses the sweep, naming its
-/// axis values and the key; a sweep file's own mistakes name their key path.
+/// Every point is validated before anything runs: one bad point refuses the sweep, naming the
+/// key, the point and its axis values; a sweep file's own mistakes name their key path.
 #[test]
 fn a_bad_point_refuses_the_sweep_before_anything_runs() {
     let dir = tmp("sweep_refused");
@@ -373,7 +381,7 @@ fn a_bad_point_refuses_the_sweep_before_anything_runs() {
     );
     println!("{e}");
     assert!(
-        e.contains("point p001 (contact.penalty = -1)") && e.contains("contact.penalty: must be a finite number > 0"),
+        e.starts_with("contact.penalty: in sweep point p001 (contact.penalty = -1): must be a finite number > 0"),
         "{e}"
     );
     assert!(!dir.join("out").exists());
@@ -419,6 +427,55 @@ fn a_bad_point_refuses_the_sweep_before_anything_runs() {
     assert!(Override::parse("domain.cells[1=0").is_err(), "an unclosed index");
 }
 
+/// A bad point's error keeps the key path of what is wrong ([`dyncontact::Error::key`], the
+/// Python package's `SceneError.key`): an unknown key on an axis, a bad value on an axis and an
+/// unknown key in `[set]` are keyed by that dotted key, and the message names the point and its
+/// axis values — not the point's scene.toml (never written for a refused sweep) nor a line of it.
+#[test]
+fn a_bad_point_is_keyed_by_its_key_path() {
+    let dir = tmp("sweep_bad_key");
+    let cases = [
+        (
+            "unknown",
+            "[[axis]]\nkey = \"contact.penaltyy\"\nvalues = [1e-3]\n",
+            "contact.penaltyy",
+            "p000 (contact.penaltyy = 0.001)",
+            "unknown field `penaltyy`",
+        ),
+        (
+            "value",
+            "[[axis]]\nkey = \"contact.compliance\"\nvalues = [1.0, -1.0]\n",
+            "contact.compliance",
+            "p001 (contact.compliance = -1)",
+            "must be >= 0, got -1",
+        ),
+        (
+            "set",
+            "[[axis]]\nkey = \"time.step\"\nvalues = [1e-3]\n[set]\n\"contact.penaltyy\" = 1e-3\n",
+            "contact.penaltyy",
+            "p000 (time.step = 0.001)",
+            "unknown field `penaltyy`",
+        ),
+    ];
+    for (name, body, key, point, what) in cases {
+        let f = dir.join(format!("{name}.toml"));
+        std::fs::write(&f, format!("name = \"{name}\"\n{body}")).expect("write");
+        let e = Plan::from_file(&f, &[]).expect_err("refused");
+        let shown = e.to_string();
+        println!("{name}: {shown}");
+        assert_eq!(e.key(), Some(key), "{shown}");
+        assert!(shown.starts_with(&format!("{key}: in sweep point {point}: ")) && shown.contains(what), "{shown}");
+        assert!(!shown.contains("scene.toml") && !shown.contains("line "), "{shown}");
+    }
+    // a sweep refused from the command line writes nothing and exits 1
+    let out = dir.join("out");
+    let o = Command::new(BIN).arg("sweep").arg(dir.join("set.toml")).arg("--out").arg(&out).output().expect("spawn");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("contact.penaltyy: in sweep point p000"), "{stderr}");
+    assert!(!out.join("sweep.json").exists(), "a refused sweep wrote its plan");
+}
+
 /// A table in `[set]` (an unquoted dotted key is one in TOML) is merged into the scene's table:
 /// the base's other keys of that table stay.
 #[test]
@@ -434,7 +491,8 @@ fn a_table_in_set_is_merged_into_the_scene() {
 }
 
 /// When the axes change, a point whose scene was run before keeps its run: its folder moves to
-/// its new id and only the new point runs.
+/// its new id with its marker (`points/<id>.done`, Snakemake's output) and only the new point
+/// runs.
 #[test]
 fn points_moved_by_a_changed_axis_keep_their_runs() {
     let dir = tmp("sweep_moved");
@@ -448,6 +506,13 @@ fn points_moved_by_a_changed_axis_keep_their_runs() {
     assert!(run_sweep(&first, &out, 2).iter().all(|o| *o == Outcome::Completed));
     let history = std::fs::read(out.join("points/p001/history.csv")).expect("history");
     let second = write("[2e-3, 1e-3, 5e-4]");
+    // laid out only (as --plan-only): the moved runs keep their markers, so Snakemake runs only
+    // the new point
+    let done = second.write(&out, &dyncontact::sweep::snakemake::this_executable()).expect("the folder");
+    assert_eq!(done, vec![false, true, true]);
+    let markers: Vec<bool> =
+        ["p000", "p001", "p002"].iter().map(|id| out.join(format!("points/{id}.done")).exists()).collect();
+    assert_eq!(markers, vec![false, true, true], "the markers follow the moved points");
     let outcomes = run_sweep(&second, &out, 2);
     assert_eq!(outcomes, vec![Outcome::Completed, Outcome::Skipped, Outcome::Skipped]);
     assert_eq!(
@@ -455,6 +520,191 @@ fn points_moved_by_a_changed_axis_keep_their_runs() {
         history,
         "k = 5e-4 moved from p001 to p002"
     );
+}
+
+/// A small sweep on `time.step` (8×4 cells, to t = 0.02), its file written as `dir/<file>`.
+fn steps_sweep(dir: &Path, file: &str, values: &str, extra: &str) -> (PathBuf, Plan) {
+    let f = dir.join(file);
+    std::fs::write(&f, format!("name = \"k\"\n[[axis]]\nkey = \"time.step\"\nvalues = {values}\n[set]\n\"domain.cells\" = [8, 4]\n\"time.end\" = 0.02\n{extra}")).expect("write");
+    let plan = Plan::from_file(&f, &[]).expect("plan");
+    (f, plan)
+}
+
+/// A folder's files (relative paths, sorted) with their bytes, but a sweep's lock (`sweep.lock`,
+/// which every sweep of the folder takes).
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut found = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("read_dir").flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let rel = p.strip_prefix(dir).expect("below").display().to_string();
+                if rel != "sweep.lock" {
+                    found.push((rel, std::fs::read(&p).expect("read")));
+                }
+            }
+        }
+    }
+    found.sort();
+    found
+}
+
+/// Completed runs are never dropped: a sweep run again into its folder with fewer values, or
+/// another sweep into that folder, would drop or overwrite completed points whose scene it does
+/// not have, and is refused (exit 4) before anything is written, naming the folder, the points
+/// with their axis values and the way on (another --out, or remove them by hand); once they are
+/// removed by hand, the smaller sweep runs there, keeping the point it shares.
+#[test]
+fn completed_points_are_never_dropped() {
+    let dir = tmp("sweep_never_dropped");
+    let out = dir.join("out");
+    let (_, first) = steps_sweep(&dir, "first.toml", "[1e-3, 5e-4, 2.5e-4]", "");
+    assert!(run_sweep(&first, &out, 2).iter().all(|o| *o == Outcome::Completed));
+    let before = files(&out);
+    let launcher = dyncontact::sweep::snakemake::this_executable();
+    // fewer values: 5e-4 (p001) would be overwritten by 2.5e-4 moving there
+    let (fewer_file, fewer) = steps_sweep(&dir, "fewer.toml", "[1e-3, 2.5e-4]", "");
+    let e = fewer.write(&out, &launcher).expect_err("refused");
+    println!("{e}");
+    assert_eq!(e.exit_code(), 4, "{e}");
+    let shown = e.to_string();
+    assert!(shown.starts_with(&out.display().to_string()), "{shown}");
+    assert!(shown.contains("points/p001 (time.step = 0.0005)") && shown.contains("--out"), "{shown}");
+    assert!(!shown.contains("p000") && !shown.contains("p002"), "{shown}");
+    // fewer values at the end: the dropped p002 is refused as well
+    let (_, head) = steps_sweep(&dir, "head.toml", "[1e-3, 5e-4]", "");
+    let shown = head.write(&out, &launcher).expect_err("refused").to_string();
+    assert!(shown.contains("points/p002 (time.step = 0.00025)"), "{shown}");
+    // another sweep (another base: every scene differs) into this sweep's folder
+    let (_, other) = steps_sweep(&dir, "other.toml", "[1e-3, 5e-4, 2.5e-4]", "\"solver.relaxation\" = 0.5\n");
+    let shown = other.write(&out, &launcher).expect_err("refused").to_string();
+    assert!(shown.contains("3 completed points") && shown.contains("points/p000 (time.step = 0.001)"), "{shown}");
+    // the command line: exit 4, and the folder as it was (but the sweep's lock)
+    let o = Command::new(BIN)
+        .arg("sweep")
+        .arg(&fewer_file)
+        .args(["--jobs", "1", "--out"])
+        .arg(&out)
+        .output()
+        .expect("spawn");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(4), "{stderr}");
+    assert!(stderr.contains("would drop or overwrite it"), "{stderr}");
+    assert!(files(&out) == before, "a refused sweep changed the folder");
+    // removed by hand, the smaller sweep runs: p000 stays, 2.5e-4 moves to p001
+    let kept = std::fs::read(out.join("points/p002/history.csv")).expect("history");
+    std::fs::remove_dir_all(out.join("points/p001")).expect("remove");
+    std::fs::remove_file(out.join("points/p001.done")).expect("remove");
+    assert_eq!(run_sweep(&fewer, &out, 2), vec![Outcome::Skipped, Outcome::Skipped]);
+    assert_eq!(std::fs::read(out.join("points/p001/history.csv")).expect("moved"), kept);
+    assert!(!out.join("points/p002").exists() && !out.join("points/p002.done").exists());
+}
+
+/// A sweep writes only into a new or empty folder or a sweep's own (it has sweep.json): a folder
+/// with a user's file, or a `run`'s folder, is refused (exit 4) naming what it holds, and left
+/// as it was — no lock, no plan; `sweep collect` of it is refused alike.
+#[test]
+fn a_folder_that_is_not_a_sweeps_is_refused() {
+    let dir = tmp("sweep_foreign_folder");
+    let (f, _) = steps_sweep(&dir, "one.toml", "[1e-3]", "");
+    let notes = dir.join("notes");
+    std::fs::create_dir_all(&notes).expect("mkdir");
+    std::fs::write(notes.join("notes.txt"), "my notes").expect("write");
+    let run = dir.join("run");
+    let o = Command::new(BIN)
+        .args(["run", "--set", "time.end=0.01", "--set", "domain.cells=[8,4]", "--out"])
+        .arg(&run)
+        .output()
+        .expect("spawn");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for (folder, holds) in [(&notes, "notes.txt"), (&run, "history.csv")] {
+        let before = files(folder);
+        for args in [vec!["sweep", f.to_str().expect("path"), "--plan-only", "--out"], vec!["sweep", "collect"]] {
+            let o = Command::new(BIN).args(&args).arg(folder).output().expect("spawn");
+            let stderr = String::from_utf8_lossy(&o.stderr);
+            println!("{args:?}: {stderr}");
+            assert_eq!(o.status.code(), Some(4), "{stderr}");
+            assert!(stderr.contains("is not a sweep's folder") && stderr.contains(holds), "{stderr}");
+            assert!(files(folder) == before, "{args:?} changed {}", folder.display());
+            assert!(!folder.join("sweep.lock").exists(), "{args:?} left a lock in {}", folder.display());
+        }
+    }
+    // the run's folder is still one `run` accepts
+    let o = Command::new(BIN)
+        .args(["run", "--set", "time.end=0.01", "--set", "domain.cells=[8,4]", "--out"])
+        .arg(&run)
+        .output()
+        .expect("spawn");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // an empty folder is a sweep's to write
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).expect("mkdir");
+    let o = Command::new(BIN).arg("sweep").arg(&f).arg("--plan-only").arg("--out").arg(&empty).output().expect("spawn");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // and the library refuses the same folder
+    let (_, plan) = steps_sweep(&dir, "one.toml", "[1e-3]", "");
+    let e = plan.write(&notes, &[]).expect_err("refused");
+    assert_eq!(e.exit_code(), 4, "{e}");
+}
+
+/// A point whose files do not agree (its history.csv cut short) is run again by the next sweep,
+/// its marker removed when the sweep is laid out (so Snakemake runs it again too); the other
+/// points are skipped.
+#[test]
+fn a_corrupt_point_runs_again() {
+    let dir = tmp("sweep_corrupt_rerun");
+    let out = dir.join("out");
+    let (_, plan) = steps_sweep(&dir, "k.toml", "[1e-3, 5e-4, 2.5e-4]", "");
+    assert!(run_sweep(&plan, &out, 2).iter().all(|o| *o == Outcome::Completed));
+    let history = out.join("points/p001/history.csv");
+    let text = std::fs::read_to_string(&history).expect("history");
+    let cut: String = text.lines().take(text.lines().count() - 1).map(|l| format!("{l}\n")).collect();
+    std::fs::write(&history, cut).expect("truncate");
+    let (_, rows) = collect::collect(&out).expect("collect");
+    assert_eq!(rows[1].status.as_str(), "corrupt");
+    let done = plan.write(&out, &dyncontact::sweep::snakemake::this_executable()).expect("the folder");
+    assert_eq!(done, vec![true, false, true]);
+    assert!(!out.join("points/p001.done").exists() && out.join("points/p000.done").exists());
+    assert_eq!(run_sweep(&plan, &out, 2), vec![Outcome::Skipped, Outcome::Completed, Outcome::Skipped]);
+    let (_, rows) = collect::collect(&out).expect("collect");
+    assert!(rows.iter().all(|r| r.status.is_completed()), "{rows:?}");
+    assert_eq!(std::fs::read_to_string(&history).expect("history"), text, "the rerun gives the same history");
+    assert!(out.join("points/p001.done").exists());
+}
+
+/// A point too large for this machine's memory (2.6 TiB) passes the plan (`--plan-only`, for a
+/// cluster's larger nodes; listed by `too_large_here`) but refuses a sweep run here before any
+/// point runs, naming the key, the point and the estimate (exit 1).
+#[test]
+fn a_point_too_large_for_this_machine_refuses_the_run_before_anything_runs() {
+    if dyncontact::resources::available_memory().is_none() {
+        println!("skipped: this system does not say how much memory is available");
+        return;
+    }
+    let dir = tmp("sweep_too_large");
+    let f = dir.join("big.toml");
+    std::fs::write(&f, "name = \"big\"\n[[axis]]\nkey = \"domain.cells\"\nvalues = [[8, 4], [20000, 20000]]\n[set]\n\"time.end\" = 0.02\n").expect("write");
+    let plan = Plan::from_file(&f, &[]).expect("a plan: the point may be meant for a larger node");
+    let out = dir.join("out");
+    let large = dyncontact::sweep::runner::too_large_here(&plan, &out);
+    assert_eq!(large.len(), 1, "{large:?}");
+    assert_eq!(large[0].key(), Some("domain"));
+    assert!(large[0].to_string().contains("in sweep point p001 (domain.cells = [20000, 20000])"), "{}", large[0]);
+    let o = Command::new(BIN).arg("sweep").arg(&f).args(["--plan-only", "--out"]).arg(&out).output().expect("spawn");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = Command::new(BIN).arg("sweep").arg(&f).args(["--jobs", "1", "--out"]).arg(&out).output().expect("spawn");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("domain: in sweep point p001") && stderr.contains("TiB") && stderr.contains("No point ran"),
+        "{stderr}"
+    );
+    assert!(!out.join("points/p000/summary.json").exists(), "a point ran");
+    assert!(!out.join("points/p001.done").exists() && !out.join("points/p001/summary.json").exists());
 }
 
 /// `dyncontact sweep` from the command line: `--plan-only` writes the folder (a scene per point,
