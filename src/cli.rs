@@ -268,7 +268,7 @@ pub fn main(args: impl IntoIterator<Item = OsString>, launcher: Option<&[String]
         Command::Sweep { action: Some(SweepAction::Collect { dir }), .. } => cmd_collect(dir),
         Command::Sweep { action: Some(SweepAction::Point { point }), .. } => {
             faer::set_global_parallelism(faer::Par::Seq);
-            crate::sweep::runner::run_one(point, Some(Arc::clone(stop))).map(|o| say!("{}: {o:?}", point.display()))
+            crate::sweep::runner::run_one(point, Some(Arc::clone(stop))).map(|o| say!("{}: {o}", point.display()))
         }
         Command::Sweep { action: None, sweep: Some(file), out, jobs, plan_only, set, oversubscribe } => {
             cmd_sweep(file, out.as_deref(), *jobs, *plan_only, *oversubscribe, set, stop, launcher)
@@ -445,13 +445,17 @@ fn cmd_sweep(
     let _lock = crate::sweep::lock(&dir)?;
     let done = plan.write(&dir, launcher)?;
     say!(
-        "sweep {}: {} points ({} already completed), folder {}",
+        "sweep {}: {} ({} already completed), folder {}",
         plan.name,
-        plan.points.len(),
+        points(plan.points.len()),
         done.iter().filter(|d| **d).count(),
         dir.display()
     );
     if plan_only {
+        // points meant for larger machines (a cluster's nodes): laid out, but said
+        for e in runner::too_large_here(&plan, &dir) {
+            esay!("warning: {e}; it runs only where that much memory is free (config.yaml gives its mem_mb)");
+        }
         say!(
             "plan only: every point validated; run them with `dyncontact sweep {}` or with Snakemake in {}",
             file.display(),
@@ -576,11 +580,16 @@ fn refuse_corrupt(dir: &Path, rows: &[crate::sweep::collect::Row]) -> Result<(),
     Err(Error::folder(
         dir,
         format!(
-            "{} points are corrupt (sweep.csv says why; no figure of theirs is reported): {}",
-            corrupt.len(),
+            "{} corrupt (sweep.csv says why; no figure of theirs is reported): {}",
+            if corrupt.len() == 1 { "1 point is".to_string() } else { format!("{} points are", corrupt.len()) },
             corrupt.join("; ")
         ),
     ))
+}
+
+/// "1 point", "2 points".
+fn points(n: usize) -> String {
+    format!("{n} point{}", if n == 1 { "" } else { "s" })
 }
 
 /// The counts of a collected sweep by status.
@@ -590,8 +599,8 @@ fn report_rows(rows: &[crate::sweep::collect::Row]) {
     }
     let count = |s: PointStatus| rows.iter().filter(|r| r.status == s).count();
     say!(
-        "{} points: {} completed, {} failed, {} interrupted, {} running, {} missing, {} corrupt",
-        rows.len(),
+        "{}: {} completed, {} failed, {} interrupted, {} running, {} missing, {} corrupt",
+        points(rows.len()),
         count(PointStatus::Run(RunStatus::Completed)),
         count(PointStatus::Run(RunStatus::Failed)),
         count(PointStatus::Run(RunStatus::Interrupted)),

@@ -43,7 +43,7 @@ enum Study {
     /// Stability map: sweeps of k, ε, the friction decay, the impact speed and θ per scheme,
     /// each run classified (converged, fixed point failed, Newton failed, energy grew, error).
     Stability {
-        /// output folder (default: target/stability); its sweeps run in OUT/sweeps/
+        /// output folder (default: target/stability); its sweeps run in OUT/sweeps/ (OUT/sweeps-quick/ with --quick)
         #[arg(long)]
         out: Option<PathBuf>,
         /// a small sweep (smoke test)

@@ -657,15 +657,16 @@ pub fn plans(quick: bool) -> Result<Vec<(SweepFile, Base, Plan)>> {
     Ok(out)
 }
 
-/// Run the map's sweeps under `out/sweeps/` (in parallel, `opts.jobs` at once; points completed
-/// earlier with the same scene are skipped) and read every point back as a [`RunResult`], with
+/// Run the map's sweeps under `out/sweeps/` (`out/sweeps-quick/` for the quick map: its scenes
+/// are others, and a sweep folder never drops completed points) (in parallel, `opts.jobs` at
+/// once; points completed earlier with the same scene are skipped) and read every point back as a [`RunResult`], with
 /// the refused values added: in the order of [`cases`].
 pub fn map_runs(out: &Path, opts: &StabilityOptions) -> Result<Vec<RunResult>> {
     let jobs =
         if opts.jobs == 0 { std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) } else { opts.jobs };
     let mut found: Vec<RunResult> = Vec::new();
     for (sweep, base, plan) in plans(opts.quick)? {
-        let dir = out.join("sweeps").join(&plan.name);
+        let dir = out.join(if opts.quick { "sweeps-quick" } else { "sweeps" }).join(&plan.name);
         let done = plan.write(&dir, &dyncontact::sweep::snakemake::this_executable())?;
         runner::run_points(&plan, &dir, &done, &RunnerOptions { jobs, progress: false, interrupt: None })?;
         for p in &plan.points {
