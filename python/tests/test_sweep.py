@@ -50,7 +50,7 @@ def test_sweep_dict_and_errors(tmp_path):
     bad = dict(spec, axis=[{"key": "contact.penaltyy", "values": [1e-3]}])
     with pytest.raises(dc.SceneError) as e:
         dc.sweep(bad, out=tmp_path / "bad", jobs=1)
-    assert "penaltyy" in str(e.value)
+    assert "penaltyy" in str(e.value) and e.value.key == "contact.penaltyy"
 
 
 def test_a_sweep_written_from_python_runs_under_snakemake(tmp_path):
