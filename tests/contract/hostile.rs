@@ -539,6 +539,17 @@ fn an_interrupted_point_has_no_marker() {
 
 // ---- 7. a full disk -------------------------------------------------------------------------
 
+/// Mount a tmpfs with `options` (its size) at `mnt`, created first; false where that is not
+/// allowed (not root).
+fn mount_tmpfs(mnt: &Path, options: &str) -> bool {
+    std::fs::create_dir_all(mnt).expect("mnt");
+    Command::new("mount")
+        .args(["-t", "tmpfs", "-o", options, "tmpfs"])
+        .arg(mnt)
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
 /// (issue 22, defect 7) A disk that fills during a run (a 64 MiB tmpfs filled by another file
 /// once the run is under way) ends it with exit 3 (an output could not be written, not "bad
 /// input"): history.csv holds whole rows only, no temporary file is left, and summary.json says
@@ -548,13 +559,7 @@ fn an_interrupted_point_has_no_marker() {
 fn a_full_disk_fails_cleanly() {
     let dir = tmp("full_disk");
     let mnt = dir.join("mnt");
-    std::fs::create_dir_all(&mnt).expect("mnt");
-    let mounted = Command::new("mount")
-        .args(["-t", "tmpfs", "-o", "size=64m", "tmpfs"])
-        .arg(&mnt)
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !mounted {
+    if !mount_tmpfs(&mnt, "size=64m") {
         println!("skipped: mounting a tmpfs needs root");
         return;
     }
@@ -611,14 +616,7 @@ fn a_disk_full_of_charts_is_not_completed() {
     }
     assert!(charts >= 4, "the charts take {charts} pages");
     let mnt = dir.join("mnt");
-    std::fs::create_dir_all(&mnt).expect("mnt");
-    let size = format!("size={}k", 4 * (rest + 4 + charts / 2));
-    let mounted = Command::new("mount")
-        .args(["-t", "tmpfs", "-o", &size, "tmpfs"])
-        .arg(&mnt)
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !mounted {
+    if !mount_tmpfs(&mnt, &format!("size={}k", 4 * (rest + 4 + charts / 2))) {
         println!("skipped: mounting a tmpfs needs root");
         return;
     }
