@@ -410,6 +410,22 @@ fn build(raw: Raw, file: &str) -> Result<PlaneMesh> {
     if raw.triangles.is_empty() {
         return Err(Error::mesh(file, "contains no triangles (element type 2); mesh the surface with triangles"));
     }
+    // the solver reads x and y: a surface mesh must lie in one plane z = const
+    if let Some(&first) = raw.node_order.first() {
+        let z0 = raw.nodes[&first][2];
+        let extent = raw.node_order.iter().fold(0.0f64, |m, t| m.max(raw.nodes[t][0].abs()).max(raw.nodes[t][1].abs()));
+        if let Some(tag) = raw.node_order.iter().find(|t| (raw.nodes[*t][2] - z0).abs() > 1e-12 * extent.max(z0.abs()))
+        {
+            return Err(Error::mesh(
+                file,
+                format!(
+                    "node {tag} has z = {} while node {first} has z = {z0}: a mesh of triangles is read in its plane \
+                     z = const (x, y only); mesh the surface flat in the xy-plane",
+                    raw.nodes[tag][2]
+                ),
+            ));
+        }
+    }
     // number nodes in file order; check that elements refer to known nodes
     let numbering = Numbering::new(&raw, file);
     let nodes = raw.node_order.iter().map(|tag| [raw.nodes[tag][0], raw.nodes[tag][1]]).collect();

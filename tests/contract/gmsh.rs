@@ -339,6 +339,11 @@ fn malformed_meshes_are_rejected_with_clear_messages() {
             "triangle 4 is inverted",
         ),
         ("duplicate node coordinates", with_node("6 1 1 0"), "nodes 3 and 6 are duplicates"),
+        (
+            "a triangle mesh off its plane",
+            msh22(&[&UNIT_NODES[..4], &["5 0.5 0.5 0.5"]].concat(), &UNIT_TRIANGLES),
+            "node 5 has z = 0.5 while node 1 has z = 0",
+        ),
         ("near-duplicate node", with_node("6 0.99999999999999 1 0"), "nodes 3 and 6 are duplicates"),
         ("duplicate node tag", with_node("5 0.25 0.25 0"), "node tag 5 appears twice"),
         ("unreferenced node", with_node("6 2 2 0"), "node 6 is not a vertex of any triangle"),
