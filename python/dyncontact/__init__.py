@@ -367,7 +367,10 @@ def sweep(
     if plan_only or not Path(path).is_file():
         return []
     with open(path, newline="") as f:
-        return [{k: _value(v) for k, v in row.items()} for row in csv.DictReader(f)]
+        rows = list(csv.DictReader(f))
+    # a column of labels stays text when any of its labels is not a number ("exact", "1e-2")
+    text = {k for row in rows for k, v in row.items() if v != "" and isinstance(_value(v), str)}
+    return [{k: (v if k in text else _value(v)) for k, v in row.items()} for row in rows]
 
 
 def refine(

@@ -92,3 +92,22 @@ def test_a_sweep_written_from_python_runs_under_snakemake(tmp_path):
     for got, want in zip(by_snakemake, in_process):
         assert got["status"] == "completed"
         assert {k: v for k, v in got.items() if k not in TIMING} == {k: v for k, v in want.items() if k not in TIMING}
+
+
+def test_a_column_of_labels_stays_text(tmp_path):
+    """An axis labelled "exact", "1e-2" keeps its labels as text in every row (not 0.01 beside
+    "exact"); numeric columns stay floats."""
+    spec = {
+        "name": "labels",
+        "base": "default",
+        "axis": [{
+            "name": "eps",
+            "sets": [{"contact.enforcement": "exact"},
+                     {"contact.enforcement": "penalty", "contact.penalty": 1e-2}],
+            "labels": ["exact", "1e-2"],
+        }],
+        "set": {"time.end": 0.01, "domain.cells": [8, 4]},
+    }
+    rows = dc.sweep(spec, out=tmp_path / "sw", jobs=1)
+    assert [r["eps"] for r in rows] == ["exact", "1e-2"]
+    assert all(isinstance(r["max_penetration"], float) for r in rows)

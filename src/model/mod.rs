@@ -76,7 +76,14 @@ impl Domain {
         let Some(path) = self.mesh_path(scene_dir) else { return Ok(None) };
         let shown = path.display().to_string();
         if !path.exists() {
-            return Err(crate::error::Error::scene("domain.file", format!("mesh file {shown:?} does not exist")));
+            let relative = match self {
+                Domain::Gmsh { file } if std::path::Path::new(file).is_relative() => format!(
+                    " ({file:?} is read relative to the scene's folder, {:?})",
+                    if scene_dir.as_os_str().is_empty() { ".".to_string() } else { scene_dir.display().to_string() }
+                ),
+                _ => String::new(),
+            };
+            return Err(crate::error::Error::scene("domain.file", format!("mesh file {shown:?} does not exist{relative}")));
         }
         if !path.is_file() {
             return Err(crate::error::Error::scene(
