@@ -353,7 +353,8 @@ def sweep(
 
     Returns:
         list of dict: one per point, sweep.csv's columns (``point``, the axes, ``status``,
-        ``wall_time_s``, the figures); numbers as float, empty cells as None.
+        ``wall_time_s``, the figures); numbers as float, empty cells as None, and a column of
+        axis labels that are not all numbers (``"exact"``, ``"1e-2"``) as text.
 
     Raises:
         SceneError: the sweep or a point's scene is refused.
