@@ -83,7 +83,10 @@ impl Domain {
                 ),
                 _ => String::new(),
             };
-            return Err(crate::error::Error::scene("domain.file", format!("mesh file {shown:?} does not exist{relative}")));
+            return Err(crate::error::Error::scene(
+                "domain.file",
+                format!("mesh file {shown:?} does not exist{relative}"),
+            ));
         }
         if !path.is_file() {
             return Err(crate::error::Error::scene(
