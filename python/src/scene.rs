@@ -13,6 +13,9 @@ use pyo3::types::PyDict;
 use crate::errors::py_result;
 use crate::values;
 
+/// What a pickled scene holds: its source text, label, folder and overrides.
+type SceneState = (String, String, PathBuf, Vec<String>);
+
 /// The label of the embedded default scene in messages and summary.json (the CLI's).
 pub const EMBEDDED: &str = "<embedded academic scene>";
 
@@ -73,6 +76,19 @@ impl PyScene {
 
 #[pymethods]
 impl PyScene {
+    /// Pickling (multiprocessing, concurrent.futures): a scene is its source text, label,
+    /// folder and overrides, and is made again from them (validated again).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, SceneState)> {
+        let restore = py.get_type::<PyScene>().getattr("_restore")?;
+        Ok((restore, (self.text.clone(), self.file.clone(), self.dir.clone(), self.overrides.clone())))
+    }
+
+    /// The inverse of `__reduce__`.
+    #[staticmethod]
+    fn _restore(py: Python<'_>, text: String, file: String, dir: PathBuf, overrides: Vec<String>) -> PyResult<PyScene> {
+        py_result(py, PyScene::load(text, file, dir, overrides))
+    }
+
     /// The embedded default scene (`academic`): what `dyncontact run` runs without a scene.
     #[staticmethod]
     fn default(py: Python<'_>) -> PyResult<PyScene> {

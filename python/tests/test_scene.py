@@ -118,3 +118,13 @@ def test_numpy_values_keep_their_kind_and_floats_their_text():
     assert s.overrides[-1] == "output.trajectory=true"
     s = dc.Scene.default().with_set({"domain.size": [np.float64(2.0), 1e-300]})
     assert s.overrides[-1] == "domain.size=[2.0, 1e-300]"
+
+
+def test_a_scene_pickles():
+    """A scene crosses process boundaries (multiprocessing): pickled and read back it is the
+    same scene, overrides and all."""
+    import pickle
+
+    s = dc.Scene.default().with_set({"time.end": 0.02, "domain.cells": [8, 4]})
+    back = pickle.loads(pickle.dumps(s))
+    assert back.to_toml() == s.to_toml() and back.overrides == s.overrides and back.source == s.source
