@@ -185,3 +185,23 @@ impl Regime {
 pub fn in_plane(u: &[[f64; 3]]) -> Vec<[f64; 2]> {
     u.iter().map(|u| [u[0], u[1]]).collect()
 }
+
+/// Every file below `dir` (its path relative to `dir`) with its bytes, sorted, but the files
+/// named `skip` (a folder's lock, which every process that writes the folder takes).
+pub fn files_below(dir: &std::path::Path, skip: &str) -> Vec<(std::path::PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("read_dir").flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.file_name().is_some_and(|n| n != skip) {
+                let rel = p.strip_prefix(dir).expect("below").to_path_buf();
+                out.push((rel, std::fs::read(&p).expect("read")));
+            }
+        }
+    }
+    out.sort();
+    out
+}

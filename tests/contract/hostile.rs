@@ -48,20 +48,7 @@ fn summary(out: &Path) -> serde_json::Value {
 
 /// Every file below `dir` with its bytes (for "nothing changed").
 fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).expect("read_dir").flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                stack.push(p);
-            } else if p.file_name().is_some_and(|n| n != "run.lock") {
-                out.push((p.clone(), std::fs::read(&p).expect("read")));
-            }
-        }
-    }
-    out.sort();
-    out
+    crate::common::files_below(dir, "run.lock").into_iter().map(|(p, b)| (dir.join(p), b)).collect()
 }
 
 /// The rows of history.csv as their step numbers; panics on a row that is not whole.

@@ -533,23 +533,7 @@ fn steps_sweep(dir: &Path, file: &str, values: &str, extra: &str) -> (PathBuf, P
 /// A folder's files (relative paths, sorted) with their bytes, but a sweep's lock (`sweep.lock`,
 /// which every sweep of the folder takes).
 fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut found = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).expect("read_dir").flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).expect("below").display().to_string();
-                if rel != "sweep.lock" {
-                    found.push((rel, std::fs::read(&p).expect("read")));
-                }
-            }
-        }
-    }
-    found.sort();
-    found
+    crate::common::files_below(dir, "sweep.lock").into_iter().map(|(p, b)| (p.display().to_string(), b)).collect()
 }
 
 /// Completed runs are never dropped: a sweep run again into its folder with fewer values, or
