@@ -96,12 +96,8 @@ pub fn run_in_memory(
             Err(e) => break Err(e),
         }
     };
-    let counts = sim.delassus_factors.all_counts();
     let details = summary.details();
-    (details.contact_factorizations, details.contact_factor_reuses) = (counts.factorizations, counts.reuses);
-    (details.contact_pcg_solves, details.contact_pcg_iterations) = (counts.pcg_solves, counts.pcg_iterations);
-    (details.contact_velocity_solves, details.contact_velocity_iterations) =
-        (counts.velocity_solves, counts.velocity_iterations);
+    details.set_contact_counts(sim.delassus_factors.all_counts());
     details.wall_time_s = start.elapsed().as_secs_f64();
     details.timing.total_s = details.wall_time_s;
     details.peak_memory_mb = crate::resources::peak_memory().map(|b| b / 1e6);
@@ -293,10 +289,7 @@ fn start_resumed(
     sim.delassus_factors.continue_counts(cp.counters.contact);
     let details = summary.details();
     restore_counters(details, &cp.counters);
-    let c = cp.counters.contact;
-    (details.contact_factorizations, details.contact_factor_reuses) = (c.factorizations, c.reuses);
-    (details.contact_pcg_solves, details.contact_pcg_iterations) = (c.pcg_solves, c.pcg_iterations);
-    (details.contact_velocity_solves, details.contact_velocity_iterations) = (c.velocity_solves, c.velocity_iterations);
+    details.set_contact_counts(cp.counters.contact);
     details.final_time = problem.time(cp.step);
     *first_cap = cp.counters.first_cap;
     details.warnings.push(format!("resumed from the checkpoint of step {}", cp.step));
@@ -540,12 +533,7 @@ fn steps_loop(
     while let Some(rec) = steps.next() {
         let rec = rec.map_err(Stop::Failed)?;
         tally(summary, first_cap, &rec);
-        let counts = steps.simulation().delassus_factors.all_counts();
-        let details = summary.details();
-        (details.contact_factorizations, details.contact_factor_reuses) = (counts.factorizations, counts.reuses);
-        (details.contact_pcg_solves, details.contact_pcg_iterations) = (counts.pcg_solves, counts.pcg_iterations);
-        (details.contact_velocity_solves, details.contact_velocity_iterations) =
-            (counts.velocity_solves, counts.velocity_iterations);
+        summary.details().set_contact_counts(steps.simulation().delassus_factors.all_counts());
         let state = &steps.simulation().state;
         let t_out = Instant::now();
         let last = state.n == problem.steps;

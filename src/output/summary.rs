@@ -445,3 +445,12 @@ pub struct RunDetails {
     pub energy_guard_exceeded_steps: usize,
     pub warnings: Vec<String>,
 }
+
+impl RunDetails {
+    /// The contact solve's counts so far (a resumed run's include the checkpoint's).
+    pub fn set_contact_counts(&mut self, c: crate::step::delassus::FactorCounts) {
+        (self.contact_factorizations, self.contact_factor_reuses) = (c.factorizations, c.reuses);
+        (self.contact_pcg_solves, self.contact_pcg_iterations) = (c.pcg_solves, c.pcg_iterations);
+        (self.contact_velocity_solves, self.contact_velocity_iterations) = (c.velocity_solves, c.velocity_iterations);
+    }
+}
