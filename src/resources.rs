@@ -415,6 +415,23 @@ pub fn peak_memory() -> Option<f64> {
     Some(kb * 1024.0)
 }
 
+/// Start [`peak_memory`] again from the memory resident now, for a bench that measures several
+/// runs in one process: the allocator's free heap is handed back first (`malloc_trim`), then
+/// VmHWM is reset to the current VmRSS (`5` into /proc/self/clear_refs, Linux ≥ 4.0). False
+/// where either is not available (the peak then stays the process's).
+pub fn reset_peak_memory() -> bool {
+    #[cfg(target_os = "linux")]
+    {
+        // SAFETY: malloc_trim only returns free memory of glibc's heap to the system.
+        unsafe { libc::malloc_trim(0) };
+        std::fs::write("/proc/self/clear_refs", "5").is_ok()
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        false
+    }
+}
+
 /// Refuse a run whose estimate exceeds the memory available, naming both and what to change.
 pub fn check_fits(e: &Estimate, available: Option<f64>) -> Result<()> {
     match available {

@@ -6,7 +6,8 @@
 //! data: with the near-field preconditioner (the Cholesky factor of W⁻¹'s near field, today's
 //! form) and with node blocks (the form before it). Per step: the free solve and the contact
 //! solve, min and median over the steps; per run: the setup split (assembly, factorization of
-//! A_k, W and W⁻¹) and the process's peak memory.
+//! A_k, W and W⁻¹), the run's peak memory (the process's peak started again before each run:
+//! setup and steps, not the route-before timing beside it) and `check`'s estimate of it.
 //!
 //! The shaking window (thick_shaking.csv): each box pressed until the shaking starts (t = 0.2 s,
 //! under F.1 in the form the run picks itself), then the same state run `steps` steps further
@@ -78,8 +79,11 @@ pub struct ThickRow {
     pub near_density: f64,
     /// the values the hierarchical form stores against m² (NaN in the dense forms)
     pub h_share: f64,
-    /// the process's peak resident memory after the run, MB
+    /// the run's peak resident memory (setup and steps), MB: the process's peak started again
+    /// before it, so no earlier row and not the route-before timing count
     pub peak_mb: f64,
+    /// `check`'s estimate of that peak (`Estimate::total`), MB
+    pub estimate_mb: f64,
     /// the entries of A_k's factor, and how its unknowns are ordered
     pub factor_entries: usize,
     pub fill_order: &'static str,
@@ -110,6 +114,8 @@ pub const FORMS: [&str; 3] = ["hierarchical", "near field", "node blocks"];
 
 /// One run in `form` (one of FORMS).
 fn measure(p: &Problem, cells: [i64; 3], form: &'static str) -> Result<ThickRow> {
+    let estimate_mb = dyncontact::resources::estimate(&p.model, Path::new("."))?.total() / 1e6;
+    dyncontact::resources::reset_peak_memory();
     let clock = Instant::now();
     let mut sim = Simulation::new(p)?;
     let _setup = clock.elapsed();
@@ -132,6 +138,14 @@ fn measure(p: &Problem, cells: [i64; 3], form: &'static str) -> Result<ThickRow>
         return Err(Error::Study(format!("thick: {cells:?} does not run in velocity form")));
     }
     let t = sim.setup_timing;
+    let (mut free, mut contact, mut newton) = (Vec::new(), Vec::new(), 0);
+    for rec in sim.steps() {
+        let rec = rec?;
+        free.push(rec.timing.free_solve);
+        contact.push(rec.timing.contact_solve);
+        newton += rec.report.inner_iterations;
+    }
+    let peak_mb = dyncontact::resources::peak_memory().unwrap_or(f64::NAN) / 1e6;
     // the route before: W by the solves, then its Cholesky inverse (timed, then dropped)
     let delassus_solves = match (form == FORMS[0], p.contact.as_ref()) {
         (true, Some(c)) => {
@@ -150,13 +164,6 @@ fn measure(p: &Problem, cells: [i64; 3], form: &'static str) -> Result<ThickRow>
         }
         _ => f64::NAN,
     };
-    let (mut free, mut contact, mut newton) = (Vec::new(), Vec::new(), 0);
-    for rec in sim.steps() {
-        let rec = rec?;
-        free.push(rec.timing.free_solve);
-        contact.push(rec.timing.contact_solve);
-        newton += rec.report.inner_iterations;
-    }
     let counts = sim.delassus_factors.all_counts();
     Ok(ThickRow {
         cells,
@@ -175,7 +182,8 @@ fn measure(p: &Problem, cells: [i64; 3], form: &'static str) -> Result<ThickRow>
         newton_iterations: newton,
         cg_iterations: counts.velocity_iterations,
         near_density,
-        peak_mb: dyncontact::resources::peak_memory().unwrap_or(f64::NAN) / 1e6,
+        peak_mb,
+        estimate_mb,
         factor_entries: sim.stepper.factor().factor_len(),
         fill_order: sim.stepper.factor().fill_order().name(),
     })
@@ -198,7 +206,7 @@ pub fn run(plan: &ThickPlan, progress: &dyn Fn(&str)) -> Result<Vec<ThickRow>> {
 pub fn csv(rows: &[ThickRow]) -> String {
     csv_table(
         "cells,unknowns,contact_nodes,form,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
-contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_by_solves_s,newton_iterations,cg_iterations,near_density,h_share,peak_mb,factor_entries,fill_order",
+contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_by_solves_s,newton_iterations,cg_iterations,near_density,h_share,peak_mb,estimate_mb,factor_entries,fill_order",
         rows.iter().map(|r| {
             vec![
                 format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
@@ -221,6 +229,7 @@ contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_
                 format!("{:.4}", r.near_density),
                 if r.h_share.is_nan() { String::new() } else { format!("{:.4}", r.h_share) },
                 format!("{:.0}", r.peak_mb),
+                format!("{:.0}", r.estimate_mb),
                 r.factor_entries.to_string(),
                 r.fill_order.to_string(),
             ]
@@ -264,7 +273,7 @@ pub fn report(rows: &[ThickRow]) -> String {
     let mut s = String::from("thick 3-D boxes (academic3d refined, velocity form): per step min / median\n");
     let _ = writeln!(
         s,
-        "{:>10} {:>8} {:>6} {:<13} {:>17} {:>19} {:>8} {:>10} {:>17} {:>8} {:>8} {:>7} {:>9}",
+        "{:>10} {:>8} {:>6} {:<13} {:>17} {:>19} {:>8} {:>10} {:>17} {:>8} {:>8} {:>15} {:>9}",
         "cells",
         "unknowns",
         "n_c",
@@ -276,13 +285,13 @@ pub fn report(rows: &[ThickRow]) -> String {
         "W route (solves)",
         "Newton",
         "CG",
-        "peakMB",
+        "peak (est.) MB",
         "L[M]"
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "{:>10} {:>8} {:>6} {:<13} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>4.1}+{:<5.1} {:>7} ({:>7.1}) {:>8} {:>8} {:>7.0} {:>6.1} {}",
+            "{:>10} {:>8} {:>6} {:<13} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>4.1}+{:<5.1} {:>7} ({:>7.1}) {:>8} {:>8} {:>7.0} ({:>5.0}) {:>6.1} {}",
             format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
             r.unknowns,
             r.contact_nodes,
@@ -299,6 +308,7 @@ pub fn report(rows: &[ThickRow]) -> String {
             r.newton_iterations,
             r.cg_iterations,
             r.peak_mb,
+            r.estimate_mb,
             r.factor_entries as f64 / 1e6,
             if r.fill_order == "nested dissection" { "ND" } else { "AMD" }
         );

@@ -70,6 +70,9 @@ fn quick_bench_writes_its_files() {
             other => panic!("form {other}"),
         }
         assert!(number(r, "cg_iterations") > 0.0 && number(r, "contact_median_s") > 0.0, "{r:?}");
+        // the run's peak and `check`'s estimate of it, side by side (not compared here: other
+        // tests share this process's memory)
+        assert!(number(r, "peak_mb") > 0.0 && number(r, "estimate_mb") > 0.0, "{r:?}");
     }
     assert!(dir.join("thick.svg").is_file());
 
