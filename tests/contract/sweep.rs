@@ -490,6 +490,16 @@ fn a_table_in_set_is_merged_into_the_scene() {
     assert!(plan.points[0].scene_text.contains("inner = \"newton\""), "{}", plan.points[0].scene_text);
 }
 
+/// A fresh folder `name` with the three-step sweep over k of [`steps_sweep`] run to completion
+/// into its `out/`: the folder, `out` and the plan.
+fn completed_steps_sweep(name: &str) -> (PathBuf, PathBuf, Plan) {
+    let dir = tmp(name);
+    let out = dir.join("out");
+    let (_, plan) = steps_sweep(&dir, "k.toml", "[1e-3, 5e-4, 2.5e-4]", "");
+    assert!(run_sweep(&plan, &out, 2).iter().all(|o| *o == Outcome::Completed));
+    (dir, out, plan)
+}
+
 /// When the axes change, a point whose scene was run before keeps its run: its folder moves to
 /// its new id with its marker (`points/<id>.done`, Snakemake's output) and only the new point
 /// runs.
@@ -543,10 +553,7 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
 /// removed by hand, the smaller sweep runs there, keeping the point it shares.
 #[test]
 fn completed_points_are_never_dropped() {
-    let dir = tmp("sweep_never_dropped");
-    let out = dir.join("out");
-    let (_, first) = steps_sweep(&dir, "first.toml", "[1e-3, 5e-4, 2.5e-4]", "");
-    assert!(run_sweep(&first, &out, 2).iter().all(|o| *o == Outcome::Completed));
+    let (dir, out, _) = completed_steps_sweep("sweep_never_dropped");
     let before = files(&out);
     let launcher = dyncontact::sweep::snakemake::this_executable();
     // fewer values: 5e-4 (p001) would be overwritten by 2.5e-4 moving there
@@ -639,10 +646,7 @@ fn a_folder_that_is_not_a_sweeps_is_refused() {
 /// points are skipped.
 #[test]
 fn a_corrupt_point_runs_again() {
-    let dir = tmp("sweep_corrupt_rerun");
-    let out = dir.join("out");
-    let (_, plan) = steps_sweep(&dir, "k.toml", "[1e-3, 5e-4, 2.5e-4]", "");
-    assert!(run_sweep(&plan, &out, 2).iter().all(|o| *o == Outcome::Completed));
+    let (_, out, plan) = completed_steps_sweep("sweep_corrupt_rerun");
     let history = out.join("points/p001/history.csv");
     let text = std::fs::read_to_string(&history).expect("history");
     let cut: String = text.lines().take(text.lines().count() - 1).map(|l| format!("{l}\n")).collect();
