@@ -4,10 +4,18 @@
 /// A real number as CSV text: the shortest form that reads back to the same f64 (Rust's
 /// shortest round-trip digits), plain for 1e-5 ≤ |x| < 1e16 and with an exponent outside, so a
 /// value like 4.7e-39 is 9 characters instead of 44 zeros (the rule of Python's `repr`).
-/// Every CSV reader (Python's float, numpy, pandas, Rust's parse) reads both forms.
+/// Every CSV reader (Python's float, numpy, pandas, Rust's parse) reads both forms. A zero of
+/// either sign is `0`: a force or slip that is exactly zero carries no direction, and `-0` in a
+/// table reads as a sign that is not there.
 pub fn real(x: f64) -> String {
     let a = x.abs();
-    if x == 0.0 || !x.is_finite() || (1e-5..1e16).contains(&a) { format!("{x}") } else { format!("{x:e}") }
+    if x == 0.0 {
+        "0".into()
+    } else if !x.is_finite() || (1e-5..1e16).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// A CSV field: one line, quoted (RFC 4180) when it holds a comma or a quote.
