@@ -17,7 +17,7 @@ use crate::problem::Problem;
 use crate::run::{RunOptions, run};
 use crate::scene::Scene;
 use crate::sweep::collect::PointStatus;
-use crate::{Error, resources, study};
+use crate::{Error, defaults, resources, study};
 use clap::{Parser, Subcommand};
 use std::ffi::OsString;
 
@@ -625,10 +625,17 @@ fn cmd_check(scene: &Path, set: &[String]) -> Result<(), Error> {
         return Ok(());
     }
     let problem = Problem::new(model, &dir)?;
+    let scan = problem.check_load_times(defaults::CHECK_LOAD_EVALUATIONS)?;
     let info = ModelInfo::of(&problem);
     say!("scene {} is valid", problem.model.name);
     for l in info.lines().into_iter().chain(estimate.lines()) {
         say!("  {l}");
+    }
+    if let Some(l) = scan.line() {
+        say!("  {l}");
+    }
+    if let Some(w) = scan.warning() {
+        esay!("warning: {w}");
     }
     for w in info.warnings() {
         esay!("warning: {w}");

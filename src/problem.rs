@@ -18,7 +18,7 @@ use crate::model::laws::{FrictionBoundLaw, NormalLaw};
 use crate::model::material::Material;
 use crate::model::{ContactParams, Domain, Enforcement, Model};
 use crate::scene::Scene;
-use crate::scheme::ContactKinematics;
+use crate::scheme::{ContactKinematics, load_time};
 
 /// The discrete problem of one scene.
 pub struct Problem {
@@ -71,9 +71,27 @@ impl Problem {
         Ok(Problem { model, mesh, material, dofs, loads, u0, v0, contact, k, steps, inputs_fingerprint })
     }
 
-    /// The time of step n.
+    /// The time of step n, t_n = n k ([`step_time`]).
     pub fn time(&self, n: usize) -> f64 {
-        n as f64 * self.k
+        step_time(n, self.k)
+    }
+
+    /// Every time-dependent load is finite at every time the run samples it: (S.2)'s
+    /// f^{n+½} = f(t_n + k/2) (f(t_{n+1}) for backward Euler), n = 0 … N − 1, at every
+    /// quadrature point — when that takes at most `budget` evaluations. [`Problem::new`] checks
+    /// t = 0 and t = T only; a load like 1/(t − 0.00075) is finite there and at every t_n of
+    /// k = 5e-4, and infinite at the load time of step 1.
+    pub fn check_load_times(&self, budget: usize) -> Result<LoadScan> {
+        if self.loads.is_constant() {
+            return Ok(LoadScan::Constant);
+        }
+        let evaluations = self.loads.scan_cost(self.steps);
+        if evaluations > budget {
+            return Ok(LoadScan::TooCostly { evaluations });
+        }
+        let kind = self.model.time.scheme;
+        self.loads.check_finite_at((0..self.steps).map(|n| load_time(kind, self.k, self.time(n))))?;
+        Ok(LoadScan::Scanned { times: self.steps })
     }
 
     /// (C.k) for this problem: the largest step for which the unfrozen step problem is convex,
@@ -182,6 +200,59 @@ fn check_sides(model: &Model, mesh: &Geometry) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// What [`Problem::check_load_times`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LoadScan {
+    /// no load depends on t: checked at t = 0 by [`Problem::new`]
+    Constant,
+    /// every load time of the run checked: finite
+    Scanned { times: usize },
+    /// not scanned: it would take this many evaluations, more than the budget
+    TooCostly { evaluations: usize },
+}
+
+impl LoadScan {
+    /// The line `check` prints for it (none for constant loads).
+    pub fn line(&self) -> Option<String> {
+        match *self {
+            LoadScan::Scanned { times: 1 } => Some("loads          : finite at the time the step samples them".into()),
+            LoadScan::Scanned { times } => {
+                Some(format!("loads          : finite at each of the {times} times the steps sample them"))
+            }
+            _ => None,
+        }
+    }
+
+    /// The warning `check` gives when it did not scan.
+    pub fn warning(&self) -> Option<String> {
+        match *self {
+            LoadScan::TooCostly { evaluations } => Some(format!(
+                "the time-dependent loads were checked at t = 0 and t = T only: every load time would take \
+                 {evaluations} evaluations (more than {}); `run` stops at the first step whose load is not finite",
+                crate::defaults::CHECK_LOAD_EVALUATIONS
+            )),
+            _ => None,
+        }
+    }
+}
+
+/// t_n = n k as the run writes and samples it: the product n·k in f64, or the 15-digit decimal
+/// nearest to it when that decimal is within 4 units in the last place. For a step given as a
+/// short decimal (k = 1e-3) the product is within 2 units of n times that decimal, so step 700
+/// is t = 0.7 (the decimal the scene means) and not 0.7000000000000001; for any other k (1/3 as
+/// 0.3333333333333333) the product stays, and t_n moves from n·k by at most 4 units either way.
+pub fn step_time(n: usize, k: f64) -> f64 {
+    let t = n as f64 * k;
+    if t == 0.0 || !t.is_finite() {
+        return t;
+    }
+    let ulp = f64::from_bits(t.to_bits() + 1) - t;
+    match format!("{t:.14e}").parse::<f64>() {
+        Ok(short) if (short - t).abs() <= 4.0 * ulp => short,
+        _ => t,
+    }
 }
 
 /// f(t): the body load f0, the tractions f2 and the known load f3 on Γ3 (every contact side;

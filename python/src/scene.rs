@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use dyncontact::output::ModelInfo;
 use dyncontact::problem::Problem;
-use dyncontact::resources;
 use dyncontact::scene::{DEFAULT_SCENE, parse};
+use dyncontact::{defaults, resources};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -148,7 +148,8 @@ impl PyScene {
     /// (`ck_step_limit`, `ck_limiting_node`, `ck_note`), `memory_estimate_bytes`,
     /// `output_estimate_bytes`, `fits` (False when `run` would refuse it for memory: then only
     /// the estimate and `refused` are given), `lines` (what `dyncontact check` prints) and
-    /// `warnings`.
+    /// `warnings`. A time-dependent load that is not finite at a time a step samples it raises
+    /// the scene error `dyncontact check` gives.
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let model =
             py_result(py, dyncontact::scene::Scene::from_toml(&self.effective, &self.file).and_then(|s| s.validate()))?;
@@ -165,8 +166,13 @@ impl PyScene {
             d.set_item("lines", estimate.lines())?;
             return Ok(d);
         }
-        let problem = py.detach(|| Problem::new(model, &self.dir));
-        let problem = py_result(py, problem)?;
+        let problem = py.detach(|| {
+            Problem::new(model, &self.dir).and_then(|p| {
+                let scan = p.check_load_times(defaults::CHECK_LOAD_EVALUATIONS)?;
+                Ok((p, scan))
+            })
+        });
+        let (problem, scan) = py_result(py, problem)?;
         let info = ModelInfo::of(&problem);
         let json =
             serde_json::to_string(&info).map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
@@ -174,8 +180,8 @@ impl PyScene {
         d.call_method1("update", (fields,))?;
         d.set_item("dimension", info.dim)?;
         d.set_item("fits", true)?;
-        d.set_item("lines", info.lines().into_iter().chain(estimate.lines()).collect::<Vec<_>>())?;
-        d.set_item("warnings", info.warnings())?;
+        d.set_item("lines", info.lines().into_iter().chain(estimate.lines()).chain(scan.line()).collect::<Vec<_>>())?;
+        d.set_item("warnings", scan.warning().into_iter().chain(info.warnings()).collect::<Vec<_>>())?;
         Ok(d)
     }
 

@@ -46,6 +46,17 @@ def test_check_reports_sizes_and_limit():
     assert info["ck_step_limit"] == pytest.approx(3.4722e-4, rel=1e-4)
     assert info["memory_estimate_bytes"] > 0 and any("memory" in line for line in info["lines"])
     assert isinstance(info["memory_estimate_bytes"], int) and isinstance(info["output_estimate_bytes"], int)
+    # the time-dependent tractions are checked at each of the 2000 times the steps sample them
+    assert "loads          : finite at each of the 2000 times the steps sample them" in info["lines"]
+
+
+def test_check_refuses_a_load_infinite_at_a_load_time_only():
+    """1/(t - 0.00075) is finite at t = 0, T and every t_n of k = 5e-4, infinite at the load
+    time t_1 + k/2 of the second step: check() raises as `dyncontact check` exits 1."""
+    s = dc.Scene.default().with_set({"loads.body": ["0", "1/(t-0.00075)"]})
+    with pytest.raises(dc.SceneError) as e:
+        s.check()
+    assert e.value.key == "loads.body" and "t = 0.00075" in str(e.value)
 
 
 def test_numpy_values_are_toml_values():

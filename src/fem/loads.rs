@@ -107,30 +107,51 @@ impl LoadVector {
 
     /// Every load expression is finite at every quadrature point at time t.
     pub fn check_finite(&self, t: f64) -> Result<()> {
-        for term in &self.all {
-            for q in &term.points {
-                let v = term.field.eval3(q.x, t);
-                if !v.iter().all(|c| c.is_finite()) {
-                    let d = term.field.dim();
-                    let (vals, at) = if d == 3 {
-                        (
-                            format!("({}, {}, {})", v[0], v[1], v[2]),
-                            format!("x = {}, y = {}, z = {}", q.x[0], q.x[1], q.x[2]),
-                        )
-                    } else {
-                        (format!("({}, {})", v[0], v[1]), format!("x = {}, y = {}", q.x[0], q.x[1]))
-                    };
-                    return Err(Error::Expression {
-                        path: term.path.clone(),
-                        message: format!(
-                            "evaluates to {vals} at {at}, t = {t}; loads must be finite on the whole mesh and time interval"
-                        ),
-                    });
-                }
+        check_terms_finite(&self.all, t)
+    }
+
+    /// The evaluations of a scan of the time-dependent loads at `times` times: one per
+    /// quadrature point of each varying term per time.
+    pub fn scan_cost(&self, times: usize) -> usize {
+        self.varying.iter().map(|t| t.points.len()).sum::<usize>().saturating_mul(times)
+    }
+
+    /// Every time-dependent load expression is finite at every quadrature point at each of the
+    /// times (the loads that do not depend on t are checked once, by [`LoadVector::check_finite`]).
+    pub fn check_finite_at(&self, times: impl IntoIterator<Item = f64>) -> Result<()> {
+        if self.varying.is_empty() {
+            return Ok(());
+        }
+        times.into_iter().try_for_each(|t| check_terms_finite(&self.varying, t))
+    }
+}
+
+/// Each term's expression is finite at each of its quadrature points at time t; else an
+/// expression error naming the term's key, the value, the point and t.
+fn check_terms_finite(terms: &[Term], t: f64) -> Result<()> {
+    for term in terms {
+        for q in &term.points {
+            let v = term.field.eval3(q.x, t);
+            if !v.iter().all(|c| c.is_finite()) {
+                let d = term.field.dim();
+                let (vals, at) = if d == 3 {
+                    (
+                        format!("({}, {}, {})", v[0], v[1], v[2]),
+                        format!("x = {}, y = {}, z = {}", q.x[0], q.x[1], q.x[2]),
+                    )
+                } else {
+                    (format!("({}, {})", v[0], v[1]), format!("x = {}, y = {}", q.x[0], q.x[1]))
+                };
+                return Err(Error::Expression {
+                    path: term.path.clone(),
+                    message: format!(
+                        "evaluates to {vals} at {at}, t = {t}; loads must be finite on the whole mesh and time interval"
+                    ),
+                });
             }
         }
-        Ok(())
     }
+    Ok(())
 }
 
 fn integrate(term: &Term, t: f64, dofs: &Dofs, f: &mut [f64]) {

@@ -1023,3 +1023,25 @@ fn the_penalty_study_takes_penalty_scenes_and_shares_the_run_folder() {
     assert!(o.status.success(), "a run after the study in its folder: {}", err(&o));
     assert!(out.join("study/penalty.csv").is_file(), "the run removed the study");
 }
+
+/// Requirement: `check` refuses a load that is finite at t = 0, at T and at every t_n but not
+/// at a time a step samples it: with k = 5e-4 the midpoint step from t_1 = 0.0005 samples
+/// f(0.00075), where 1/(t − 0.00075) divides by zero (0.0005 + 0.00025 is 0.00075 in f64).
+/// `run` stops at that step, naming the same load; `check` said "valid" before.
+#[test]
+fn check_refuses_a_load_infinite_at_a_load_time_only() {
+    let load = ["--set", "loads.body=[\"0\", \"1/(t-0.00075)\"]"];
+    let scene = fixture("academic");
+    let o = cli(&[&["check", scene.to_str().expect("path")][..], &SMALL, &load].concat());
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stdout));
+    assert!(err(&o).contains("loads.body") && err(&o).contains("t = 0.00075"), "{}", err(&o));
+    let dir = tmp("load_time");
+    let o = run_into(&dir.join("run"), &[&SMALL[..], &load].concat());
+    assert_ne!(o.status.code(), Some(0));
+    assert!(err(&o).contains("loads.body"), "{}", err(&o));
+    // a load that is finite at every load time: `check` says it scanned them
+    let o = cli(&[&["check", scene.to_str().expect("path")][..], &SMALL].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", err(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("finite at each of the 200 times the steps sample them"), "{out}");
+}

@@ -60,3 +60,51 @@ fn zeros_are_written_without_a_sign() {
         }
     }
 }
+
+/// Significant digits of a real's shortest text (`0.0115` → 3, `7.49e-6` → 3).
+fn significant_digits(s: &str) -> usize {
+    let mantissa = s.split(['e', 'E']).next().unwrap_or("");
+    mantissa.chars().filter(|c| c.is_ascii_digit()).collect::<String>().trim_start_matches('0').len()
+}
+
+/// Requirement: t_n is n·k written as the decimal the scene means when k is a short decimal:
+/// step 700 of k = 1e-3 is 0.7 (the product n·fl(k) is 0.7000000000000001), step 3 of 0.1 is 0.3.
+#[test]
+fn step_times_of_a_decimal_step_are_decimals() {
+    use dyncontact::problem::step_time;
+    assert_ne!(700.0 * 1e-3, 0.7, "the product this rounds (else the test shows nothing)");
+    assert_eq!(step_time(700, 1e-3), 0.7);
+    assert_eq!(step_time(3, 0.1), 0.3);
+    assert_eq!(step_time(0, 2.5e-3), 0.0);
+    // every pinned run's t column: at most 15 significant digits (their steps are 1e-3, 5e-4,
+    // 2.5e-3, 2e-4, 1e-4; 14% of the t fields had 16 or 17 before)
+    let pins = root().join("fixtures/regression");
+    for dir in std::fs::read_dir(&pins).expect("fixtures/regression").flatten() {
+        let text = std::fs::read_to_string(dir.path().join("history.csv")).expect("a pinned history");
+        for line in text.lines().skip(1) {
+            let t = line.split(',').nth(1).expect("a t field");
+            assert!(significant_digits(t) <= 15, "{}: t = {t}", dir.path().display());
+        }
+    }
+}
+
+proptest! {
+    /// Requirement: t_n stays within 4 units in the last place of the product n·k (for k = 1/3
+    /// too), and for a step m·10⁻ᵖ with m < 1000 it is the f64 nearest to n·m·10⁻ᵖ, up to a
+    /// million steps.
+    #[test]
+    fn step_times_stay_within_four_ulps(n in 0usize..1_000_000, m in 1u32..1000, p in 1i32..9) {
+        use dyncontact::problem::step_time;
+        let k: f64 = format!("{m}e-{p}").parse().unwrap();
+        let t = step_time(n, k);
+        let product = n as f64 * k;
+        let ulp = f64::from_bits(product.to_bits() + 1) - product;
+        prop_assert!((t - product).abs() <= 4.0 * ulp, "n = {}, k = {}: {} against {}", n, k, t, product);
+        let decimal: f64 = format!("{}e-{p}", n as u64 * m as u64).parse().unwrap();
+        prop_assert_eq!(t, decimal, "n = {}, k = {}", n, k);
+        // a step that is no short decimal: the product, within 4 units
+        let p3 = n as f64 * (1.0 / 3.0);
+        let ulp3 = f64::from_bits(p3.to_bits() + 1) - p3;
+        prop_assert!((step_time(n, 1.0 / 3.0) - p3).abs() <= 4.0 * ulp3, "n = {}", n);
+    }
+}
