@@ -139,3 +139,13 @@ def test_a_scene_pickles():
     s = dc.Scene.default().with_set({"time.end": 0.02, "domain.cells": [8, 4]})
     back = pickle.loads(pickle.dumps(s))
     assert back.to_toml() == s.to_toml() and back.overrides == s.overrides and back.source == s.source
+
+
+def test_an_int_beyond_i64_names_the_range():
+    """A Python int beyond TOML's i64 arrives as a float: at a whole-number key the error names
+    the range; at a real key it is the float it means."""
+    with pytest.raises(dc.SceneError) as e:
+        dc.Scene.default().with_set({"output.every": 10**20}).check()
+    assert e.value.key == "output.every" and "9223372036854775807" in str(e.value)
+    assert dc.Scene.default().with_set({"material.young": 10**20}).check()["fits"] is True
+

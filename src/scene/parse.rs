@@ -10,7 +10,7 @@
 
 use super::{DEFAULT_SCENE, Scene};
 use crate::error::{Error, Result};
-use crate::overrides::Override;
+use crate::overrides::{Override, Segment};
 
 /// A TOML error of `file` as an [`Error::SceneSyntax`]: `path` (the key path serde reached,
 /// empty for a syntax error) first, then TOML's headline (`TOML parse error at line L, column
@@ -131,8 +131,9 @@ impl Scene {
         let at = crate::overrides::parse_path(&path).unwrap_or_default();
         if let Some(o) = overrides.iter().rev().find(|o| !at.is_empty() && crate::overrides::overlap(&o.path, &at)) {
             let message = format!(
-                "{path}: {} (the value came from --set {}={})",
+                "{path}: {}{} (the value came from --set {}={})",
                 one_paragraph(e.message()),
+                beyond_i64_hint(e.message(), &at, &o.path, &o.value),
                 o.key,
                 one_paragraph(&o.value.to_string())
             );
@@ -177,4 +178,39 @@ pub fn one_paragraph(s: &str) -> String {
         .filter(|l| !l.trim().is_empty())
         .collect::<Vec<_>>()
         .join(" | ")
+}
+
+/// For a whole number beyond TOML's integers at a key that takes one: `--set output.every=1e20`
+/// reads as a float, `100000000000000000000` as a string (TOML's integers are i64), and a Python
+/// int beyond i64 arrives as a float; serde says "invalid type: floating point …, expected
+/// i64", which names neither the range nor that the number was meant whole.
+fn beyond_i64_hint(message: &str, at: &[Segment], set: &[Segment], value: &toml::Value) -> &'static str {
+    const HINT: &str = "; this key takes a whole number, and TOML's whole numbers lie within ±9223372036854775807";
+    let wants_integer = ["expected i64", "expected u64", "expected usize", "expected u32", "expected i32"]
+        .iter()
+        .any(|w| message.contains(w));
+    // the value at the error's key: the override's own, or its element there (`domain.cells=[1e20, 4]`)
+    let mut v = value;
+    for seg in at.iter().skip(set.len()) {
+        v = match (seg, v) {
+            (Segment::Index(i), toml::Value::Array(a)) => match a.get(*i) {
+                Some(x) => x,
+                None => return "",
+            },
+            (Segment::Key(k), toml::Value::Table(t)) => match t.get(k) {
+                Some(x) => x,
+                None => return "",
+            },
+            _ => return "",
+        };
+    }
+    let whole_beyond = match v {
+        toml::Value::Float(x) => x.fract() == 0.0 && x.abs() >= 9.223_372_036_854_776e18,
+        toml::Value::String(s) => {
+            let digits = s.strip_prefix(['-', '+']).unwrap_or(s);
+            !digits.is_empty() && digits.chars().all(|c| c.is_ascii_digit() || c == '_')
+        }
+        _ => false,
+    };
+    if wants_integer && whole_beyond { HINT } else { "" }
 }
