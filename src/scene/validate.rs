@@ -61,7 +61,7 @@ impl Scene {
     /// Where a valid scene asks for more than the model will switch on, or for a choice that has
     /// no effect: each is said, never silent.
     fn warnings(&self) -> Vec<String> {
-        let mut w = Vec::new();
+        let mut w = self.unused_keys();
         let Some(c) = &self.contact else { return w };
         if self.boundary.contact.is_empty() {
             w.push("the [contact] section is not used: boundary.contact names no contact side".to_string());
@@ -94,6 +94,61 @@ impl Scene {
                  bound at the iterate's midpoint: every step is solved by the fixed point (F.1) with the frozen Newton"
                     .to_string(),
             );
+        }
+        w
+    }
+
+    /// The keys the chosen options do not use, each said as ignored: `penalty` beside
+    /// enforcement = "exact" (the scene template gives both, the comment saying ε acts only with
+    /// "penalty"), the coefficients of another friction law (`--set contact.friction.law=constant
+    /// --set contact.friction.coefficient=0.3` on a scene with the exponential law keeps its
+    /// static, kinetic and decay), a mesh file beside a rectangle or box, size and cells beside a
+    /// Gmsh mesh. A key no option knows is still refused by the schema.
+    fn unused_keys(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        let d = &self.domain;
+        let kind = format!("{:?}", d.kind).to_lowercase();
+        match d.kind {
+            DomainKind::Rectangle | DomainKind::Box if d.file.is_some() => w.push(format!(
+                "domain.file is not used with kind = \"{kind}\" and is ignored (kind = \"gmsh\" reads it)"
+            )),
+            DomainKind::Gmsh => {
+                for (key, present) in [("size", d.size.is_some()), ("cells", d.cells.is_some())] {
+                    if present {
+                        w.push(format!(
+                            "domain.{key} is not used with kind = \"gmsh\" (the mesh file gives the geometry) and is ignored"
+                        ));
+                    }
+                }
+            }
+            _ => {}
+        }
+        let Some(c) = &self.contact else { return w };
+        if c.enforcement == EnforcementKind::Exact && c.penalty.is_some() {
+            w.push(
+                "contact.penalty is not used with enforcement = \"exact\" and is ignored (enforcement = \"penalty\" uses it)"
+                    .to_string(),
+            );
+        }
+        let f = &c.friction;
+        let law = format!("{:?}", f.law).to_lowercase();
+        let used: &[&str] = match f.law {
+            FrictionLaw::None => &[],
+            FrictionLaw::Constant => &["coefficient"],
+            FrictionLaw::Exponential => &["static", "kinetic", "decay"],
+            FrictionLaw::Table => &["points"],
+        };
+        let given = [
+            ("static", f.static_.is_some()),
+            ("kinetic", f.kinetic.is_some()),
+            ("decay", f.decay.is_some()),
+            ("coefficient", f.coefficient.is_some()),
+            ("points", f.points.is_some()),
+        ];
+        for (key, present) in given {
+            if present && !used.contains(&key) {
+                w.push(format!("contact.friction.{key} is not used by law = \"{law}\" and is ignored"));
+            }
         }
         w
     }
@@ -201,9 +256,6 @@ impl Scene {
                 return e(&format!("domain.cells[{i}]"), format!("must be <= {max}, got {c}"));
             }
         }
-        if d.file.is_some() {
-            return e("domain.file", "only used with kind = \"gmsh\"; remove it or set kind = \"gmsh\"".into());
-        }
         Ok((size, cells.map(|c| c as usize)))
     }
 
@@ -233,12 +285,6 @@ impl Scene {
                     Some(f) if f.trim().is_empty() => return e("domain.file", "is empty".into()),
                     Some(f) => f.clone(),
                 };
-                if d.size.is_some() {
-                    return e("domain.size", "only used with kind = \"rectangle\" or \"box\"; remove it".into());
-                }
-                if d.cells.is_some() {
-                    return e("domain.cells", "only used with kind = \"rectangle\" or \"box\"; remove it".into());
-                }
                 Ok(model::Domain::Gmsh { file })
             }
         }
@@ -450,14 +496,9 @@ impl Scene {
             (EnforcementKind::Penalty, Some(eps)) if !(eps.is_finite() && eps > 0.0) => {
                 return e("contact.penalty", format!("must be a finite number > 0, got {eps}"));
             }
-            (EnforcementKind::Exact, Some(_)) => {
-                return e(
-                    "contact.penalty",
-                    "only used with enforcement = \"penalty\"; remove it or set enforcement = \"penalty\"".into(),
-                );
-            }
             (EnforcementKind::Penalty, Some(eps)) => Enforcement::Penalty { epsilon: eps },
-            (EnforcementKind::Exact, None) => Enforcement::Exact,
+            // a penalty beside enforcement = "exact" is ignored, and said (`Scene::warnings`)
+            (EnforcementKind::Exact, _) => Enforcement::Exact,
         };
         if c.enforcement == EnforcementKind::Penalty && bound == Bound::Infinite {
             return e(
@@ -512,21 +553,11 @@ impl Scene {
     }
 }
 
-/// The friction section: the keys each law needs and forbids, and the coefficient μ it defines
-/// (None for `law = "none"`).
+/// The friction section: the keys each law needs, and the coefficient μ it defines (None for
+/// `law = "none"`); another law's keys are ignored and said ([`Scene::unused_keys`]).
 fn validate_friction(f: &Friction) -> Result<Option<FrictionCoefficient>> {
     let e = |p: &str, m: String| Err(Error::scene(p, m));
     let p = "contact.friction";
-    let forbid = |key: &str, present: bool| -> Result<()> {
-        if present {
-            Err(Error::scene(
-                format!("{p}.{key}"),
-                format!("not used by law = \"{}\"; remove it", format!("{:?}", f.law).to_lowercase()),
-            ))
-        } else {
-            Ok(())
-        }
-    };
     let need = |key: &str, v: Option<f64>| -> Result<f64> {
         match v {
             None => Err(Error::scene(
@@ -543,41 +574,14 @@ fn validate_friction(f: &Friction) -> Result<Option<FrictionCoefficient>> {
             Some(x) => Ok(x),
         }
     };
-    match f.law {
-        FrictionLaw::None => {
-            forbid("static", f.static_.is_some())?;
-            forbid("kinetic", f.kinetic.is_some())?;
-            forbid("decay", f.decay.is_some())?;
-            forbid("coefficient", f.coefficient.is_some())?;
-            forbid("points", f.points.is_some())?;
-        }
-        FrictionLaw::Constant => {
-            need("coefficient", f.coefficient)?;
-            forbid("static", f.static_.is_some())?;
-            forbid("kinetic", f.kinetic.is_some())?;
-            forbid("decay", f.decay.is_some())?;
-            forbid("points", f.points.is_some())?;
-        }
-        FrictionLaw::Exponential => {
-            need("static", f.static_)?;
-            need("kinetic", f.kinetic)?;
-            need("decay", f.decay)?;
-            forbid("coefficient", f.coefficient.is_some())?;
-            forbid("points", f.points.is_some())?;
-        }
-        FrictionLaw::Table => {
-            forbid("static", f.static_.is_some())?;
-            forbid("kinetic", f.kinetic.is_some())?;
-            forbid("decay", f.decay.is_some())?;
-            forbid("coefficient", f.coefficient.is_some())?;
-            let Some(pts) = &f.points else {
-                return e(
-                    &format!("{p}.points"),
-                    "missing: law = \"table\" needs points = [[r0, mu0], [r1, mu1], ...]".into(),
-                );
-            };
-            validate_table(pts)?;
-        }
+    if f.law == FrictionLaw::Table {
+        let Some(pts) = &f.points else {
+            return e(
+                &format!("{p}.points"),
+                "missing: law = \"table\" needs points = [[r0, mu0], [r1, mu1], ...]".into(),
+            );
+        };
+        validate_table(pts)?;
     }
     Ok(match f.law {
         FrictionLaw::None => None,

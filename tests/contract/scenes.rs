@@ -251,18 +251,6 @@ fn cases() -> Vec<Malformed> {
             "domain.file",
             "missing",
         ),
-        case(
-            "gmsh with rectangle size",
-            edit("kind = \"rectangle\"", "kind = \"gmsh\"\nfile = \"m.msh\""),
-            "domain.size",
-            "remove it",
-        ),
-        case(
-            "rectangle with a mesh file",
-            after("[domain]", "file = \"m.msh\""),
-            "domain.file",
-            "only used with kind = \"gmsh\"",
-        ),
         // ---- material ----
         case(
             "negative density",
@@ -369,12 +357,6 @@ fn cases() -> Vec<Malformed> {
             "must be >= 0",
         ),
         case(
-            "penalty with exact enforcement",
-            edit("enforcement = \"exact\"", "enforcement = \"exact\"\npenalty = 1.0e-4"),
-            "contact.penalty",
-            "only used with enforcement = \"penalty\"",
-        ),
-        case(
             "penalty enforcement without penalty",
             edit("enforcement = \"exact\"", "enforcement = \"penalty\""),
             "contact.penalty",
@@ -430,22 +412,10 @@ fn cases() -> Vec<Malformed> {
             "must be >= 0, got -3",
         ),
         case(
-            "constant law with a stray static",
-            friction("law = \"constant\"\ncoefficient = 0.3\nstatic = 0.6"),
-            "contact.friction.static",
-            "not used by law = \"constant\"",
-        ),
-        case(
             "constant law without coefficient",
             friction("law = \"constant\""),
             "contact.friction.coefficient",
             "missing",
-        ),
-        case(
-            "no friction with a coefficient",
-            friction("law = \"none\"\ncoefficient = 0.3"),
-            "contact.friction.coefficient",
-            "not used",
         ),
         case("table without points", friction("law = \"table\""), "contact.friction.points", "missing"),
         case("empty table", friction("law = \"table\"\npoints = []"), "contact.friction.points", "is empty"),
@@ -815,4 +785,36 @@ fn the_readme_scene_template_is_the_default_scene_and_names_every_key() {
         }
     }
     assert!(missing.is_empty(), "the README's scene template does not name: {}", missing.join(", "));
+}
+
+/// Requirement: a key that the chosen options do not use is accepted, ignored and said by name
+/// (the scene template gives `penalty` beside enforcement = "exact"; `--set
+/// contact.friction.law=constant` leaves the exponential law's keys behind); the model is the one
+/// without the key. A key no option knows is still refused (the cases above).
+#[test]
+fn unused_keys_are_ignored_and_said() {
+    let ignored = [
+        (edit("enforcement = \"exact\"", "enforcement = \"exact\"\npenalty = 1.0e-4"), "contact.penalty is not used"),
+        (
+            friction("law = \"constant\"\ncoefficient = 0.3\nstatic = 0.6"),
+            "contact.friction.static is not used by law = \"constant\"",
+        ),
+        (friction("law = \"none\"\ncoefficient = 0.3"), "contact.friction.coefficient is not used by law = \"none\""),
+        (after("[domain]", "file = \"m.msh\""), "domain.file is not used with kind = \"rectangle\""),
+        (
+            edit("kind = \"rectangle\"", "kind = \"gmsh\"\nfile = \"m.msh\""),
+            "domain.size is not used with kind = \"gmsh\"",
+        ),
+    ];
+    for (toml, said) in ignored {
+        let model = Scene::from_toml(&toml, "case.toml").and_then(|s| s.validate()).expect("accepted");
+        assert!(model.warnings.iter().any(|w| w.contains(said)), "{said:?} not in {:?}", model.warnings);
+    }
+    // ignored means ignored: the exact problem, whatever the penalty says
+    let with = edit("enforcement = \"exact\"", "enforcement = \"exact\"\npenalty = -1.0");
+    let model = Scene::from_toml(&with, "case.toml").and_then(|s| s.validate()).expect("accepted");
+    let plain = Scene::from_toml(BASE, "case.toml").and_then(|s| s.validate()).expect("the base scene");
+    let enforcement = |m: &dyncontact::model::Model| m.contact.as_ref().map(|c| c.enforcement);
+    assert_eq!(enforcement(&model), Some(dyncontact::model::Enforcement::Exact));
+    assert_eq!(enforcement(&model), enforcement(&plain));
 }
