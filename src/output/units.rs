@@ -137,20 +137,23 @@ pub struct Units {
 impl Units {
     /// The units of a run in dimension `dim`.
     pub fn of(dim: usize) -> Units {
-        let families = |table: &[(&str, &str, &str, &[&str])]| {
+        // contact.csv's columns of this dimension only (2-D has no z, v_tx, friction_x, …);
+        // history.csv has the same columns in both (friction_force_z is 0 in 2-D)
+        let contact_csv: Vec<&str> = crate::output::contact_columns(dim).split(',').collect();
+        let families = |table: &[(&str, &str, &str, &[&str])], keep: &dyn Fn(&str) -> bool| {
             table
                 .iter()
                 .map(|(name, two, three, cols)| {
                     let unit = if dim == 3 { three } else { two };
-                    let columns = cols.iter().map(|c| (*c).to_string()).collect();
+                    let columns = cols.iter().filter(|c| keep(c)).map(|c| (*c).to_string()).collect();
                     ((*name).to_string(), Family { unit: (*unit).to_string(), columns })
                 })
                 .collect()
         };
         Units {
             basis: if dim == 3 { "absolute (3-D)" } else { "per unit thickness (2-D)" }.to_string(),
-            history: families(&HISTORY_FAMILIES),
-            contact: families(&CONTACT_FAMILIES),
+            history: families(&HISTORY_FAMILIES, &|_| true),
+            contact: families(&CONTACT_FAMILIES, &|c| contact_csv.contains(&c)),
         }
     }
 
@@ -183,6 +186,9 @@ mod tests {
                 let n = u.contact.values().filter(|f| f.columns.iter().any(|c| c == name)).count();
                 assert_eq!(n, 1, "contact.csv {name} is in {n} families");
             }
+            // and lists no column the dimension's contact.csv does not have
+            let listed = u.contact.values().flat_map(|f| &f.columns).count();
+            assert_eq!(listed, crate::output::contact_columns(dim).split(',').count() - 1, "{dim}-D");
             assert_eq!(u.history_unit("normal_force"), Some(force(dim)));
             assert_eq!(u.history_unit("kinetic"), Some(energy(dim)));
         }

@@ -708,7 +708,8 @@ fn resolve_axis(a: usize, spec: &AxisSpec) -> Result<Axis> {
 fn show_value(v: &toml::Value) -> String {
     match v {
         toml::Value::String(s) => s.clone(),
-        toml::Value::Float(f) => f.to_string(),
+        // as sweep.csv's other reals: 1e-30, not 0.000…001 (thirty digits)
+        toml::Value::Float(f) => crate::output::csv::real(*f),
         other => other.to_string(),
     }
 }
@@ -829,5 +830,16 @@ mod tests {
         let e = point_error("p003", "domain.file = m.msh", mesh);
         assert_eq!(e.key(), Some("point p003"));
         assert_eq!(e.to_string(), "point p003: (domain.file = m.msh) mesh m.msh: no such file");
+    }
+
+    /// An axis value reads in sweep.csv as its other reals do: shortest round-trip, with an
+    /// exponent outside 1e-5 ≤ |x| < 1e16 (1e-30 was thirty digits after the point).
+    #[test]
+    fn axis_values_read_as_sweep_reals() {
+        assert_eq!(show_value(&toml::Value::Float(1e-30)), "1e-30");
+        assert_eq!(show_value(&toml::Value::Float(1e-4)), "0.0001");
+        assert_eq!(show_value(&toml::Value::Float(2.5e-3)), "0.0025");
+        assert_eq!(show_value(&toml::Value::Integer(3)), "3");
+        assert_eq!(show_value(&toml::Value::String("midpoint".into())), "midpoint");
     }
 }
