@@ -360,22 +360,36 @@ impl<'p> Simulation<'p> {
         Steps { sim: self, failed: false }
     }
 
-    /// The row of t = 0.
+    /// The row of t = 0: the initial state's quantities. No step has solved for λ or the
+    /// friction force yet, so they are 0; the compliance force q_i = p(u_ν,i) of an initial
+    /// penetration is the state's own, and the normal force Σ ω_i q_i and the statuses follow it
+    /// (a node with q_i > 0 is in contact: under a friction law in stick when its initial
+    /// tangential velocity is zero, else slipping).
     pub fn initial_record(&self) -> StepRecord {
         let mut nodes = Vec::new();
+        let (mut normal_force, mut counts) = (0.0, [0usize; 3]);
         if let Some(c) = &self.problem.contact {
             let d = c.penetration(&self.state.u);
             for (i, &d_i) in d.iter().enumerate() {
                 let v_tan = c.tangential(i, &self.state.v);
+                let (p_i, v_t) = (c.compliance.p(d_i), c.tangential_size(i, &self.state.v));
+                let status = NodeStatus::classify(p_i, 0.0, c.friction.as_ref().map(|_| v_t == 0.0));
+                normal_force += c.omega[i] * p_i;
+                match status {
+                    NodeStatus::Separated => {}
+                    NodeStatus::Stick => counts = [counts[0] + 1, counts[1] + 1, counts[2]],
+                    NodeStatus::Slip => counts = [counts[0] + 1, counts[1], counts[2] + 1],
+                    NodeStatus::Contact => counts[0] += 1,
+                }
                 nodes.push(NodeRecord {
                     u_n: d_i,
                     u_t: c.tangential_size(i, &self.state.u),
-                    v_t: c.tangential_size(i, &self.state.v),
-                    p: c.compliance.p(d_i),
+                    v_t,
+                    p: p_i,
                     lambda: 0.0,
                     friction: 0.0,
                     bound: 0.0,
-                    status: NodeStatus::Separated,
+                    status,
                     v_t_vec: c.global(i, &v_tan),
                     friction_vec: [0.0; 3],
                 });
@@ -386,7 +400,10 @@ impl<'p> Simulation<'p> {
             t: 0.0,
             energy: self.state.energy,
             energy_scale: self.state.energy_scale,
-            normal_force: 0.0,
+            normal_force,
+            contact_nodes: counts[0],
+            stick_nodes: counts[1],
+            slip_nodes: counts[2],
             tangential_force: 0.0,
             max_penetration: if nodes.is_empty() {
                 0.0

@@ -319,3 +319,43 @@ fn output_every_zero_writes_no_frames() {
         assert!(!svg.contains("NaN"), "{chart} has a NaN");
     }
 }
+
+/// Requirement: the t = 0 row of a body that starts pressed into the foundation agrees with its
+/// contact.csv rows: the academic block (bottom 2 m long) lowered by 0.015 m onto a foundation
+/// 0.01 m below it penetrates u_ν = 0.005 m at every bottom node, so q = c_ν u_ν = 1000 · 0.005
+/// = 5 N/m² there and the normal force is 5 · 2 = 10 N/m (round-off of Σ ω_i q_i: 1e-12). Every
+/// node is in contact, in stick (the block starts at rest); λ and the friction force are not
+/// solved for before the first step and are 0. The row said 0 N/m and 0 contact nodes, and
+/// contact.csv `separated` beside p = 5.
+#[test]
+fn the_initial_row_of_a_pressed_body_has_its_contact_force() {
+    let out = tmp("initially_pressed");
+    let st = Command::new(BIN)
+        .arg("run")
+        .arg(scene("academic"))
+        .args(["--set", "domain.cells=[8,4]", "--set", "time.end=0.005", "--set", "contact.gap=\"0.01\""])
+        .args(["--set", "initial.displacement=[\"0\", \"-0.015\"]", "--set", "boundary.dirichlet=[]"])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("run");
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    let history = std::fs::read_to_string(out.join("history.csv")).expect("history");
+    let cols: Vec<&str> = history.lines().next().expect("header").split(',').collect();
+    let row0: Vec<&str> = history.lines().nth(1).expect("the t = 0 row").split(',').collect();
+    let at = |name: &str| row0[cols.iter().position(|c| *c == name).expect(name)];
+    let normal: f64 = at("normal_force").parse().expect("a number");
+    assert!((normal - 10.0).abs() <= 1e-12, "normal_force at t = 0: {normal}");
+    assert_eq!((at("contact_nodes"), at("stick_nodes"), at("slip_nodes")), ("9", "9", "0"));
+    let contact = std::fs::read_to_string(out.join("contact.csv")).expect("contact");
+    let ccols: Vec<&str> = contact.lines().next().expect("header").split(',').collect();
+    let (p, status) =
+        (ccols.iter().position(|c| *c == "p").expect("p"), ccols.iter().position(|c| *c == "status").expect("status"));
+    let first: Vec<Vec<&str>> =
+        contact.lines().skip(1).map(|l| l.split(',').collect::<Vec<_>>()).filter(|r| r[0] == "0").collect();
+    assert_eq!(first.len(), 9, "the nine bottom nodes at t = 0");
+    for r in &first {
+        let q: f64 = r[p].parse().expect("p");
+        assert!((q - 5.0).abs() <= 1e-12 && r[status] == "stick", "{r:?}");
+    }
+}
