@@ -371,7 +371,8 @@ def sweep(
         rows = list(csv.DictReader(f))
     # a column of labels stays text when any of its labels is not a number ("exact", "1e-2")
     text = {k for row in rows for k, v in row.items() if v != "" and isinstance(_value(v), str)}
-    return [{k: (v if k in text else _value(v)) for k, v in row.items()} for row in rows]
+    # an empty cell is None in every column, text or number
+    return [{k: (None if v == "" else v if k in text else _value(v)) for k, v in row.items()} for row in rows]
 
 
 def refine(

@@ -75,8 +75,9 @@ class Steps(Iterator[StepRecord]):
 class Simulation:
     """The time loop of a scene, step by step (`for rec in Simulation(scene).steps(): ...`)."""
 
-    def __init__(self, scene: Scene) -> None:
-        """Build the problem and its operators (assembly, factorization, Delassus operator)."""
+    def __init__(self, scene: Union[Scene, str, PathLike]) -> None:
+        """Build the problem of a Scene or a scene file and its operators (assembly,
+        factorization, Delassus operator)."""
     def steps(self) -> Steps:
         """The remaining steps, one StepRecord each; a failed step raises SolverError."""
     def step(self) -> Optional[StepRecord]:

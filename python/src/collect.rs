@@ -3,7 +3,7 @@
 //! prints), contact.csv's columns and the stored frames, at the steps the writer stores them.
 
 use dyncontact::output::vtu::{self, NodeContact};
-use dyncontact::output::{Cell, HISTORY, contact_columns};
+use dyncontact::output::{HISTORY, contact_columns, csv};
 use dyncontact::problem::Problem;
 use dyncontact::simulation::{State, StepRecord};
 
@@ -54,10 +54,7 @@ impl Collected {
     /// frame every `output.every` steps and at the last step (none when `every` is 0).
     pub fn record(&mut self, rec: &StepRecord, problem: &Problem, state: &State) {
         for (col, (_, value)) in self.history.iter_mut().zip(HISTORY.iter()) {
-            col.push(match value(rec) {
-                Cell::Real(x) => x,
-                Cell::Count(n) => n as f64,
-            });
+            col.push(value(rec).value());
         }
         let every = problem.model.output_every;
         if every == 0 || !(rec.step.is_multiple_of(every) || rec.step == problem.steps) {
@@ -72,7 +69,8 @@ impl Collected {
                 for (name, col) in &mut self.contact {
                     match col {
                         ContactColumn::Statuses(s) => s.push(nr.status.as_str().to_string()),
-                        ContactColumn::Numbers(n) => n.push(match name.as_str() {
+                        // as contact.csv holds them: a zero without its sign
+                        ContactColumn::Numbers(n) => n.push(csv::as_written(match name.as_str() {
                             "step" => rec.step as f64,
                             "t" => rec.t,
                             "node" => node as f64,
@@ -93,7 +91,7 @@ impl Collected {
                             "friction_z" => nr.friction_vec[2],
                             "friction_bound" => nr.bound,
                             other => unreachable!("contact.csv column {other} has no value here: add it"),
-                        }),
+                        })),
                     }
                 }
             }

@@ -329,7 +329,7 @@ fn run_refine(
         "k" => What::K,
         "both" => What::Both,
         other => {
-            return Err(to_py(py, &Error::scene("what", format!("{other:?}: give \"h\", \"k\" or \"both\""))));
+            return Err(to_py(py, &Error::scene("--what", format!("{other:?}: give \"h\", \"k\" or \"both\""))));
         }
     };
     let opts = RefineOptions { levels, ratio, what, windows };

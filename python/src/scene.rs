@@ -97,7 +97,7 @@ impl PyScene {
 
     /// A scene file (TOML); relative paths in it (a Gmsh mesh) are read from its folder.
     #[staticmethod]
-    fn from_file(py: Python<'_>, path: PathBuf) -> PyResult<PyScene> {
+    pub(crate) fn from_file(py: Python<'_>, path: PathBuf) -> PyResult<PyScene> {
         let text =
             std::fs::read_to_string(&path).map_err(|e| crate::errors::to_py(py, &dyncontact::Error::read(&path, e)));
         let dir = path.parent().map(Path::to_path_buf).filter(|d| !d.as_os_str().is_empty());

@@ -4,7 +4,7 @@
 use std::mem::ManuallyDrop;
 use std::ptr::NonNull;
 
-use dyncontact::output::{Cell, HISTORY};
+use dyncontact::output::{HISTORY, csv};
 use dyncontact::problem::Problem;
 use dyncontact::simulation::{Simulation, StepRecord};
 use pyo3::prelude::*;
@@ -65,10 +65,27 @@ const _: fn() = || {
 
 #[pymethods]
 impl PySimulation {
-    /// Build the problem of `scene` and its operators (assembly, the factorization of A_k, the
-    /// Delassus operator), without the GIL.
+    /// Build the problem of `scene` (a Scene, or the path of a scene file, as `run` takes) and
+    /// its operators (assembly, the factorization of A_k, the Delassus operator), without the GIL.
     #[new]
-    fn new(py: Python<'_>, scene: &PyScene) -> PyResult<PySimulation> {
+    fn new(py: Python<'_>, scene: &Bound<'_, PyAny>) -> PyResult<PySimulation> {
+        let from_path;
+        let held: PyRef<'_, PyScene> = match scene.extract::<PyRef<'_, PyScene>>() {
+            Ok(s) => s,
+            Err(_) => match scene.extract::<std::path::PathBuf>() {
+                Ok(path) => {
+                    from_path = Bound::new(py, PyScene::from_file(py, path)?)?;
+                    from_path.borrow()
+                }
+                Err(_) => {
+                    return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                        "scene: expected a dyncontact.Scene or the path of a scene file, got {}",
+                        scene.get_type().name()?
+                    )));
+                }
+            },
+        };
+        let scene: &PyScene = &held;
         let built = py.detach(|| -> dyncontact::Result<(&'static Problem, Simulation<'static>)> {
             let problem: &'static Problem = Box::leak(Box::new(scene.problem(None)?));
             match Simulation::new(problem) {
@@ -180,19 +197,14 @@ impl PyStepRecord {
     fn of(py: Python<'_>, rec: &StepRecord, sim: &Simulation) -> PyResult<PyStepRecord> {
         let p = sim.problem;
         let d = p.mesh.dim();
-        let row = HISTORY
-            .iter()
-            .map(|(_, value)| match value(rec) {
-                Cell::Real(x) => x,
-                Cell::Count(n) => n as f64,
-            })
-            .collect();
+        let row = HISTORY.iter().map(|(_, value)| value(rec).value()).collect();
         Ok(PyStepRecord {
             step: rec.step,
             t: rec.t,
-            normal_force: rec.normal_force,
-            tangential_force: rec.tangential_force,
-            max_penetration: rec.max_penetration,
+            // as history.csv holds them (a zero without its sign)
+            normal_force: csv::as_written(rec.normal_force),
+            tangential_force: csv::as_written(rec.tangential_force),
+            max_penetration: csv::as_written(rec.max_penetration),
             u: vectors(py, &p.dofs.expand_dim(&sim.state.u), d).unbind(),
             v: vectors(py, &p.dofs.expand_dim(&sim.state.v), d).unbind(),
             row,

@@ -48,4 +48,4 @@ def test_refine_refusals_name_the_key(root, tmp_path):
     assert e.value.key == "--windows" and "40" in str(e.value)
     with pytest.raises(dc.SceneError) as e:
         dc.refine(layer, what="x", out=tmp_path / "x")
-    assert e.value.key == "what"
+    assert e.value.key == "--what"  # as --windows, --levels, --ratio: the CLI option names

@@ -114,3 +114,19 @@ def test_a_column_of_labels_stays_text(tmp_path):
     rows = dc.sweep(spec, out=tmp_path / "sw", jobs=1)
     assert [r["eps"] for r in rows] == ["exact", "1e-2"]
     assert all(isinstance(r["max_penetration"], float) for r in rows)
+
+
+def test_an_empty_cell_is_none_in_a_text_column(tmp_path):
+    """A failed point gives `reason` text, so the column is text; the completed point's empty
+    reason is None there too (it was '' beside None in sweeps without a failure)."""
+    spec = {
+        "name": "fail",
+        "base": "default",
+        "axis": [{"key": "solver.max_newton_iterations", "values": [1, 50]}],
+        "set": {"domain.cells": [8, 4], "time.end": 0.3, "solver.newton_tolerance": 1e-15},
+    }
+    rows = dc.sweep(spec, out=tmp_path / "sw", jobs=1)
+    statuses = [r["status"] for r in rows]
+    assert "failed" in statuses, statuses
+    for r in rows:
+        assert (r["reason"] is None) == (r["status"] == "completed"), r

@@ -18,6 +18,13 @@ pub fn real(x: f64) -> String {
     }
 }
 
+/// The f64 that [`real`]'s text of x reads back as: x itself, but a zero without its sign
+/// (−0.0 + 0.0 is +0.0 in IEEE arithmetic; every other x is unchanged). In-memory copies of the
+/// tables (Python's `run(out=None)`) hold these, so they equal the files bit for bit.
+pub fn as_written(x: f64) -> f64 {
+    x + 0.0
+}
+
 /// A CSV field: one line, quoted (RFC 4180) when it holds a comma or a quote.
 pub fn csv_field(s: &str) -> String {
     let one_line = s.replace(['\n', '\r'], " ");

@@ -42,6 +42,16 @@ pub enum Cell {
     Count(usize),
 }
 
+impl Cell {
+    /// The value as history.csv holds it ([`csv::as_written`]: a zero without its sign).
+    pub fn value(self) -> f64 {
+        match self {
+            Cell::Real(x) => csv::as_written(x),
+            Cell::Count(n) => n as f64,
+        }
+    }
+}
+
 impl std::fmt::Display for Cell {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {

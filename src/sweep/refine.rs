@@ -45,7 +45,7 @@ const ROUND_OFF_ULPS: f64 = 8.0;
 /// The figures of sweep.csv that `refine` estimates: the values of the solution (final
 /// energies, cumulative dissipations, force and penetration maxima, the (E.1) residuals). The
 /// solver's counts (iterations, cap hits, steps, final time) are costs, not discretized
-/// quantities, and are left out.
+/// quantities: refine.csv lists their values per level without an estimate.
 pub const FIGURES: [&str; 13] = [
     "final_kinetic",
     "final_elastic",
@@ -527,9 +527,10 @@ impl Refinement {
 }
 
 /// The rows of refine.csv from sweep.csv's rows (one per level, coarsest first): a level that
-/// did not complete gives no value.
+/// did not complete gives no value. Every sweep.csv figure has its row, in sweep.csv's order:
+/// those of [`FIGURES`] with their estimate, the solver's costs with their values and a note.
 pub fn estimates(rows: &[Row], r: f64, p_expected: f64) -> Vec<RefineRow> {
-    FIGURES
+    collect::FIGURES
         .iter()
         .map(|&fig| {
             let i = collect::FIGURES.iter().position(|f| *f == fig).unwrap_or(usize::MAX);
@@ -544,7 +545,18 @@ pub fn estimates(rows: &[Row], r: f64, p_expected: f64) -> Vec<RefineRow> {
                 })
                 .collect();
             let numbers: Vec<Option<f64>> = values.iter().map(|v| v.parse().ok()).collect();
-            RefineRow { figure: fig.to_string(), estimate: Estimate::of(&numbers, r, p_expected), values }
+            let estimate = if FIGURES.contains(&fig) {
+                Estimate::of(&numbers, r, p_expected)
+            } else {
+                Estimate {
+                    order: None,
+                    extrapolated: None,
+                    gci: None,
+                    asymptotic: false,
+                    note: "a cost of the solver, not a discretized quantity: not estimated".into(),
+                }
+            };
+            RefineRow { figure: fig.to_string(), estimate, values }
         })
         .collect()
 }

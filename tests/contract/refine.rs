@@ -191,9 +191,18 @@ fn g1_g2_g3_refine_the_compliant_layer_bands_hold_the_closed_form() {
     ];
     let (text, rows) = refine(&args, &out);
     let figures: Vec<&str> = rows.iter().map(|r| r[0].as_str()).collect();
-    let mut expected: Vec<String> = dyncontact::sweep::refine::FIGURES.iter().map(|f| f.to_string()).collect();
+    // every sweep.csv figure in its order (the solver's costs without an estimate), then the impulses
+    let mut expected: Vec<String> = dyncontact::sweep::collect::FIGURES.iter().map(|f| f.to_string()).collect();
     expected.extend(dyncontact::sweep::refine::impulse_figures(2, dyncontact::sweep::refine::DEFAULT_WINDOWS));
     assert_eq!(figures, expected);
+    let cost =
+        |f: &str| dyncontact::sweep::collect::FIGURES.contains(&f) && !dyncontact::sweep::refine::FIGURES.contains(&f);
+    for r in rows.iter().filter(|r| cost(&r[0])) {
+        // a cost: its three values, no order, extrapolation or GCI, not asymptotic, and the note
+        assert!(r[1..4].iter().all(|v| v.parse::<f64>().is_ok()), "{r:?}");
+        assert_eq!(&r[4..8], ["", "", "", "false"], "{r:?}");
+        assert!(r[8].contains("a cost of the solver"), "{r:?}");
+    }
     let exact: Vec<(String, f64, f64)> = compliant_layer_exact(t_end).into_iter().map(|(f, x)| (f, x, 0.0)).collect();
     let checked = bands_hold("g1_g2_g3_refine_the_compliant_layer_bands_hold_the_closed_form", &rows, &exact);
     // B.2's penetration and force converge at order ≈ 1, the dissipations and friction
