@@ -146,8 +146,8 @@ impl PyScene {
     /// Returns a dict: `name`, `dimension`, the sizes (`nodes`, `triangles`, `tetrahedra`,
     /// `velocity_unknowns`, `contact_nodes`, ...), `steps`, `step`, the (C.k) limit
     /// (`ck_step_limit`, `ck_limiting_node`, `ck_note`), `memory_estimate_bytes`,
-    /// `output_estimate_bytes`, `fits` (False when `run` would refuse it for memory: then only
-    /// the estimate and `refused` are given), `lines` (what `dyncontact check` prints) and
+    /// `output_estimate_bytes`, `fits` (False when `run` would refuse it for memory: then the
+    /// estimate's sizes, `refused`, and no (C.k) limit), `lines` (what `dyncontact check` prints) and
     /// `warnings`. A time-dependent load that is not finite at a time a step samples it raises
     /// the scene error `dyncontact check` gives.
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
@@ -161,6 +161,18 @@ impl PyScene {
         d.set_item("output_estimate_bytes", estimate.outputs.total().round() as u64)?;
         if let Err(e) = resources::check_fits(&estimate, resources::available_memory()) {
             d.set_item("dimension", estimate.dim)?;
+            // the sizes the estimate counted without building the mesh (upper bounds where the
+            // clamped and contact sides are not resolved); (C.k) needs the contact nodes'
+            // masses, which only the assembly gives
+            d.set_item("nodes", estimate.nodes)?;
+            d.set_item(if estimate.dim == 3 { "tetrahedra" } else { "triangles" }, estimate.triangles)?;
+            d.set_item("velocity_unknowns", estimate.unknowns)?;
+            d.set_item("contact_nodes", estimate.contact_nodes)?;
+            d.set_item("steps", model.time.steps)?;
+            d.set_item("step", model.time.step)?;
+            d.set_item("ck_step_limit", py.None())?;
+            d.set_item("ck_limiting_node", py.None())?;
+            d.set_item("ck_note", "not computed: the scene does not fit in the memory available")?;
             d.set_item("fits", false)?;
             d.set_item("refused", e.to_string())?;
             d.set_item("lines", estimate.lines())?;

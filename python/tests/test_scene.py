@@ -149,3 +149,14 @@ def test_an_int_beyond_i64_names_the_range():
     assert e.value.key == "output.every" and "9223372036854775807" in str(e.value)
     assert dc.Scene.default().with_set({"material.young": 10**20}).check()["fits"] is True
 
+
+
+def test_check_of_a_scene_too_large_still_gives_its_sizes(root):
+    """A 400³ box would not fit: check() gives the estimate's sizes (counted without building
+    the mesh: 401³ nodes, 6 · 400³ tetrahedra) and says why there is no (C.k) limit."""
+    big = dc.Scene.from_file(root / "fixtures/scenes/academic3d.toml").with_set({"domain.cells": [400, 400, 400]})
+    info = big.check()
+    assert info["fits"] is False and info["refused"]
+    assert info["nodes"] == 401**3 and info["tetrahedra"] == 6 * 400**3
+    assert info["velocity_unknowns"] == 3 * 401**3 and info["contact_nodes"] > 0
+    assert info["ck_step_limit"] is None and "not computed" in info["ck_note"]
