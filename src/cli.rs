@@ -326,7 +326,11 @@ fn cmd_run(
         if resume.is_none() {
             resources::check_disk(&estimate, &out)?;
         }
-        Problem::new(model, &dir)
+        // a load that is not finite at a time a step samples it: refused before any output,
+        // as `check` refuses it (beyond the scan's budget the step that meets it stops the run)
+        let problem = Problem::new(model, &dir)?;
+        problem.check_load_times(defaults::CHECK_LOAD_EVALUATIONS)?;
+        Ok(problem)
     });
     let problem = match prepared {
         Ok(p) => p,

@@ -56,7 +56,8 @@ impl PyScene {
     }
 
     /// The model and its discrete problem, refused (as `dyncontact run` refuses it) when it
-    /// would not fit in this machine's memory; `out`, when given, must have room for the outputs.
+    /// would not fit in this machine's memory or a load is not finite at a time a step samples
+    /// it; `out`, when given, must have room for the outputs.
     pub fn problem(&self, out: Option<&Path>) -> dyncontact::Result<Problem> {
         let model = dyncontact::scene::Scene::from_toml(&self.effective, &self.file)?.validate()?;
         let estimate = resources::estimate(&model, &self.dir)?;
@@ -65,7 +66,10 @@ impl PyScene {
             dyncontact::output::folder::check_target(out)?;
             resources::check_disk(&estimate, out)?;
         }
-        Problem::new(model, &self.dir)
+        // refused before any step, as `dyncontact run` refuses it
+        let problem = Problem::new(model, &self.dir)?;
+        problem.check_load_times(dyncontact::defaults::CHECK_LOAD_EVALUATIONS)?;
+        Ok(problem)
     }
 
     fn from_text(py: Python<'_>, text: String, file: String, dir: Option<PathBuf>) -> PyResult<PyScene> {

@@ -1027,7 +1027,8 @@ fn the_penalty_study_takes_penalty_scenes_and_shares_the_run_folder() {
 /// Requirement: `check` refuses a load that is finite at t = 0, at T and at every t_n but not
 /// at a time a step samples it: with k = 5e-4 the midpoint step from t_1 = 0.0005 samples
 /// f(0.00075), where 1/(t − 0.00075) divides by zero (0.0005 + 0.00025 is 0.00075 in f64).
-/// `run` stops at that step, naming the same load; `check` said "valid" before.
+/// `run` refuses it the same way before writing anything (it stopped at that step, after
+/// writing the first); `check` said "valid" before.
 #[test]
 fn check_refuses_a_load_infinite_at_a_load_time_only() {
     let load = ["--set", "loads.body=[\"0\", \"1/(t-0.00075)\"]"];
@@ -1037,8 +1038,9 @@ fn check_refuses_a_load_infinite_at_a_load_time_only() {
     assert!(err(&o).contains("loads.body") && err(&o).contains("t = 0.00075"), "{}", err(&o));
     let dir = tmp("load_time");
     let o = run_into(&dir.join("run"), &[&SMALL[..], &load].concat());
-    assert_ne!(o.status.code(), Some(0));
-    assert!(err(&o).contains("loads.body"), "{}", err(&o));
+    assert_eq!(o.status.code(), Some(1), "{}", err(&o));
+    assert!(err(&o).contains("loads.body") && err(&o).contains("t = 0.00075"), "{}", err(&o));
+    assert!(!dir.join("run").exists(), "a refused run made its folder");
     // a load that is finite at every load time: `check` says it scanned them
     let o = cli(&[&["check", scene.to_str().expect("path")][..], &SMALL].concat());
     assert_eq!(o.status.code(), Some(0), "{}", err(&o));

@@ -81,7 +81,10 @@ fn forced_newton_failure_exits_2_with_valid_files() {
 
 /// A load that becomes infinite mid-run (1/(t − 0.0105) at the midpoint of step 11) stops the
 /// run at that step as bad input (exit 1) naming the load's key, the point and the time — it is
-/// checked every step before anything is solved — and no non-finite value reaches a file.
+/// checked every step before anything is solved — and no non-finite value reaches a file. Over
+/// 0.3 s `run` refuses the scene before its first step (the load at each of the 300 load times:
+/// 768 quadrature points each); over 30 s that scan would take 30,000 × 768 = 2.3e7
+/// evaluations, more than its budget of 2e7, so the run starts and the step meets the load.
 #[test]
 fn forced_non_finite_load_is_refused_naming_the_key() {
     let dir = tmp("fail_nan");
@@ -89,7 +92,12 @@ fn forced_non_finite_load_is_refused_naming_the_key() {
     let text = fixture_text("impact_friction")
         .replace("body = [\"0\", \"-20\"]", "body = [\"0\", \"-20 + 1/(t - 0.0105)\"]")
         .replace("step = 5.0e-4", "step = 1.0e-3");
-    std::fs::write(&scene, text).expect("write");
+    std::fs::write(&scene, &text).expect("write");
+    let refused = dir.join("refused");
+    let o = run(&[], &scene, &refused);
+    assert_eq!(o.status.code(), Some(1), "exit code");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("t = 0.0105") && !refused.exists());
+    std::fs::write(&scene, text.replace("end = 0.3", "end = 30.0")).expect("write");
     let out = dir.join("out");
     let o = run(&[], &scene, &out);
     let err = String::from_utf8_lossy(&o.stderr);
