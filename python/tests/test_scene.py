@@ -57,6 +57,11 @@ def test_check_refuses_a_load_infinite_at_a_load_time_only():
     with pytest.raises(dc.SceneError) as e:
         s.check()
     assert e.value.key == "loads.body" and "t = 0.00075" in str(e.value)
+    # run() and Simulation() refuse it before the first step, as `dyncontact run` does
+    for start in (dc.run, dc.Simulation):
+        with pytest.raises(dc.SceneError) as e:
+            start(s)
+        assert e.value.key == "loads.body" and "t = 0.00075" in str(e.value)
 
 
 def test_numpy_values_are_toml_values():
