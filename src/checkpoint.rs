@@ -16,8 +16,10 @@ use crate::energy::EnergyTerms;
 use crate::error::{Error, Result};
 use crate::simulation::{SolverState, State};
 
-/// The checkpoint format this version writes and reads.
-const FORMAT: u32 = 5;
+/// The checkpoint format this version writes and reads (6: t_n is the decimal of n·k,
+/// `problem::step_time`, and the loads are sampled there; a format-5 state continued with it
+/// would equal neither version's uninterrupted run).
+const FORMAT: u32 = 6;
 
 /// Bits of an f64 vector (JSON numbers would round-trip through decimal text).
 fn bits(x: &[f64]) -> Vec<u64> {

@@ -625,6 +625,9 @@ fn cmd_check(scene: &Path, set: &[String]) -> Result<(), Error> {
         for l in estimate.lines() {
             say!("  {l}");
         }
+        for w in &model.warnings {
+            esay!("warning: {w}");
+        }
         esay!("warning: `run` would refuse it: {e}");
         return Ok(());
     }

@@ -13,12 +13,12 @@ use crate::mesh::solid::SolidMesh;
 use crate::mesh::{self, Geometry, PlaneMesh};
 use crate::model::contact::ContactModel;
 use crate::model::expr::VecExpr;
-use crate::model::kinds::{Bound, FrictionBound};
+use crate::model::kinds::{Bound, FrictionBound, SchemeKind};
 use crate::model::laws::{FrictionBoundLaw, NormalLaw};
 use crate::model::material::Material;
 use crate::model::{ContactParams, Domain, Enforcement, Model};
 use crate::scene::Scene;
-use crate::scheme::{ContactKinematics, load_time};
+use crate::scheme::ContactKinematics;
 
 /// The discrete problem of one scene.
 pub struct Problem {
@@ -76,6 +76,15 @@ impl Problem {
         step_time(n, self.k)
     }
 
+    /// The time at which the step from t_n samples the load: f^{n+½} = f(t_n + k/2) (decision
+    /// 7), or f(t_{n+1}) for backward Euler — the time of step n + 1 as the run writes it.
+    pub fn load_time(&self, n: usize) -> f64 {
+        match self.model.time.scheme {
+            SchemeKind::BackwardEuler => self.time(n + 1),
+            _ => self.time(n) + 0.5 * self.k,
+        }
+    }
+
     /// Every time-dependent load is finite at every time the run samples it: (S.2)'s
     /// f^{n+½} = f(t_n + k/2) (f(t_{n+1}) for backward Euler), n = 0 … N − 1, at every
     /// quadrature point — when that takes at most `budget` evaluations. [`Problem::new`] checks
@@ -85,12 +94,12 @@ impl Problem {
         if self.loads.is_constant() {
             return Ok(LoadScan::Constant);
         }
-        let evaluations = self.loads.scan_cost(self.steps);
+        // a time costs ~10 evaluations besides its points (t_n's decimal: a format and a parse)
+        let evaluations = self.loads.scan_cost(self.steps).saturating_add(10 * self.steps);
         if evaluations > budget {
             return Ok(LoadScan::TooCostly { evaluations });
         }
-        let kind = self.model.time.scheme;
-        self.loads.check_finite_at((0..self.steps).map(|n| load_time(kind, self.k, self.time(n))))?;
+        self.loads.check_finite_at((0..self.steps).map(|n| self.load_time(n)))?;
         Ok(LoadScan::Scanned { times: self.steps })
     }
 
@@ -250,7 +259,7 @@ pub fn step_time(n: usize, k: f64) -> f64 {
     }
     let ulp = f64::from_bits(t.to_bits() + 1) - t;
     match format!("{t:.14e}").parse::<f64>() {
-        Ok(short) if (short - t).abs() <= 4.0 * ulp => short,
+        Ok(short) if short.is_finite() && (short - t).abs() <= 4.0 * ulp => short,
         _ => t,
     }
 }

@@ -69,6 +69,26 @@ pub struct NodeRecord {
     pub friction_vec: [f64; 3],
 }
 
+impl NodeRecord {
+    /// The record as contact.csv holds it: every real with a zero's sign dropped
+    /// ([`crate::output::csv::as_written`]).
+    pub fn as_written(&self) -> NodeRecord {
+        let w = crate::output::csv::as_written;
+        NodeRecord {
+            u_n: w(self.u_n),
+            u_t: w(self.u_t),
+            v_t: w(self.v_t),
+            p: w(self.p),
+            lambda: w(self.lambda),
+            friction: w(self.friction),
+            bound: w(self.bound),
+            status: self.status,
+            v_t_vec: self.v_t_vec.map(w),
+            friction_vec: self.friction_vec.map(w),
+        }
+    }
+}
+
 /// Wall-clock split of the setup, in seconds.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct SetupTiming {
@@ -361,8 +381,9 @@ impl<'p> Simulation<'p> {
     }
 
     /// The row of t = 0: the initial state's quantities. No step has solved for λ or the
-    /// friction force yet, so they are 0; the compliance force q_i = p(u_ν,i) of an initial
-    /// penetration is the state's own, and the normal force Σ ω_i q_i and the statuses follow it
+    /// friction force yet, so they are 0; the normal response q_i = p(u_ν,i) of an initial
+    /// penetration (p_ε under `enforcement = "penalty"`, as a step reports it) is the state's
+    /// own, and the normal force Σ ω_i q_i and the statuses follow it
     /// (a node with q_i > 0 is in contact: under a friction law in stick when its initial
     /// tangential velocity is zero, else slipping).
     pub fn initial_record(&self) -> StepRecord {
@@ -372,7 +393,7 @@ impl<'p> Simulation<'p> {
             let d = c.penetration(&self.state.u);
             for (i, &d_i) in d.iter().enumerate() {
                 let v_tan = c.tangential(i, &self.state.v);
-                let (p_i, v_t) = (c.compliance.p(d_i), c.tangential_size(i, &self.state.v));
+                let (p_i, v_t) = (c.normal.p(d_i), c.tangential_size(i, &self.state.v));
                 let status = NodeStatus::classify(p_i, 0.0, c.friction.as_ref().map(|_| v_t == 0.0));
                 normal_force += c.omega[i] * p_i;
                 match status {
@@ -426,7 +447,7 @@ impl<'p> Simulation<'p> {
         let (mut v_new, f) = self.free_velocity();
         if let Some(entry) = f.iter().position(|x| !x.is_finite()) {
             // name the load and where it is not finite (an expression like 1/(t − t0))
-            let t = self.stepper.load_time(self.problem.time(self.state.n));
+            let t = self.problem.load_time(self.state.n);
             return Err(self
                 .problem
                 .loads
@@ -686,7 +707,7 @@ impl<'p> Simulation<'p> {
 
     /// The free velocity A_k⁻¹ b^n of the current state and the load used.
     pub fn free_velocity(&self) -> (Vec<f64>, Vec<f64>) {
-        let f = self.problem.loads.at(self.stepper.load_time(self.problem.time(self.state.n)));
+        let f = self.problem.loads.at(self.problem.load_time(self.state.n));
         let mut v_free = self.stepper.rhs(&self.products, &f);
         self.stepper.solve_in_place(&mut v_free);
         (v_free, f)

@@ -39,8 +39,7 @@ fn margin(pair: &StepPair, z: &[f64]) -> (f64, f64) {
     let p = sim.problem;
     let k = p.k;
     let (u0, v0, u1, w) = (pair.u_before, pair.v_before, &sim.state.u, &sim.state.v);
-    let t_n = p.time(sim.state.n - 1);
-    let f = p.loads.at(sim.stepper.load_time(t_n));
+    let f = p.loads.at(p.load_time(sim.state.n - 1));
     let vbar: Vec<f64> = v0.iter().zip(w.iter()).map(|(a, b)| 0.5 * (a + b)).collect();
     let uhalf: Vec<f64> = u0.iter().zip(u1.iter()).map(|(a, b)| 0.5 * (a + b)).collect();
     let dv: Vec<f64> = w.iter().zip(v0).map(|(a, b)| (a - b) / k).collect();

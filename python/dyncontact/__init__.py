@@ -390,11 +390,12 @@ def refine(
 
     The scene (with its ``with_set`` overrides) runs on ``levels`` levels: level l has
     ``domain.cells`` times ``ratio**l`` in every direction (``what="h"``), ``time.step`` divided
-    by ``ratio**l`` (``"k"``) or both (``"both"``). Every figure of sweep.csv and the contact
-    impulses (``normal_impulse``, ``friction_impulse_x`` ... over the run and over ``windows``
-    equal windows, ``..._w1`` ...; default 4, or 3, 2, 1 when 4 does not divide the coarsest
-    level's steps) get the observed order (G.1), Richardson's extrapolation (G.2) and the grid
-    convergence index (G.3) from the three finest levels.
+    by ``ratio**l`` (``"k"``) or both (``"both"``). Every solution figure of sweep.csv and the
+    contact impulses (``normal_impulse``, ``friction_impulse_x`` ... over the run and over
+    ``windows`` equal windows, ``..._w1`` ...; default 4, or 3, 2, 1 when 4 does not divide the
+    coarsest level's steps) get the observed order (G.1), Richardson's extrapolation (G.2) and
+    the grid convergence index (G.3) from the three finest levels; the solver's costs
+    (iterations, steps) have rows with their values per level and no estimate.
 
     Args:
         scene: the scene to refine (a rectangle or box with ``domain.cells``).

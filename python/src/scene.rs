@@ -169,7 +169,10 @@ impl PyScene {
             // clamped and contact sides are not resolved); (C.k) needs the contact nodes'
             // masses, which only the assembly gives
             d.set_item("nodes", estimate.nodes)?;
-            d.set_item(if estimate.dim == 3 { "tetrahedra" } else { "triangles" }, estimate.triangles)?;
+            let (triangles, tetrahedra) =
+                if estimate.dim == 3 { (0, estimate.triangles) } else { (estimate.triangles, 0) };
+            d.set_item("triangles", triangles)?;
+            d.set_item("tetrahedra", tetrahedra)?;
             d.set_item("velocity_unknowns", estimate.unknowns)?;
             d.set_item("contact_nodes", estimate.contact_nodes)?;
             d.set_item("steps", model.time.steps)?;
@@ -178,6 +181,7 @@ impl PyScene {
             d.set_item("ck_limiting_node", py.None())?;
             d.set_item("ck_note", "not computed: the scene does not fit in the memory available")?;
             d.set_item("fits", false)?;
+            d.set_item("warnings", &model.warnings)?;
             d.set_item("refused", e.to_string())?;
             d.set_item("lines", estimate.lines())?;
             return Ok(d);

@@ -31,6 +31,8 @@ pub struct PySimulation {
     /// owned: made by Box::leak in `new`, freed in Drop after `sim`; never moved or mutated
     problem: NonNull<Problem>,
     failed: bool,
+    /// the record of t = 0, made with the simulation (the state moves on with its steps)
+    initial: Py<PyStepRecord>,
 }
 
 // SAFETY: the problem is owned by this object alone (leaked from a Box in `new`, freed in
@@ -98,7 +100,17 @@ impl PySimulation {
             }
         });
         let (problem, sim) = py_result(py, built)?;
-        Ok(PySimulation { sim: ManuallyDrop::new(sim), problem: NonNull::from(problem), failed: false })
+        let initial = PyStepRecord::of(py, &sim.initial_record(), &sim).and_then(|r| Py::new(py, r));
+        let initial = match initial {
+            Ok(r) => r,
+            Err(e) => {
+                drop(sim);
+                // SAFETY: `sim`, the only borrower of the leaked problem, is dropped
+                unsafe { drop(Box::from_raw(std::ptr::from_ref(problem).cast_mut())) };
+                return Err(e);
+            }
+        };
+        Ok(PySimulation { sim: ManuallyDrop::new(sim), problem: NonNull::from(problem), failed: false, initial })
     }
 
     /// An iterator over the remaining steps, one StepRecord each (the library's
@@ -108,9 +120,9 @@ impl PySimulation {
         Steps { sim: slf }
     }
 
-    /// The record of t = 0 (history.csv's first row).
-    fn initial_record(&self, py: Python<'_>) -> PyResult<PyStepRecord> {
-        PyStepRecord::of(py, &self.sim.initial_record(), &self.sim)
+    /// The record of t = 0 (history.csv's first row), whatever steps were taken since.
+    fn initial_record(&self, py: Python<'_>) -> Py<PyStepRecord> {
+        self.initial.clone_ref(py)
     }
 
     /// Advance one step and return its record (None after the last step).

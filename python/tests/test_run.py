@@ -126,6 +126,9 @@ def test_simulation_steps_are_the_run(root):
     force = np.array([first.normal_force] + [r.normal_force for r in records])
     assert t.tobytes() == ref.history["t"].tobytes()
     assert force.tobytes() == ref.history["normal_force"].tobytes()
+    # the record of t = 0 after the steps is still t = 0's
+    again = sim.initial_record()
+    assert again.t == 0.0 and np.array_equal(again.u, first.u) and again.history == first.history
     last = records[-1]
     assert last.u.shape == (561, 2) and last.v.shape == (561, 2)
     assert np.array_equal(last.u, ref.fields(-1)["u"]) and np.array_equal(last.v, ref.fields(-1)["v"])

@@ -194,10 +194,3 @@ pub struct SolverParams {
     pub energy_residual_limit: f64,
     pub energy_residual_action: EnergyResidualAction,
 }
-
-impl Model {
-    /// The time of step n.
-    pub fn time(&self, n: usize) -> f64 {
-        n as f64 * self.time.step
-    }
-}

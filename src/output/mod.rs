@@ -220,19 +220,21 @@ impl Writer {
             let _ = write!(row, "{}{sep}", value(rec));
         }
         self.history.append(row.as_bytes())?;
-        let e = &rec.energy;
+        // the charts' values as history.csv holds them (a zero without its sign), which a
+        // resumed run reads back: its charts equal an uninterrupted run's
+        let (e, w) = (&rec.energy, csv::as_written);
         self.rows.push(ChartRow {
-            t: rec.t,
-            kinetic: e.kinetic,
-            elastic: e.elastic,
-            compliance: e.compliance,
-            work: e.external_work,
-            viscous: e.viscous_dissipation,
-            friction: e.friction_dissipation,
-            constraint: e.constraint_dissipation,
-            residual: e.residual,
-            normal_force: rec.normal_force,
-            tangential_force: rec.tangential_force,
+            t: w(rec.t),
+            kinetic: w(e.kinetic),
+            elastic: w(e.elastic),
+            compliance: w(e.compliance),
+            work: w(e.external_work),
+            viscous: w(e.viscous_dissipation),
+            friction: w(e.friction_dissipation),
+            constraint: w(e.constraint_dissipation),
+            residual: w(e.residual),
+            normal_force: w(rec.normal_force),
+            tangential_force: w(rec.tangential_force),
         });
         if let Some(tw) = self.trajectory.as_mut() {
             tw.record(rec.step, rec.t, &state.u, &state.v)?;
@@ -269,7 +271,8 @@ impl Writer {
             w.append(rows.as_bytes())?;
         }
         if !rec.nodes.is_empty() {
-            self.contact_frames.push((rec.step, rec.t, rec.nodes.clone()));
+            // as contact.csv holds them, which a resumed run reads back
+            self.contact_frames.push((rec.step, rec.t, rec.nodes.iter().map(NodeRecord::as_written).collect()));
         }
         let u = p.dofs.expand_dim(&state.u);
         let v = p.dofs.expand_dim(&state.v);

@@ -185,7 +185,7 @@ pub fn one_paragraph(s: &str) -> String {
 /// int beyond i64 arrives as a float; serde says "invalid type: floating point …, expected
 /// i64", which names neither the range nor that the number was meant whole.
 fn beyond_i64_hint(message: &str, at: &[Segment], set: &[Segment], value: &toml::Value) -> &'static str {
-    const HINT: &str = "; this key takes a whole number, and TOML's whole numbers lie within ±9223372036854775807";
+    const HINT: &str = "; this key takes a whole number, and TOML's whole numbers run from -9223372036854775808 to 9223372036854775807";
     let wants_integer = ["expected i64", "expected u64", "expected usize", "expected u32", "expected i32"]
         .iter()
         .any(|w| message.contains(w));
@@ -204,11 +204,16 @@ fn beyond_i64_hint(message: &str, at: &[Segment], set: &[Segment], value: &toml:
             _ => return "",
         };
     }
+    // beyond i64: x ≥ 2⁶³ or x < −2⁶³ (−2⁶³ itself is i64::MIN); a string of digits that TOML
+    // read as text only for its range (not `007` or `1__0`, which are in range)
+    const TWO_63: f64 = 9_223_372_036_854_775_808.0;
     let whole_beyond = match v {
-        toml::Value::Float(x) => x.fract() == 0.0 && x.abs() >= 9.223_372_036_854_776e18,
+        toml::Value::Float(x) => x.fract() == 0.0 && (*x >= TWO_63 || *x < -TWO_63),
         toml::Value::String(s) => {
-            let digits = s.strip_prefix(['-', '+']).unwrap_or(s);
-            !digits.is_empty() && digits.chars().all(|c| c.is_ascii_digit() || c == '_')
+            let digits = s.replace('_', "");
+            digits.parse::<i128>().is_ok_and(|n| i64::try_from(n).is_err())
+                || (digits.trim_start_matches(['-', '+']).len() > 38
+                    && digits.trim_start_matches(['-', '+']).chars().all(|c| c.is_ascii_digit()))
         }
         _ => false,
     };

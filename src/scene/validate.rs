@@ -99,8 +99,8 @@ impl Scene {
     }
 
     /// The keys the chosen options do not use, each said as ignored: `penalty` beside
-    /// enforcement = "exact" (the scene template gives both, the comment saying ε acts only with
-    /// "penalty"), the coefficients of another friction law (`--set contact.friction.law=constant
+    /// enforcement = "exact" (the contract's scene template gives both, its comment saying ε
+    /// acts only with "penalty"), the coefficients of another friction law (`--set contact.friction.law=constant
     /// --set contact.friction.coefficient=0.3` on a scene with the exponential law keeps its
     /// static, kinetic and decay), a mesh file beside a rectangle or box, size and cells beside a
     /// Gmsh mesh. A key no option knows is still refused by the schema.

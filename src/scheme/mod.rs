@@ -30,15 +30,6 @@ pub struct ContactKinematics {
     pub p_w: f64,
 }
 
-/// The time at which the step from t_n samples the load: f^{n+½} = f(t_n + k/2) (decision 7),
-/// or f(t_{n+1}) for backward Euler.
-pub fn load_time(kind: SchemeKind, k: f64, t_n: f64) -> f64 {
-    match kind {
-        SchemeKind::BackwardEuler => t_n + k,
-        _ => t_n + 0.5 * k,
-    }
-}
-
 /// The factored step matrix A_k.
 pub struct StepOperator {
     pub kind: SchemeKind,
@@ -83,11 +74,6 @@ impl StepOperator {
         };
         let factor = Cholesky::new(&a, "the step matrix A_k", Some(&ops.positions))?;
         Ok(StepOperator { kind, k, a: factor, matrix: Some(a) })
-    }
-
-    /// The time at which the load is sampled ([`load_time`]).
-    pub fn load_time(&self, t_n: f64) -> f64 {
-        load_time(self.kind, self.k, t_n)
     }
 
     /// (S.2) without contact forces: b^n = (M/k − C/2 − kK/4) v^n − K u^n + f^{n+½}

@@ -215,7 +215,9 @@ impl Plan {
             let label = describe(&axes, &choice);
             let refuse = |e: Error| point_error(&id, &label, e);
             let scene_text = point_text(base_text, base_label, base_dir, &ovs, &sweep.name).map_err(refuse)?;
-            let (mem_mb, runtime_min) = check_point(&scene_text, &id).map_err(refuse)?;
+            let axis_keys: Vec<&str> =
+                axes.iter().zip(&choice).flat_map(|(a, &c)| a.overrides[c].iter().map(|o| o.key.as_str())).collect();
+            let (mem_mb, runtime_min) = check_point(&scene_text, &id, &axis_keys).map_err(refuse)?;
             points.push(Point { id, choice, scene_text, mem_mb, runtime_min });
         }
         Ok(Plan {
@@ -775,18 +777,26 @@ fn point_text(base: &str, label: &str, base_dir: &Path, ovs: &[Override], name: 
 }
 
 /// Validate a point's scene as `run` would: the scene, then the problem (mesh and sides, the
-/// gap and the initial state on it, loads); its memory for a cluster job (MB: the estimate
-/// ×1.5 + 100 — the estimate is within 0.91–1.17 of measured peaks, and a job killed for its
-/// memory loses its work, so the margin is wide) and a conservative run time (minutes: the
-/// estimated work at 0.1 Gflop/s, at least 10).
-fn check_point(text: &str, id: &str) -> Result<(u64, u64)> {
+/// gap and the initial state on it, loads, at every time a step samples them); its memory for a
+/// cluster job (MB: the estimate ×1.5 + 100 — the estimate is within 0.91–1.17 of measured
+/// peaks, and a job killed for its memory loses its work, so the margin is wide) and a
+/// conservative run time (minutes: the estimated work at 0.1 Gflop/s, at least 10). An axis
+/// over a key the point's scene does not use (`contact.penalty` with `enforcement = "exact"`)
+/// is refused: its points would be the same run.
+fn check_point(text: &str, id: &str, axis_keys: &[&str]) -> Result<(u64, u64)> {
     let scene = Scene::from_toml(text, &format!("points/{id}/scene.toml"))?;
     let model = scene.validate()?;
+    for key in axis_keys {
+        if let Some(w) = model.warnings.iter().find(|w| w.starts_with(&format!("{key} is not used"))) {
+            return Err(Error::scene(*key, format!("a sweep axis over a key the scene does not use: {w}")));
+        }
+    }
     let e = crate::resources::estimate(&model, Path::new("."))?;
     // the problem's own checks, where the machine can hold it (a point meant for a larger
     // cluster node is checked by its run)
     if crate::resources::check_fits(&e, crate::resources::available_memory()).is_ok() {
-        crate::problem::Problem::new(model.clone(), Path::new("."))?;
+        let problem = crate::problem::Problem::new(model.clone(), Path::new("."))?;
+        problem.check_load_times(crate::defaults::CHECK_LOAD_EVALUATIONS)?;
     }
     let (solves, contact) = e.flops_per_step();
     let steps = model.time.steps as f64;

@@ -1,6 +1,7 @@
 //! `dyncontact refine` (SCENES.md, "Solution verification"): a scene run on a sequence of
-//! systematically refined meshes and steps, and every figure of sweep.csv with its observed
-//! order, its Richardson extrapolation and Roache's grid convergence index.
+//! systematically refined meshes and steps, and every solution figure of sweep.csv with its
+//! observed order, its Richardson extrapolation and Roache's grid convergence index (the
+//! solver's costs are listed per level, without an estimate).
 //!
 //! The levels ℓ = 0 … N−1 (coarsest first) are the points of a sweep with one axis `level`
 //! (a `sets` axis): level ℓ has `domain.cells` × r^ℓ in every direction (`what = h`),
@@ -347,7 +348,10 @@ pub fn plan(base: &Base, extra: &[Override], name: &str, opts: &RefineOptions) -
     let text = toml::to_string(&table).map_err(|e| Error::Output(format!("{}: {e}", base.label)))?;
     let base = &Base { text, label: base.label.clone(), dir: base.dir.clone() };
     let scene = super::scene_for(&probe, base, &[])?;
-    if let Some(f) = &scene.domain.file
+    // a rectangle's or box's `file`, a mesh's `size` and `cells` are ignored keys (said by the
+    // scene's warnings): the kind decides
+    let gmsh = scene.domain.kind == crate::model::kinds::DomainKind::Gmsh;
+    if let (true, Some(f)) = (gmsh, &scene.domain.file)
         && opts.what.refines_h()
     {
         return Err(Error::scene(
@@ -357,7 +361,7 @@ pub fn plan(base: &Base, extra: &[Override], name: &str, opts: &RefineOptions) -
             ),
         ));
     }
-    let cells = match scene.domain.cells.clone() {
+    let cells = match scene.domain.cells.clone().filter(|_| !gmsh) {
         Some(cells) => cells,
         None if opts.what.refines_h() => {
             return Err(Error::scene(
@@ -477,6 +481,11 @@ impl Refinement {
         let plots = dir.join("plots");
         std::fs::create_dir_all(&plots).map_err(|e| Error::io(&plots, e))?;
         for row in &table {
+            // a cost row has no estimate to draw
+            let cost = collect::FIGURES.contains(&row.figure.as_str()) && !FIGURES.contains(&row.figure.as_str());
+            if cost {
+                continue;
+            }
             if let Some(svg) = chart(row, &self.sizes, self.size_name, self.dim)? {
                 write_atomic(&plots.join(format!("refine_{}.svg", row.figure)), svg.as_bytes())?;
             }

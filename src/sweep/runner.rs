@@ -251,7 +251,11 @@ fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> 
     };
     let scene = Scene::from_toml(text, &pd.join("scene.toml").display().to_string());
     let name = scene.as_ref().map(|s| s.name.clone()).unwrap_or_default();
-    let problem = scene.and_then(|s| s.validate()).and_then(|model| Problem::new(model, pd));
+    // refused before any step, as `dyncontact run` refuses it
+    let problem = scene.and_then(|s| s.validate()).and_then(|model| Problem::new(model, pd)).and_then(|p| {
+        p.check_load_times(crate::defaults::CHECK_LOAD_EVALUATIONS)?;
+        Ok(p)
+    });
     let problem = match problem {
         Ok(p) => p,
         Err(e) => {

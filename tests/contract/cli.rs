@@ -52,7 +52,7 @@ fn cli_run_default_scene_writes_outputs() {
     let warnings = summary["warnings"].as_array().expect("warnings");
     assert!(warnings.iter().all(|w| w.as_str().unwrap_or("").contains("(C.k)")), "unexpected warnings: {warnings:?}");
     // (issue 24, item 10) the README's figures of this run are this run's: "(E.1) defect 2e-16",
-    // "5.7 convex solves per step … (17 at most" (rounded as printed there)
+    // "5.7 convex solves per step … (15 at most" (rounded as printed there)
     let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).expect("README");
     let steps = summary["steps_completed"].as_f64().expect("steps");
     let per_step = summary["fixed_point_iterations_total"].as_f64().expect("total") / steps;

@@ -77,7 +77,7 @@ fn step_times_of_a_decimal_step_are_decimals() {
     assert_eq!(step_time(3, 0.1), 0.3);
     assert_eq!(step_time(0, 2.5e-3), 0.0);
     // every pinned run's t column: at most 15 significant digits (their steps are 1e-3, 5e-4,
-    // 2.5e-3, 2e-4, 1e-4; 14% of the t fields had 16 or 17 before)
+    // 2.5e-3, 2e-4, 1e-4; 2,597 of the 12,877 history.csv t fields had 16 or 17 before)
     let pins = root().join("fixtures/regression");
     for dir in std::fs::read_dir(&pins).expect("fixtures/regression").flatten() {
         let text = std::fs::read_to_string(dir.path().join("history.csv")).expect("a pinned history");
@@ -89,22 +89,16 @@ fn step_times_of_a_decimal_step_are_decimals() {
 }
 
 proptest! {
-    /// Requirement: t_n stays within 4 units in the last place of the product n·k (for k = 1/3
-    /// too), and for a step m·10⁻ᵖ with m < 1000 it is the f64 nearest to n·m·10⁻ᵖ, up to a
-    /// million steps.
+    /// Requirement: for a step m·10⁻ᵖ with m < 1000, t_n is the f64 nearest to n·m·10⁻ᵖ (the
+    /// product n·k alone misses it, as 700 · 1e-3 shows) and increases with n, up to a million
+    /// steps.
     #[test]
-    fn step_times_stay_within_four_ulps(n in 0usize..1_000_000, m in 1u32..1000, p in 1i32..9) {
+    fn step_times_of_decimal_steps_are_the_decimals(n in 0usize..1_000_000, m in 1u32..1000, p in 1i32..9) {
         use dyncontact::problem::step_time;
         let k: f64 = format!("{m}e-{p}").parse().unwrap();
         let t = step_time(n, k);
-        let product = n as f64 * k;
-        let ulp = f64::from_bits(product.to_bits() + 1) - product;
-        prop_assert!((t - product).abs() <= 4.0 * ulp, "n = {}, k = {}: {} against {}", n, k, t, product);
         let decimal: f64 = format!("{}e-{p}", n as u64 * m as u64).parse().unwrap();
         prop_assert_eq!(t, decimal, "n = {}, k = {}", n, k);
-        // a step that is no short decimal: the product, within 4 units
-        let p3 = n as f64 * (1.0 / 3.0);
-        let ulp3 = f64::from_bits(p3.to_bits() + 1) - p3;
-        prop_assert!((step_time(n, 1.0 / 3.0) - p3).abs() <= 4.0 * ulp3, "n = {}", n);
+        prop_assert!(step_time(n + 1, k) > t, "n = {}, k = {}", n, k);
     }
 }

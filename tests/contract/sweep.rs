@@ -793,3 +793,23 @@ fn sweeps_say_what_went_wrong() {
     assert!(csv.lines().skip(1).all(|l| l.contains("(C.k)")), "{csv}");
     assert!(stderr.contains("2 of 2 points ran beyond (C.k): p000, p001"), "{stderr}");
 }
+
+/// Requirement: a sweep axis over a key its points do not use (`contact.penalty` on the exact
+/// default scene: every point would be the same run) is refused before anything runs, naming the
+/// key; with `[set] "contact.enforcement" = "penalty"` (the contract's example) it is a sweep.
+#[test]
+fn an_axis_over_an_unused_key_is_refused() {
+    let dir = tmp("unused-axis");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let file = dir.join("eps.toml");
+    let body = "name = \"eps\"\nbase = \"default\"\n[[axis]]\nkey = \"contact.penalty\"\nvalues = [1e-3, 1e-4]\n";
+    std::fs::write(&file, format!("{body}[set]\n\"time.end\" = 0.01\n")).expect("sweep file");
+    let Err(e) = Plan::from_file(&file, &[]) else {
+        panic!("an axis over contact.penalty without penalty enforcement was accepted")
+    };
+    assert_eq!(e.key(), Some("contact.penalty"), "{e}");
+    assert!(e.to_string().contains("does not use"), "{e}");
+    std::fs::write(&file, format!("{body}[set]\n\"time.end\" = 0.01\n\"contact.enforcement\" = \"penalty\"\n"))
+        .expect("sweep file");
+    assert_eq!(Plan::from_file(&file, &[]).expect("a sweep").points.len(), 2);
+}

@@ -83,7 +83,7 @@ fn forced_newton_failure_exits_2_with_valid_files() {
 /// run at that step as bad input (exit 1) naming the load's key, the point and the time — it is
 /// checked every step before anything is solved — and no non-finite value reaches a file. Over
 /// 0.3 s `run` refuses the scene before its first step (the load at each of the 300 load times:
-/// 768 quadrature points each); over 30 s that scan would take 30,000 × 768 = 2.3e7
+/// 768 quadrature points each); over 30 s that scan would take 30,000 × (768 + 10) = 2.3e7
 /// evaluations, more than its budget of 2e7, so the run starts and the step meets the load.
 #[test]
 fn forced_non_finite_load_is_refused_naming_the_key() {
