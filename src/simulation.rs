@@ -69,26 +69,6 @@ pub struct NodeRecord {
     pub friction_vec: [f64; 3],
 }
 
-impl NodeRecord {
-    /// The record as contact.csv holds it: every real with a zero's sign dropped
-    /// ([`crate::output::csv::as_written`]).
-    pub fn as_written(&self) -> NodeRecord {
-        let w = crate::output::csv::as_written;
-        NodeRecord {
-            u_n: w(self.u_n),
-            u_t: w(self.u_t),
-            v_t: w(self.v_t),
-            p: w(self.p),
-            lambda: w(self.lambda),
-            friction: w(self.friction),
-            bound: w(self.bound),
-            status: self.status,
-            v_t_vec: self.v_t_vec.map(w),
-            friction_vec: self.friction_vec.map(w),
-        }
-    }
-}
-
 /// Wall-clock split of the setup, in seconds.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct SetupTiming {

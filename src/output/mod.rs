@@ -128,6 +128,24 @@ pub struct ChartRow {
     pub tangential_force: f64,
 }
 
+/// A contact record as contact.csv holds it: every real with a zero's sign dropped
+/// ([`csv::as_written`]), as a resumed run reads it back.
+fn as_written(nr: &NodeRecord) -> NodeRecord {
+    let w = csv::as_written;
+    NodeRecord {
+        u_n: w(nr.u_n),
+        u_t: w(nr.u_t),
+        v_t: w(nr.v_t),
+        p: w(nr.p),
+        lambda: w(nr.lambda),
+        friction: w(nr.friction),
+        bound: w(nr.bound),
+        status: nr.status,
+        v_t_vec: nr.v_t_vec.map(w),
+        friction_vec: nr.friction_vec.map(w),
+    }
+}
+
 /// The writer of one run folder.
 pub struct Writer {
     dir: PathBuf,
@@ -272,7 +290,7 @@ impl Writer {
         }
         if !rec.nodes.is_empty() {
             // as contact.csv holds them, which a resumed run reads back
-            self.contact_frames.push((rec.step, rec.t, rec.nodes.iter().map(NodeRecord::as_written).collect()));
+            self.contact_frames.push((rec.step, rec.t, rec.nodes.iter().map(as_written).collect()));
         }
         let u = p.dofs.expand_dim(&state.u);
         let v = p.dofs.expand_dim(&state.v);
