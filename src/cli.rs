@@ -17,7 +17,7 @@ use crate::problem::Problem;
 use crate::run::{RunOptions, run};
 use crate::scene::Scene;
 use crate::sweep::collect::PointStatus;
-use crate::{Error, defaults, resources, study};
+use crate::{Error, resources, study};
 use clap::{Parser, Subcommand};
 use std::ffi::OsString;
 
@@ -329,7 +329,7 @@ fn cmd_run(
         // a load that is not finite at a time a step samples it: refused before any output,
         // as `check` refuses it (beyond the scan's budget the step that meets it stops the run)
         let problem = Problem::new(model, &dir)?;
-        problem.check_load_times(defaults::CHECK_LOAD_EVALUATIONS)?;
+        problem.check_load_times()?;
         Ok(problem)
     });
     let problem = match prepared {
@@ -632,7 +632,7 @@ fn cmd_check(scene: &Path, set: &[String]) -> Result<(), Error> {
         return Ok(());
     }
     let problem = Problem::new(model, &dir)?;
-    let scan = problem.check_load_times(defaults::CHECK_LOAD_EVALUATIONS)?;
+    let scan = problem.check_load_times()?;
     let info = ModelInfo::of(&problem);
     say!("scene {} is valid", problem.model.name);
     for l in info.lines().into_iter().chain(estimate.lines()) {

@@ -6,6 +6,7 @@
 
 use std::path::Path;
 
+use crate::defaults;
 use crate::error::{Error, Result};
 use crate::fem::assemble::nodal_masses;
 use crate::fem::{Dofs, LoadVector};
@@ -87,10 +88,11 @@ impl Problem {
 
     /// Every time-dependent load is finite at every time the run samples it: (S.2)'s
     /// f^{n+½} = f(t_n + k/2) (f(t_{n+1}) for backward Euler), n = 0 … N − 1, at every
-    /// quadrature point — when that takes at most `budget` evaluations. [`Problem::new`] checks
-    /// t = 0 and t = T only; a load like 1/(t − 0.00075) is finite there and at every t_n of
-    /// k = 5e-4, and infinite at the load time of step 1.
-    pub fn check_load_times(&self, budget: usize) -> Result<LoadScan> {
+    /// quadrature point — when that takes at most [`defaults::CHECK_LOAD_EVALUATIONS`]
+    /// evaluations. [`Problem::new`] checks t = 0 and t = T only; a load like 1/(t − 0.00075)
+    /// is finite there and at every t_n of k = 5e-4, and infinite at the load time of step 1.
+    pub fn check_load_times(&self) -> Result<LoadScan> {
+        let budget = defaults::CHECK_LOAD_EVALUATIONS;
         if self.loads.is_constant() {
             return Ok(LoadScan::Constant);
         }
@@ -240,7 +242,7 @@ impl LoadScan {
             LoadScan::TooCostly { evaluations } => Some(format!(
                 "the time-dependent loads were checked at t = 0 and t = T only: every load time would take \
                  {evaluations} evaluations (more than {}); `run` stops at the first step whose load is not finite",
-                crate::defaults::CHECK_LOAD_EVALUATIONS
+                defaults::CHECK_LOAD_EVALUATIONS
             )),
             _ => None,
         }

@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use dyncontact::output::ModelInfo;
 use dyncontact::problem::Problem;
+use dyncontact::resources;
 use dyncontact::scene::{DEFAULT_SCENE, parse};
-use dyncontact::{defaults, resources};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -68,7 +68,7 @@ impl PyScene {
         }
         // refused before any step, as `dyncontact run` refuses it
         let problem = Problem::new(model, &self.dir)?;
-        problem.check_load_times(dyncontact::defaults::CHECK_LOAD_EVALUATIONS)?;
+        problem.check_load_times()?;
         Ok(problem)
     }
 
@@ -188,7 +188,7 @@ impl PyScene {
         }
         let problem = py.detach(|| {
             Problem::new(model, &self.dir).and_then(|p| {
-                let scan = p.check_load_times(defaults::CHECK_LOAD_EVALUATIONS)?;
+                let scan = p.check_load_times()?;
                 Ok((p, scan))
             })
         });

@@ -796,7 +796,7 @@ fn check_point(text: &str, id: &str, axis_keys: &[&str]) -> Result<(u64, u64)> {
     // cluster node is checked by its run)
     if crate::resources::check_fits(&e, crate::resources::available_memory()).is_ok() {
         let problem = crate::problem::Problem::new(model.clone(), Path::new("."))?;
-        problem.check_load_times(crate::defaults::CHECK_LOAD_EVALUATIONS)?;
+        problem.check_load_times()?;
     }
     let (solves, contact) = e.flops_per_step();
     let steps = model.time.steps as f64;

@@ -63,6 +63,12 @@ pub const FIGURES: [&str; 13] = [
     "max_relative_energy_residual",
 ];
 
+/// A figure of sweep.csv that is a cost of the solver, not one of [`FIGURES`]: refine.csv lists
+/// its values per level without an estimate, and draws no chart of it.
+fn is_cost(figure: &str) -> bool {
+    collect::FIGURES.contains(&figure) && !FIGURES.contains(&figure)
+}
+
 /// What is refined from level to level.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum What {
@@ -482,8 +488,7 @@ impl Refinement {
         std::fs::create_dir_all(&plots).map_err(|e| Error::io(&plots, e))?;
         for row in &table {
             // a cost row has no estimate to draw
-            let cost = collect::FIGURES.contains(&row.figure.as_str()) && !FIGURES.contains(&row.figure.as_str());
-            if cost {
+            if is_cost(&row.figure) {
                 continue;
             }
             if let Some(svg) = chart(row, &self.sizes, self.size_name, self.dim)? {
@@ -554,7 +559,7 @@ pub fn estimates(rows: &[Row], r: f64, p_expected: f64) -> Vec<RefineRow> {
                 })
                 .collect();
             let numbers: Vec<Option<f64>> = values.iter().map(|v| v.parse().ok()).collect();
-            let estimate = if FIGURES.contains(&fig) {
+            let estimate = if !is_cost(fig) {
                 Estimate::of(&numbers, r, p_expected)
             } else {
                 Estimate {

@@ -253,7 +253,7 @@ fn run_point_once(pd: &Path, text: &str, interrupt: Option<Arc<AtomicBool>>) -> 
     let name = scene.as_ref().map(|s| s.name.clone()).unwrap_or_default();
     // refused before any step, as `dyncontact run` refuses it
     let problem = scene.and_then(|s| s.validate()).and_then(|model| Problem::new(model, pd)).and_then(|p| {
-        p.check_load_times(crate::defaults::CHECK_LOAD_EVALUATIONS)?;
+        p.check_load_times()?;
         Ok(p)
     });
     let problem = match problem {
