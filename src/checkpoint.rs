@@ -71,6 +71,10 @@ pub struct Checkpoint {
     active: Vec<bool>,
     stick: Vec<bool>,
     energy_scale: u64,
+    /// (Ps.1) the out-of-plane strain per triangle where it is an internal variable; absent
+    /// otherwise (so every other scene's checkpoint reads as before)
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    eps_zz: Vec<u64>,
     pub counters: Counters,
     /// what the solver needs to continue bit for bit (the key of the contact solve's kept
     /// factorization, format 3 on; JSON key `factor`): the resumed run rebuilds it
@@ -96,6 +100,7 @@ impl Checkpoint {
             energy_scale: s.energy_scale.to_bits(),
             active: s.active.clone(),
             stick: s.stick.clone(),
+            eps_zz: bits(&s.eps_zz),
             counters,
             solver,
             checksum: String::new(),
@@ -122,6 +127,7 @@ impl Checkpoint {
             .or_else(|| bad("t_fric", &self.t_fric))
             .or_else(|| bad("energy", &self.energy))
             .or_else(|| bad("energy_scale", &[self.energy_scale]))
+            .or_else(|| bad("eps_zz", &self.eps_zz))
     }
 
     pub fn state(&self) -> State {
@@ -135,6 +141,7 @@ impl Checkpoint {
             energy_scale: f64::from_bits(self.energy_scale),
             active: self.active.clone(),
             stick: self.stick.clone(),
+            eps_zz: unbits(&self.eps_zz),
         }
     }
 
@@ -188,6 +195,7 @@ mod tests {
             energy_scale: 1.0,
             active: vec![false],
             stick: vec![true],
+            eps_zz: Vec::new(),
         }
     }
 

@@ -216,6 +216,9 @@ pub struct State {
     /// contact nodes on the constraint (λ > 0) / in stick at the end of the last step (R.2)
     pub active: Vec<bool>,
     pub stick: Vec<bool>,
+    /// (Ps.1) the out-of-plane strain s = ε_zz per triangle where it is an internal variable
+    /// (plane stress, A not proportional to B); empty otherwise
+    pub eps_zz: Vec<f64>,
 }
 
 /// What a run needs beyond its [`State`] to continue bit for bit after a checkpoint: the key
@@ -304,9 +307,11 @@ impl<'p> Simulation<'p> {
         let t_delassus = clock.elapsed().as_secs_f64();
         let nc = problem.contact.as_ref().map(ContactModel::n).unwrap_or(0);
         let (u, v) = (problem.u0.clone(), problem.v0.clone());
+        let eps_zz = ops.thickness.as_ref().map(|th| th.initial(&u)).unwrap_or_default();
         let mut energy = EnergyTerms {
             kinetic: energy::half_quad(&ops.m, &v),
-            elastic: energy::half_quad(&ops.k, &u),
+            elastic: energy::half_quad(&ops.k, &u)
+                + ops.thickness.as_ref().map_or(0.0, |th| th.energy(&eps_zz, &th.trace(&u))),
             ..EnergyTerms::default()
         };
         if let Some(c) = &problem.contact {
@@ -335,6 +340,7 @@ impl<'p> Simulation<'p> {
             energy_scale: energy.scale(),
             active: vec![false; nc],
             stick: vec![false; nc],
+            eps_zz,
         };
         let products = StateProducts::of(&ops, &state.u, &state.v);
         Ok(Simulation {
@@ -528,6 +534,18 @@ impl<'p> Simulation<'p> {
             viscous: self.stepper.viscous_work(&du, &p.cv, &p_new.cv),
             ..StepEnergy::default()
         };
+        // (Ps.1) the out-of-plane strain follows the step's in-plane trace; its energy and
+        // dissipation complete (E.1)
+        let eps_zz_new = match &self.stepper.thickness {
+            Some((th, st)) => {
+                let s = &self.state.eps_zz;
+                let s_new = th.advance(st, s, &p.eu, &p_new.eu);
+                se.d_elastic += th.energy_increment(s, &p.eu, &s_new, &p_new.eu);
+                se.viscous += th.viscous_work(st.k, s, &p.eu, &s_new, &p_new.eu);
+                s_new
+            }
+            None => Vec::new(),
+        };
         let mut rec = StepRecord {
             timing: StepTiming { products: t_products, ..timing },
             ..StepRecord::empty(self.state.n + 1, self.problem.time(self.state.n + 1))
@@ -561,6 +579,7 @@ impl<'p> Simulation<'p> {
         self.state.energy_scale = scale;
         self.state.u = u_new;
         self.state.v = v_new;
+        self.state.eps_zz = eps_zz_new;
         self.state.n += 1;
         self.products = p_new;
         rec.energy = self.state.energy;
@@ -688,7 +707,7 @@ impl<'p> Simulation<'p> {
     /// The free velocity A_k⁻¹ b^n of the current state and the load used.
     pub fn free_velocity(&self) -> (Vec<f64>, Vec<f64>) {
         let f = self.problem.loads.at(self.problem.load_time(self.state.n));
-        let mut v_free = self.stepper.rhs(&self.products, &f);
+        let mut v_free = self.stepper.rhs(&self.products, &f, &self.state.eps_zz);
         self.stepper.solve_in_place(&mut v_free);
         (v_free, f)
     }
@@ -796,6 +815,7 @@ impl<'p> Simulation<'p> {
             || s.v.len() != cur.v.len()
             || s.lambda.len() != cur.lambda.len()
             || s.t_fric.len() != cur.t_fric.len()
+            || s.eps_zz.len() != cur.eps_zz.len()
         {
             return Err(Error::Checkpoint("it does not match this problem's sizes".into()));
         }

@@ -18,6 +18,8 @@ pub struct StepPair<'a> {
     pub sim: &'a Simulation<'a>,
     pub u_before: &'a [f64],
     pub v_before: &'a [f64],
+    /// (Ps.1) s^n where ε_zz is an internal variable (the state's `eps_zz` before the step), else empty
+    pub eps_zz_before: &'a [f64],
 }
 
 /// ψ⁰(ξ; η): the Clarke directional derivative of ψ(ξ) = ∫_0^|ξ| μ; a slip rate |ξ| ≤ `zero`
@@ -51,6 +53,14 @@ fn margin(pair: &StepPair, z: &[f64]) -> (f64, f64) {
     ];
     let mut total: f64 = terms.iter().sum();
     let mut scale: f64 = terms.iter().map(|t| t.abs()).sum();
+    if let Some((th, st)) = &sim.stepper.thickness {
+        // (Ps.1) the trace stress of the step, ⟨Gᵀ|T| q, z⟩
+        let mut force = vec![0.0; z.len()];
+        th.add_forces(&th.step_stress(st, pair.eps_zz_before, &sim.state.eps_zz), &mut force);
+        let term = linalg::dot(&force, z);
+        total += term;
+        scale += term.abs();
+    }
     if let Some(c) = &p.contact {
         let (d0, d1) = (c.penetration(u0), c.penetration(u1));
         // stick is v̄ = 0 to the Newton tolerance (1e-10 of the velocity scale)
@@ -79,7 +89,8 @@ fn margin(pair: &StepPair, z: &[f64]) -> (f64, f64) {
 }
 
 /// (V.1) The hemivariational inequality of P_ε in discrete form: for every z ∈ V^h,
-/// ⟨M(w − v^n)/k + C v̄ + K u^{n+½} + Σ ω q_ε ν − f^{n+½}, z⟩ + Σ ω p_τ ψ⁰(v̄_τ; z_τ) ≥ 0.
+/// ⟨M(w − v^n)/k + C v̄ + K u^{n+½} + Σ ω q_ε ν − f^{n+½}, z⟩ + Σ ω p_τ ψ⁰(v̄_τ; z_τ) ≥ 0
+/// (plus ⟨Gᵀ|T| q, z⟩ with the trace stress of the out-of-plane strain where it is a variable, Ps.1).
 /// Returns (margin, scale).
 pub fn hemivariational_margin(pair: &StepPair, z: &[f64]) -> (f64, f64) {
     margin(pair, z)

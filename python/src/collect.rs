@@ -104,6 +104,7 @@ impl Collected {
             u: &u,
             v: &v,
             contact: &contact,
+            eps_zz: &state.eps_zz,
         });
         self.frames.push(Frame { step: rec.step, t: rec.t, u, v, contact, stress });
     }

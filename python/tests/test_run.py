@@ -77,8 +77,9 @@ def test_run_with_out_writes_the_clis_folder(tmp_path, cli):
         ("fixtures/scenes/academic3d.toml", {"time.end": 0.01}),
         ("fixtures/scenes/hertz.toml", {"domain.cells": [16, 8], "time.end": 0.05}),
         ("fixtures/scenes/column_impact3d.toml", {"domain.cells": [10, 1, 1], "time.end": 0.3}),
+        ("fixtures/scenes/academic.toml", {"domain.plane": "stress", "time.end": 0.05}),
     ],
-    ids=["2d", "3d", "hertz-signed-zeros", "column3d-signed-zeros"],
+    ids=["2d", "3d", "hertz-signed-zeros", "column3d-signed-zeros", "2d-plane-stress-eps-zz"],
 )
 def test_history_equals_the_clis_bit_for_bit(root, cli, tmp_path, monkeypatch, scene, sets):
     monkeypatch.chdir(root)
@@ -101,6 +102,21 @@ def test_history_equals_the_clis_bit_for_bit(root, cli, tmp_path, monkeypatch, s
         else:
             want = np.array([float(x) for x in expected]).astype(got.dtype)
             assert got.tobytes() == want.tobytes(), name
+
+
+def test_plane_stress_fields_are_the_frames_stress(tmp_path):
+    """(Python) In plane stress with the template's θ = 2, ζ = 1.5 (not proportional to the
+    elasticity: ε_zz is a variable per triangle), `fields(i)["stress"]` is the frame's stress as
+    written, value for value (both read ε_zz), with σ_zz = 0; it is not plane strain's."""
+    scene = dc.Scene.default().with_set({"domain.plane": "stress", "time.end": 0.05})
+    res = dc.run(scene, out=tmp_path / "py", progress=False)
+    step = res.frames[-1][0]
+    frame = meshio.read(tmp_path / "py" / "frames" / f"frame_{step:05d}.vtu")
+    stress = res.fields(-1)["stress"]
+    assert np.array_equal(frame.cell_data["stress"][0], stress)
+    assert np.all(stress[:, 2] == 0.0) and np.abs(stress[:, 0]).max() > 0
+    strain = dc.run(dc.Scene.default().with_set({"time.end": 0.05}), out=None, progress=False)
+    assert not np.allclose(strain.fields(-1)["stress"][:, :2], stress[:, :2])
 
 
 def test_simulation_takes_a_scene_file_as_run_does(root):

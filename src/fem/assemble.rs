@@ -8,6 +8,7 @@ use crate::mesh::{Geometry, PlaneMesh};
 use crate::model::kinds::MassKind;
 use crate::model::material::Material;
 
+use super::thickness::ThicknessStrain;
 use super::{element, tet};
 
 /// Numbering of the free DOFs: (node k, component c) → map[d k + c] = Some(free index), or
@@ -75,6 +76,9 @@ pub struct Operators {
     /// where each free DOF sits (its node's position; z = 0 in 2-D): the nested dissection of
     /// the step matrix's factor (`ordering`)
     pub positions: Vec<[f64; 3]>,
+    /// (Ps.1) ε_zz per triangle in plane stress with A not proportional to B (K and C are then
+    /// the plane-strain forms), None otherwise
+    pub thickness: Option<ThicknessStrain>,
 }
 
 /// (P.2) Galerkin form of ρü = Div σ + f0 with σ from (P.1): assembles, on all 2N DOFs,
@@ -200,7 +204,11 @@ impl Operators {
                 positions[*i] = mesh.point(g / dofs.dim);
             }
         }
-        Ok(Operators { m, k: restrict(&k, dofs)?, c: restrict(&c, dofs)?, m_lumped, positions })
+        let thickness = match (mesh, mat.thickness) {
+            (Geometry::Plane(mesh), Some(law)) => Some(ThicknessStrain::new(mesh, law, dofs)),
+            _ => None,
+        };
+        Ok(Operators { m, k: restrict(&k, dofs)?, c: restrict(&c, dofs)?, m_lumped, positions, thickness })
     }
 }
 

@@ -6,6 +6,7 @@ pub mod element;
 pub mod loads;
 pub mod norms;
 pub mod tet;
+pub mod thickness;
 
 pub use assemble::{Dofs, Operators};
 pub use loads::LoadVector;

@@ -28,6 +28,54 @@ pub struct Material {
     pub lambda_3d: f64,
     pub theta_3d: f64,
     pub plane: Plane,
+    /// (Ps.1) plane stress with A not proportional to B: ε_zz is an internal variable, the
+    /// in-plane constants above are the 3-D ones (the plane-strain forms), and this law adds
+    /// the trace stress λ ε_zz + θ ε̇_zz. None otherwise (ε_zz eliminated algebraically).
+    pub thickness: Option<ThicknessLaw>,
+}
+
+/// (Ps.1) The law of the out-of-plane strain s = ε_zz in plane stress: σ_zz = 0 reads
+/// Λ s + Θ ṡ = −λ e − θ ė with e = ε_xx + ε_yy, Λ = λ + 2μ_L, Θ = θ + 2ζ (the scene's 3-D
+/// constants), and s adds λ s + θ ṡ to σ_xx and σ_yy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ThicknessLaw {
+    pub lambda: f64,
+    pub mu: f64,
+    pub theta: f64,
+    pub zeta: f64,
+}
+
+impl ThicknessLaw {
+    /// Λ = λ + 2μ_L
+    pub fn big_lambda(&self) -> f64 {
+        self.lambda + 2.0 * self.mu
+    }
+
+    /// Θ = θ + 2ζ
+    pub fn big_theta(&self) -> f64 {
+        self.theta + 2.0 * self.zeta
+    }
+
+    /// (Ps.1) ṡ from σ_zz = 0 at one instant: ṡ = −(Λ s + λ e + θ ė)/Θ (Θ > 0 on this path).
+    pub fn rate(&self, s: f64, e: f64, e_dot: f64) -> f64 {
+        -(self.big_lambda() * s + self.lambda * e + self.theta * e_dot) / self.big_theta()
+    }
+
+    /// (Ps.1) The stress s adds to σ_xx and σ_yy: λ s + θ ṡ.
+    pub fn trace_stress(&self, s: f64, e: f64, e_dot: f64) -> f64 {
+        self.lambda * s + self.theta * self.rate(s, e, e_dot)
+    }
+
+    /// (Ps.1) s^0 = −(λ/Λ) e(u^0): the state of the elastic plane-stress reduction (s = 0 for an
+    /// undeformed start), where the algebraic path would put it when A ∝ B.
+    pub fn initial(&self, e0: f64) -> f64 {
+        -self.lambda / self.big_lambda() * e0
+    }
+}
+
+/// A = β B for some β ≥ 0 (θ μ_L = ζ λ to 1e-12): plane stress then eliminates ε_zz algebraically.
+pub fn viscosity_proportional(lambda: f64, mu: f64, theta: f64, zeta: f64) -> bool {
+    (theta * mu - zeta * lambda).abs() <= 1e-12 * (theta * mu).abs().max((zeta * lambda).abs())
 }
 
 impl Material {
@@ -35,14 +83,36 @@ impl Material {
     pub fn new(m: &MaterialParams, plane: Plane) -> Material {
         let (lambda, mu) = lame(m.young, m.poisson);
         let (theta, zeta) = (m.theta, m.zeta);
-        // Plane stress: σ_zz = 0 eliminates ε_zz, giving λ* = 2λμ/(λ + 2μ) (and the same for
-        // (θ, ζ), exact when A is proportional to B, which validation requires — decision 11).
-        let reduce = |l: f64, m: f64| if l + 2.0 * m > 0.0 { 2.0 * l * m / (l + 2.0 * m) } else { 0.0 };
-        let (lp, tp) = match plane {
-            Plane::Strain => (lambda, theta),
-            Plane::Stress => (reduce(lambda, mu), reduce(theta, zeta)),
+        let plane_strain = Material {
+            rho: m.density,
+            lambda,
+            mu_lame: mu,
+            theta,
+            zeta,
+            lambda_3d: lambda,
+            theta_3d: theta,
+            plane,
+            thickness: None,
         };
-        Material { rho: m.density, lambda: lp, mu_lame: mu, theta: tp, zeta, lambda_3d: lambda, theta_3d: theta, plane }
+        match plane {
+            Plane::Strain => plane_strain,
+            // decision 11: σ_zz = 0 eliminates ε_zz when A ∝ B, giving λ* = 2λμ/(λ + 2μ) and the
+            // same for (θ, ζ); otherwise ε_zz is an internal variable (Ps.1)
+            Plane::Stress if viscosity_proportional(lambda, mu, theta, zeta) => {
+                let reduce = |l: f64, m: f64| if l + 2.0 * m > 0.0 { 2.0 * l * m / (l + 2.0 * m) } else { 0.0 };
+                Material { lambda: reduce(lambda, mu), theta: reduce(theta, zeta), ..plane_strain }
+            }
+            Plane::Stress => plane_strain.with_thickness_variable(),
+        }
+    }
+
+    /// (Ps.1) The same plane-stress material with ε_zz carried as an internal variable, the
+    /// in-plane operators at the 3-D constants. `new` takes this path when A is not
+    /// proportional to B; with A ∝ B it gives the algebraic reduction's answers to round-off
+    /// (the tests compare the two).
+    pub fn with_thickness_variable(self) -> Material {
+        let law = ThicknessLaw { lambda: self.lambda_3d, mu: self.mu_lame, theta: self.theta_3d, zeta: self.zeta };
+        Material { lambda: self.lambda_3d, theta: self.theta_3d, plane: Plane::Stress, thickness: Some(law), ..self }
     }
 
     /// Voigt matrix of B: [[λ+2μ, λ, 0], [λ, λ+2μ, 0], [0, 0, μ]].
@@ -71,13 +141,19 @@ impl Material {
     }
 
     /// (P.1) Kelvin–Voigt stress σ = A ε(u̇) + B ε(u), in-plane components (σ_xx, σ_yy, σ_xy)
-    /// and σ_zz (zero in plane stress, λ tr ε + θ tr ε̇ in plane strain).
-    pub fn stress(&self, eps_u: [f64; 3], eps_v: [f64; 3]) -> [f64; 4] {
+    /// and σ_zz (zero in plane stress, λ tr ε + θ tr ε̇ in plane strain); `eps_zz` is s = ε_zz
+    /// where it is an internal variable (Ps.1: σ_xx, σ_yy gain λ s + θ ṡ), else unused.
+    pub fn stress(&self, eps_u: [f64; 3], eps_v: [f64; 3], eps_zz: f64) -> [f64; 4] {
         let b = self.elasticity();
         let a = self.viscosity();
         let eu = nalgebra::Vector3::from(eps_u);
         let ev = nalgebra::Vector3::from(eps_v);
-        let s = b * eu + a * ev;
+        let mut s = b * eu + a * ev;
+        if let Some(law) = &self.thickness {
+            let trace = law.trace_stress(eps_zz, eps_u[0] + eps_u[1], eps_v[0] + eps_v[1]);
+            s[0] += trace;
+            s[1] += trace;
+        }
         let szz = match self.plane {
             Plane::Stress => 0.0,
             Plane::Strain => self.lambda_3d * (eps_u[0] + eps_u[1]) + self.theta_3d * (eps_v[0] + eps_v[1]),

@@ -34,11 +34,20 @@ pub fn export_operators(p: &Problem, dir: &Path) -> Result<()> {
             "export-operators writes 2-D meshes only (the 3-D operators are cross-checked by tests/verification/crosscheck.rs)",
         ));
     };
+    if p.material.thickness.is_some() {
+        return Err(Error::scene(
+            "material.viscosity",
+            "export-operators writes M, K, C of a body whose stress they determine; in plane stress with a \
+             viscosity not proportional to the elasticity ε_zz is an internal variable (Ps.1) beside them, so no \
+             K and C alone describe it: use plane = \"strain\" or a proportional viscosity for the export",
+        ));
+    }
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let n = mesh.nodes.len();
     let zero = vec![[0.0; 3]; n];
     let contact = vec![vtu::NodeContact::OFF; n];
-    let frame = vtu::Snapshot { mesh: &p.mesh, material: &p.material, u: &zero, v: &zero, contact: &contact };
+    let frame =
+        vtu::Snapshot { mesh: &p.mesh, material: &p.material, u: &zero, v: &zero, contact: &contact, eps_zz: &[] };
     write_atomic(&dir.join("mesh.vtu"), vtu::vtu(&frame).as_bytes())?;
     let model = &p.model;
     let (m, k, c) = assemble_full(mesh, &p.material, model.solver.mass)?;

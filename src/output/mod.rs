@@ -294,12 +294,14 @@ impl Writer {
         }
         let u = p.dofs.expand_dim(&state.u);
         let v = p.dofs.expand_dim(&state.v);
+        let eps_zz = state.eps_zz.clone();
         self.wait()?;
         let name = format!("frames/frame_{:05}.vtu", rec.step);
         self.frames.push((rec.t, name.clone()));
         let (dir, mesh, material, frames) = (self.dir.clone(), Arc::clone(&self.mesh), p.material, self.frames.clone());
         self.pending = Some(std::thread::spawn(move || {
-            let frame = vtu::Snapshot { mesh: &mesh, material: &material, u: &u, v: &v, contact: &contact };
+            let frame =
+                vtu::Snapshot { mesh: &mesh, material: &material, u: &u, v: &v, contact: &contact, eps_zz: &eps_zz };
             write_atomic(&dir.join(&name), vtu::vtu(&frame).as_bytes())?;
             write_atomic(&dir.join("series.pvd"), vtu::pvd(&frames).as_bytes())
         }));

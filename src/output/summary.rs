@@ -68,6 +68,15 @@ impl ModelInfo {
         } else {
             format!("elastic (no viscosity): E = {}, ν = {}, ρ = {}", m.young, m.poisson, m.density)
         };
+        let material = match (&p.material.thickness, &p.material.plane) {
+            (Some(_), _) => {
+                format!("{material}; plane stress with ε_zz an internal variable per triangle (θ/ζ ≠ λ/μ: Ps.1)")
+            }
+            (None, kinds::Plane::Stress) if s.dim == 2 => {
+                format!("{material}; plane stress with ε_zz eliminated (reduced λ*, θ*)")
+            }
+            _ => material,
+        };
         let mut info = ModelInfo {
             plane: if s.dim == 3 { "-".into() } else { kinds::name(&s.plane.unwrap_or_default()) },
             material,

@@ -22,6 +22,8 @@ pub struct Snapshot<'a> {
     pub v: &'a [[f64; 3]],
     /// contact data per mesh node ([`NodeContact::OFF`] off Γ3)
     pub contact: &'a [NodeContact],
+    /// (Ps.1) ε_zz per triangle where it is an internal variable (the state's `eps_zz`), else empty
+    pub eps_zz: &'a [f64],
 }
 
 /// The contact fields of one mesh node in a frame.
@@ -133,7 +135,7 @@ pub fn stress(frame: &Snapshot) -> Vec<f64> {
         Geometry::Plane(m) => {
             // (P.1) stress per triangle: material.stress gives (σ_xx, σ_yy, σ_xy, σ_zz)
             let mut stress = Vec::with_capacity(6 * nc);
-            for tri in &m.cells {
+            for (t, tri) in m.cells.iter().enumerate() {
                 let x = [m.nodes[tri[0]], m.nodes[tri[1]], m.nodes[tri[2]]];
                 let (grad, _) = element::gradients(x);
                 let strain = |f: &[[f64; 3]]| {
@@ -146,7 +148,8 @@ pub fn stress(frame: &Snapshot) -> Vec<f64> {
                     }
                     e
                 };
-                let [sxx, syy, sxy, szz] = frame.material.stress(strain(frame.u), strain(frame.v));
+                let eps_zz = frame.eps_zz.get(t).copied().unwrap_or(0.0);
+                let [sxx, syy, sxy, szz] = frame.material.stress(strain(frame.u), strain(frame.v), eps_zz);
                 stress.extend([sxx, syy, szz, sxy, 0.0, 0.0]);
             }
             stress

@@ -6,7 +6,7 @@ use crate::defaults;
 use crate::error::{Error, Result};
 use crate::model::expr::{Expr, VecExpr};
 use crate::model::kinds::{
-    self, Bound, BoundAt, DomainKind, EnforcementKind, FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane,
+    self, Bound, BoundAt, DomainKind, EnforcementKind, FrictionBound, FrictionLaw, InnerSolver, MassKind,
 };
 use crate::model::laws::FrictionCoefficient;
 use crate::model::{self, ContactParams, Enforcement, MaterialParams, Model, SolverParams, TimeParams};
@@ -327,24 +327,6 @@ impl Scene {
         }
         if !(v.zeta.is_finite() && v.zeta >= 0.0) {
             return e("material.viscosity.zeta", format!("must be >= 0, got {}", v.zeta));
-        }
-        if self.domain.plane == Some(Plane::Stress) && (v.theta > 0.0 || v.zeta > 0.0) {
-            // decision 11: σ_zz = 0 is algebraic only when A = β B.
-            let (lam, mu) = crate::model::material::lame(m.young, m.poisson);
-            let proportional =
-                (v.theta * mu - v.zeta * lam).abs() <= 1e-12 * (v.theta * mu).abs().max((v.zeta * lam).abs());
-            if !proportional {
-                return e(
-                    "material.viscosity",
-                    format!(
-                        "plane stress with viscosity needs A proportional to B (theta/zeta = lambda/mu = {:.6}), \
-                         got theta/zeta = {:.6}; otherwise ε_zz obeys an ODE that dyncontact does not model. \
-                         Use plane = \"strain\" or proportional viscosity",
-                        lam / mu,
-                        v.theta / v.zeta
-                    ),
-                );
-            }
         }
         Ok(MaterialParams { density: m.density, young: m.young, poisson: m.poisson, theta: v.theta, zeta: v.zeta })
     }

@@ -7,6 +7,7 @@
 
 use crate::error::Result;
 use crate::fem::Operators;
+use crate::fem::thickness::{ThicknessStep, ThicknessStrain};
 use crate::linalg::{self, Cholesky, SpMat};
 use crate::model::kinds::SchemeKind;
 use crate::model::laws::NormalForceRule;
@@ -39,6 +40,8 @@ pub struct StepOperator {
     /// A_k itself, kept through the setup for the Schur complement on the contact unknowns
     /// (`delassus::delassus_pair`), then released
     matrix: Option<SpMat>,
+    /// (Ps.1) the out-of-plane strain's operator and this step's coefficients, where it is a variable
+    pub thickness: Option<(ThicknessStrain, ThicknessStep)>,
 }
 
 /// The operator products of a state (u, v): K u, K v, C v and M v. The time loop forms them once
@@ -51,40 +54,55 @@ pub struct StateProducts {
     pub kv: Vec<f64>,
     pub cv: Vec<f64>,
     pub mv: Vec<f64>,
+    /// (Ps.1) e = G u and ė = G v per triangle (empty without the thickness variable)
+    pub eu: Vec<f64>,
+    pub ev: Vec<f64>,
 }
 
 impl StateProducts {
     /// K u, K v, C v (one pass when K and C share a pattern, as P1 assembly gives) and M v.
     pub fn of(ops: &Operators, u: &[f64], v: &[f64]) -> StateProducts {
         let (ku, kv, cv) = linalg::sym_mul3(&ops.k, &ops.c, u, v);
-        StateProducts { ku, kv, cv, mv: linalg::mul(&ops.m, v) }
+        let (eu, ev) = ops.thickness.as_ref().map(|th| (th.trace(u), th.trace(v))).unwrap_or_default();
+        StateProducts { ku, kv, cv, mv: linalg::mul(&ops.m, v), eu, ev }
     }
 }
 
 impl StepOperator {
     /// (S.2) The constant step matrix A_k = M/k + C/2 + (k/4) K of the midpoint rule
     /// (A = M/k + C + k K for backward Euler), factored once by sparse Cholesky (ordered by
-    /// nested dissection of the DOFs' positions where that factor is the smaller, `ordering`).
+    /// nested dissection of the DOFs' positions where that factor is the smaller, `ordering`);
+    /// with the out-of-plane strain as a variable (Ps.1), plus −(a²/b) k α D.
     pub fn new(ops: &Operators, kind: SchemeKind, k: f64) -> Result<StepOperator> {
-        let a = match kind {
-            SchemeKind::Midpoint | SchemeKind::Trapezoid => {
-                linalg::combine(&[(1.0 / k, &ops.m), (0.5, &ops.c), (0.25 * k, &ops.k)])?
-            }
-            SchemeKind::BackwardEuler => linalg::combine(&[(1.0 / k, &ops.m), (1.0, &ops.c), (k, &ops.k)])?,
+        let alpha = if kind == SchemeKind::BackwardEuler { 1.0 } else { 0.5 };
+        let thickness = ops.thickness.as_ref().map(|th| (th.clone(), th.step(alpha, k)));
+        let d = thickness.as_ref().map(|(th, _)| th.d_matrix(ops.m.nrows())).transpose()?;
+        let mut terms = match kind {
+            SchemeKind::Midpoint | SchemeKind::Trapezoid => vec![(1.0 / k, &ops.m), (0.5, &ops.c), (0.25 * k, &ops.k)],
+            SchemeKind::BackwardEuler => vec![(1.0 / k, &ops.m), (1.0, &ops.c), (k, &ops.k)],
         };
+        if let (Some((_, st)), Some(d)) = (&thickness, &d) {
+            terms.push((-st.a * st.a / st.b * k * alpha, d));
+        }
+        let a = linalg::combine(&terms)?;
         let factor = Cholesky::new(&a, "the step matrix A_k", Some(&ops.positions))?;
-        Ok(StepOperator { kind, k, a: factor, matrix: Some(a) })
+        Ok(StepOperator { kind, k, a: factor, matrix: Some(a), thickness })
     }
 
     /// (S.2) without contact forces: b^n = (M/k − C/2 − kK/4) v^n − K u^n + f^{n+½}
     /// (backward Euler: M v^n/k − K u^n + f^{n+1}), so that A_k w = b^n − Hᵀ r, from the
-    /// products `p` of the state (u^n, v^n).
-    pub fn rhs(&self, p: &StateProducts, f: &[f64]) -> Vec<f64> {
+    /// products `p` of the state (u^n, v^n); with the out-of-plane strain s^n (`eps_zz`, Ps.1),
+    /// plus the known part of its trace stress.
+    pub fn rhs(&self, p: &StateProducts, f: &[f64], eps_zz: &[f64]) -> Vec<f64> {
         let k = self.k;
-        match self.kind {
+        let mut b: Vec<f64> = match self.kind {
             SchemeKind::BackwardEuler => (0..f.len()).map(|i| p.mv[i] / k - p.ku[i] + f[i]).collect(),
             _ => (0..f.len()).map(|i| p.mv[i] / k - 0.5 * p.cv[i] - 0.25 * k * p.kv[i] - p.ku[i] + f[i]).collect(),
+        };
+        if let Some((th, st)) = &self.thickness {
+            th.add_rhs(st, eps_zz, &p.eu, &p.ev, &mut b);
         }
+        b
     }
 
     /// x ← A_k⁻¹ x.

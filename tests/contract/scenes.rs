@@ -289,12 +289,6 @@ fn cases() -> Vec<Malformed> {
             "must be >= 0, got -2",
         ),
         case("negative shear viscosity", edit("zeta = 1.5", "zeta = -0.1"), "material.viscosity.zeta", "must be >= 0"),
-        case(
-            "plane stress, non-proportional viscosity",
-            edit("plane = \"strain\"", "plane = \"stress\""),
-            "material.viscosity",
-            "plane stress with viscosity needs A proportional to B",
-        ),
         // ---- boundary ----
         case(
             "side both clamped and in contact",

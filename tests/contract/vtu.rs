@@ -67,7 +67,8 @@ fn solid_stress_is_vtks_symmetric_tensor() {
     let f = [[-2.0, 1.0, 0.5], [3.0, 1.0, -1.0], [0.0, 4.0, 2.0]].map(|r| r.map(|x| 1e-2 * x));
     let (u, v) = linear_fields(&p, e, f);
     let contact = vec![NodeContact::OFF; p.mesh.n_nodes()];
-    let doc = vtu::vtu(&Snapshot { mesh: &p.mesh, material: &p.material, u: &u, v: &v, contact: &contact });
+    let doc =
+        vtu::vtu(&Snapshot { mesh: &p.mesh, material: &p.material, u: &u, v: &v, contact: &contact, eps_zz: &[] });
     let (attrs, stress) = data_array(&doc, "stress");
     assert_eq!(components(&attrs), (6, ["XX", "YY", "ZZ", "XY", "YZ", "XZ"].map(String::from).to_vec()));
     let m = &p.material;
@@ -96,11 +97,12 @@ fn plane_stress_and_vectors_follow_vtk() {
         let f = [[0.5, 1.0, 0.0], [2.0, -1.0, 0.0], [0.0; 3]].map(|r| r.map(|x| 1e-2 * x));
         let (u, v) = linear_fields(&p, e, f);
         let contact = vec![NodeContact::OFF; p.mesh.n_nodes()];
-        let doc = vtu::vtu(&Snapshot { mesh: &p.mesh, material: &p.material, u: &u, v: &v, contact: &contact });
+        let doc =
+            vtu::vtu(&Snapshot { mesh: &p.mesh, material: &p.material, u: &u, v: &v, contact: &contact, eps_zz: &[] });
         let (attrs, stress) = data_array(&doc, "stress");
         assert_eq!(components(&attrs), (6, ["XX", "YY", "ZZ", "XY", "YZ", "XZ"].map(String::from).to_vec()));
         let voigt = |g: [[f64; 3]; 3]| [g[0][0], g[1][1], g[0][1] + g[1][0]];
-        let [sxx, syy, sxy, szz] = p.material.stress(voigt(e), voigt(f));
+        let [sxx, syy, sxy, szz] = p.material.stress(voigt(e), voigt(f), 0.0);
         assert_eq!(szz == 0.0, p.material.plane == Plane::Stress, "{name}: σ_zz {szz}");
         for (c, cell) in stress.chunks_exact(6).enumerate() {
             assert_close(cell, &[sxx, syy, szz, sxy, 0.0, 0.0], &format!("{name}: triangle {c}"));
@@ -110,6 +112,45 @@ fn plane_stress_and_vectors_follow_vtk() {
             assert_eq!(components(&attrs), (3, ["x", "y", "z"].map(String::from).to_vec()), "{name}: {vector}");
             assert_eq!(values.len(), 3 * p.mesh.n_nodes());
         }
+    }
+}
+
+/// (Ps.1) Plane stress with a viscosity not proportional to the elasticity (the academic
+/// scene's θ = 2, ζ = 1.5): with ε_zz = s given per triangle, the frame's stress is the 3-D
+/// (P.1) stress of (ε, s) with ṡ chosen so that σ_zz = 0 — derived here from the 3-D law, not
+/// from the solver's formula — to 1e-10 of its largest component (round-off of a few products).
+#[test]
+fn plane_stress_with_the_thickness_variable_is_the_3d_stress_with_sigma_zz_zero() {
+    let mut scene = fixture("academic");
+    scene.domain.plane = Some(Plane::Stress);
+    let p = problem(scene);
+    assert!(p.material.thickness.is_some(), "θ/ζ = 1.33 against λ/μ = 1.5: ε_zz is a variable");
+    let e = [[1.0, 2.0, 0.0], [-3.0, 0.5, 0.0], [0.0; 3]].map(|r| r.map(|x| 1e-3 * x));
+    let f = [[0.5, 1.0, 0.0], [2.0, -1.0, 0.0], [0.0; 3]].map(|r| r.map(|x| 1e-2 * x));
+    let (u, v) = linear_fields(&p, e, f);
+    let contact = vec![NodeContact::OFF; p.mesh.n_nodes()];
+    let eps_zz: Vec<f64> = (0..p.mesh.n_cells()).map(|t| 1e-4 * (t % 7) as f64 - 3e-4).collect();
+    let doc =
+        vtu::vtu(&Snapshot { mesh: &p.mesh, material: &p.material, u: &u, v: &v, contact: &contact, eps_zz: &eps_zz });
+    let (_, stress) = data_array(&doc, "stress");
+    let (young, poisson) = (1000.0, 0.3);
+    let (lambda, mu) = (young * poisson / ((1.0 + poisson) * (1.0 - 2.0 * poisson)), young / (2.0 * (1.0 + poisson)));
+    let (theta, zeta) = (2.0, 1.5);
+    let (tr_e, tr_f) = (e[0][0] + e[1][1], f[0][0] + f[1][1]);
+    for (t, cell) in stress.chunks_exact(6).enumerate() {
+        let s = eps_zz[t];
+        // σ_zz = λ(tr ε + s) + 2μ s + θ(tr ε̇ + ṡ) + 2ζ ṡ = 0
+        let s_dot = -(lambda * (tr_e + s) + 2.0 * mu * s + theta * tr_f) / (theta + 2.0 * zeta);
+        let trace = lambda * (tr_e + s) + theta * (tr_f + s_dot);
+        let want = [
+            trace + 2.0 * mu * e[0][0] + 2.0 * zeta * f[0][0],
+            trace + 2.0 * mu * e[1][1] + 2.0 * zeta * f[1][1],
+            0.0,
+            mu * (e[0][1] + e[1][0]) + zeta * (f[0][1] + f[1][0]),
+            0.0,
+            0.0,
+        ];
+        assert_close(cell, &want, &format!("triangle {t}"));
     }
 }
 

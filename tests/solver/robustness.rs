@@ -133,6 +133,16 @@ fn resume_equals_uninterrupted_run_bit_for_bit_in_3d() {
     resume_case("resume3d", &fixture_text("sliding_block3d"), 900);
 }
 
+/// The same in plane stress with the impact's viscosity θ = ζ = 0.5 (not proportional to the
+/// elasticity): the checkpoint carries ε_zz per triangle (Ps.1), and the resumed run's files —
+/// the frames' stress, which reads ε_zz, included — equal the uninterrupted run's byte for byte.
+#[test]
+fn resume_equals_uninterrupted_run_bit_for_bit_in_plane_stress() {
+    let text = fixture_text("impact_friction").replace("[domain]\n", "[domain]\nplane = \"stress\"\n");
+    assert!(text.contains("plane = \"stress\""));
+    resume_case("resume_plane_stress", &text, 237);
+}
+
 fn resume_case(name: &str, text: &str, stop: usize) {
     let dir = tmp(name);
     let scene = dir.join("scene.toml");

@@ -15,6 +15,7 @@ mod energy;
 mod manufactured;
 mod manufactured_contact;
 mod manufactured_contact3d;
+mod plane_stress;
 mod properties;
 mod solid;
 mod solid_run;
