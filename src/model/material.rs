@@ -109,8 +109,12 @@ impl Material {
     /// (Ps.1) The same plane-stress material with ε_zz carried as an internal variable, the
     /// in-plane operators at the 3-D constants. `new` takes this path when A is not
     /// proportional to B; with A ∝ B it gives the algebraic reduction's answers to round-off
-    /// (the tests compare the two).
+    /// (the tests compare the two). Without viscosity (Θ = 0) the material is returned as it is.
     pub fn with_thickness_variable(self) -> Material {
+        if self.theta_3d + 2.0 * self.zeta <= 0.0 {
+            // no viscosity: σ_zz = 0 is algebraic and ṡ undefined (Θ = 0): keep the reduction
+            return self;
+        }
         let law = ThicknessLaw { lambda: self.lambda_3d, mu: self.mu_lame, theta: self.theta_3d, zeta: self.zeta };
         Material { lambda: self.lambda_3d, theta: self.theta_3d, plane: Plane::Stress, thickness: Some(law), ..self }
     }

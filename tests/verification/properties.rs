@@ -74,7 +74,7 @@ proptest! {
         let mat = material(young, poisson, theta, zeta, Plane::Strain);
         check_operator(&element::operator_matrix(x, &mat.elasticity()), x)?;
         check_operator(&element::operator_matrix(x, &mat.viscosity()), x)?;
-        // plane stress constants (with proportional viscosity, as validation requires)
+        // plane stress constants (with proportional viscosity: the algebraic reduction)
         let (l, m) = dyncontact::model::material::lame(young, poisson);
         let ps = material(young, poisson, 0.5 * l / m * zeta, 0.5 * zeta, plane);
         check_operator(&element::operator_matrix(x, &ps.elasticity()), x)?;
