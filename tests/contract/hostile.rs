@@ -877,8 +877,9 @@ fn resume_needs_only_the_run_folder() {
 
 /// (issue 24, item 9) A later time.end extends a finished run — a plain one, without
 /// --checkpoint-every: "run --resume DIR needs nothing else" (its last step is always
-/// checkpointed): the history equals a run to the later end; any other change is refused
-/// (exit 4), the folder unchanged.
+/// checkpointed): history.csv, contact.csv, series.pvd and the frames equal a run to the later
+/// end, except that an old end off the frame grid keeps its frame (and its contact.csv rows);
+/// any other change is refused (exit 4), the folder unchanged.
 #[test]
 fn a_later_end_extends_a_finished_run() {
     let dir = tmp("resume_extend");
@@ -897,6 +898,37 @@ fn a_later_end_extends_a_finished_run() {
     let h = |d: &Path| std::fs::read(d.join("history.csv")).expect("history");
     assert_eq!(h(&a), h(&b), "the extended run's history is that of a run to the later end");
     assert!(std::fs::read_to_string(a.join("scene.toml")).expect("scene.toml").contains("end = 0.2"));
+    // the old end (step 200) is a multiple of output.every = 10: every other file is equal too
+    for f in ["contact.csv", "series.pvd"] {
+        assert_eq!(std::fs::read(a.join(f)).expect("a"), std::fs::read(b.join(f)).expect("b"), "{f}");
+    }
+    let frames = |d: &Path| {
+        let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(d.join("frames"))
+            .expect("frames")
+            .flatten()
+            .map(|e| (e.file_name().to_string_lossy().to_string(), std::fs::read(e.path()).expect("frame")))
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(frames(&a), frames(&b), "the frames of the extended run");
+    // an old end off the frame grid (step 205) keeps its frame: the only difference
+    let (c, d) = (dir.join("c"), dir.join("d"));
+    assert!(run_into(&c, &["--set", "domain.cells=[8,4]", "--set", "time.end=0.1025"]).status.success());
+    let o = cli(&["run", "--resume", c.to_str().expect("path"), "--set", "time.end=0.2"]);
+    assert!(o.status.success(), "{}", err(&o));
+    assert!(run_into(&d, &["--set", "domain.cells=[8,4]", "--set", "time.end=0.2"]).status.success());
+    assert_eq!(h(&c), h(&d));
+    let without_205: String = std::fs::read_to_string(c.join("contact.csv"))
+        .expect("contact")
+        .lines()
+        .filter(|l| !l.starts_with("205,"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert_eq!(without_205, std::fs::read_to_string(d.join("contact.csv")).expect("contact"));
+    let (fc, fd) = (frames(&c), frames(&d));
+    assert_eq!(fc.iter().filter(|f| f.0 != "frame_00205.vtu").cloned().collect::<Vec<_>>(), fd);
+    assert_eq!(fc.len(), fd.len() + 1, "the old end's frame is kept");
 }
 
 // ---- the audit of 2026-11-27: bad folders, overflowing inputs, the penalty study ----------

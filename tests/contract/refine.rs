@@ -269,7 +269,8 @@ fn g1_g2_g3_refine_the_bar_impact_bands_hold_the_closed_form() {
     let checked = bands_hold("g1_g2_g3_refine_the_bar_impact_bands_hold_the_closed_form", &rows, &exact);
     // measured: the kinetic energy (order 0.90), the elastic energy (0.70), the constraint's
     // dissipation (1.03), the impulse (0.83) and the window holding the release (0.76) are
-    // asymptotic; the first two windows are off 0.0075 by ≤ 1e-6 relative, without an order
+    // asymptotic; the first two windows are off 0.0075 by ≤ 8.8e-4 (w1) and 1.9e-5 (w2)
+    // relative, without an order
     assert!(checked >= 11, "only {checked} asymptotic figures with a closed form");
     for f in ["final_kinetic", "normal_impulse", "constraint_dissipation"] {
         assert_eq!(rows.iter().find(|r| r[0] == f).map(|r| r[7].as_str()), Some("true"), "{f} asymptotic");
