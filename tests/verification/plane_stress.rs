@@ -186,15 +186,20 @@ fn ps1_free_plate_creeps_as_the_3d_kelvin_voigt_closed_form() {
 /// (Ps.1) (E.1) with ε_zz as a variable: the academic scene (compliance, the bound, the
 /// slip-rate-dependent friction, the oblique pull) in plane stress with its own θ = 2, ζ = 1.5
 /// (θ/ζ = 1.33 against λ/μ = 1.5), first 0.5 s, with the midpoint rule and the trapezoid (the
-/// same ε_zz rule; its contact forces end-point averaged): every step's residual is within 1e-12
-/// of the energy scale (the Newton and fixed-point tolerances, as for plane strain), and the
-/// viscous dissipation — which now includes ∫ 2θ ė ṡ + Θ ṡ² — never decreases.
+/// same ε_zz rule; its contact forces end-point averaged), and the unstructured Gmsh square
+/// (the same θ, ζ, no contact) to t = 0.2: every step's residual is within 1e-12 of the energy
+/// scale (the Newton and fixed-point tolerances, as for plane strain), and the viscous
+/// dissipation — which now includes ∫ 2θ ė ṡ + Θ ṡ² — never decreases.
 #[test]
 fn ps1_energy_balance_holds_with_the_out_of_plane_strain() {
-    for scheme in [SchemeKind::Midpoint, SchemeKind::Trapezoid] {
-        let mut s = fixture("academic");
+    for (name, scheme, end) in [
+        ("academic", SchemeKind::Midpoint, 0.5),
+        ("academic", SchemeKind::Trapezoid, 0.5),
+        ("gmsh_square", SchemeKind::Midpoint, 0.2),
+    ] {
+        let mut s = fixture(name);
         s.domain.plane = Some(Plane::Stress);
-        s.time.end = 0.5;
+        s.time.end = end;
         s.time.scheme = scheme;
         let p = problem(s);
         assert!(p.material.thickness.is_some());
@@ -205,15 +210,15 @@ fn ps1_energy_balance_holds_with_the_out_of_plane_strain() {
             recs.windows(2).filter(|w| w[1].energy.viscous_dissipation < w[0].energy.viscous_dissipation).count();
         let contact = recs.iter().filter(|r| r.contact_nodes > 0).count();
         println!(
-            "plane stress academic, {scheme:?}: (E.1) ≤ {worst:.2e} of the scale over {} steps ({contact} with contact)",
+            "plane stress {name}, {scheme:?}: (E.1) ≤ {worst:.2e} of the scale over {} steps ({contact} with contact)",
             recs.len() - 1
         );
-        assert!(contact > 100, "the block must reach the foundation");
-        assert!(worst <= 1e-12, "{scheme:?}: (E.1) residual {worst:.3e} of the scale");
-        assert_eq!(decreasing, 0, "{scheme:?}: viscous dissipation decreased on {decreasing} steps");
+        assert!(p.contact.is_none() || contact > 100, "{name}: the block must reach the foundation");
+        assert!(worst <= 1e-12, "{name}, {scheme:?}: (E.1) residual {worst:.3e} of the scale");
+        assert_eq!(decreasing, 0, "{name}, {scheme:?}: viscous dissipation decreased on {decreasing} steps");
         common::measured(
             "plane_stress::ps1_energy_balance_holds_with_the_out_of_plane_strain",
-            &format!("{scheme:?}: largest (E.1) residual / energy scale"),
+            &format!("{name}, {scheme:?}: largest (E.1) residual / energy scale"),
             worst,
             "≤ 1e-12",
         );
