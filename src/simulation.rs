@@ -13,6 +13,7 @@ use crate::energy::{self, EnergyTerms, StepEnergy};
 use crate::error::{Error, Result};
 use crate::failure::{ContactFailure, SolverFailure, StepFailureCause};
 use crate::fem::Operators;
+use crate::fem::thickness::{ThicknessStep, ThicknessStrain};
 use crate::linalg;
 use crate::model::contact::ContactModel;
 use crate::model::kinds::{
@@ -307,11 +308,20 @@ impl<'p> Simulation<'p> {
         let t_delassus = clock.elapsed().as_secs_f64();
         let nc = problem.contact.as_ref().map(ContactModel::n).unwrap_or(0);
         let (u, v) = (problem.u0.clone(), problem.v0.clone());
-        let eps_zz = ops.thickness.as_ref().map(|th| th.initial(&u)).unwrap_or_default();
+        // (Ps.1) s^0 and its part of the stored energy
+        let (eps_zz, eps_zz_energy) = ops
+            .thickness
+            .as_ref()
+            .map(|th| {
+                let e0 = th.trace(&u);
+                let s0 = th.initial(&e0);
+                let energy = th.energy(&s0, &e0);
+                (s0, energy)
+            })
+            .unwrap_or_default();
         let mut energy = EnergyTerms {
             kinetic: energy::half_quad(&ops.m, &v),
-            elastic: energy::half_quad(&ops.k, &u)
-                + ops.thickness.as_ref().map_or(0.0, |th| th.energy(&eps_zz, &th.trace(&u))),
+            elastic: energy::half_quad(&ops.k, &u) + eps_zz_energy,
             ..EnergyTerms::default()
         };
         if let Some(c) = &problem.contact {
@@ -536,7 +546,7 @@ impl<'p> Simulation<'p> {
         };
         // (Ps.1) the out-of-plane strain follows the step's in-plane trace; its energy and
         // dissipation complete (E.1)
-        let eps_zz_new = match &self.stepper.thickness {
+        let eps_zz_new = match self.thickness() {
             Some((th, st)) => {
                 let s = &self.state.eps_zz;
                 let s_new = th.advance(st, s, &p.eu, &p_new.eu);
@@ -707,7 +717,7 @@ impl<'p> Simulation<'p> {
     /// The free velocity A_k⁻¹ b^n of the current state and the load used.
     pub fn free_velocity(&self) -> (Vec<f64>, Vec<f64>) {
         let f = self.problem.loads.at(self.problem.load_time(self.state.n));
-        let mut v_free = self.stepper.rhs(&self.products, &f, &self.state.eps_zz);
+        let mut v_free = self.stepper.rhs(&self.products, &f, self.ops.thickness.as_ref(), &self.state.eps_zz);
         self.stepper.solve_in_place(&mut v_free);
         (v_free, f)
     }
@@ -791,6 +801,12 @@ impl<'p> Simulation<'p> {
             &self.settings.fixed_point,
             trace,
         )
+    }
+
+    /// (Ps.1) The out-of-plane strain's operator and this step's coefficients, where ε_zz is a
+    /// variable.
+    pub fn thickness(&self) -> Option<(&ThicknessStrain, &ThicknessStep)> {
+        self.ops.thickness.as_ref().zip(self.stepper.thickness.as_ref())
     }
 
     /// The solver state a checkpoint stores beside [`State`] (see [`SolverState`]).

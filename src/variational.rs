@@ -53,7 +53,7 @@ fn margin(pair: &StepPair, z: &[f64]) -> (f64, f64) {
     ];
     let mut total: f64 = terms.iter().sum();
     let mut scale: f64 = terms.iter().map(|t| t.abs()).sum();
-    if let Some((th, st)) = &sim.stepper.thickness {
+    if let Some((th, st)) = sim.thickness() {
         // (Ps.1) the trace stress of the step, ⟨Gᵀ|T| q, z⟩
         let mut force = vec![0.0; z.len()];
         th.add_forces(&th.step_stress(st, pair.eps_zz_before, &sim.state.eps_zz), &mut force);

@@ -40,8 +40,9 @@ pub struct StepOperator {
     /// A_k itself, kept through the setup for the Schur complement on the contact unknowns
     /// (`delassus::delassus_pair`), then released
     matrix: Option<SpMat>,
-    /// (Ps.1) the out-of-plane strain's operator and this step's coefficients, where it is a variable
-    pub thickness: Option<(ThicknessStrain, ThicknessStep)>,
+    /// (Ps.1) the out-of-plane strain's coefficients for this k, where it is a variable (its
+    /// operator G is the operators' `thickness`)
+    pub thickness: Option<ThicknessStep>,
 }
 
 /// The operator products of a state (u, v): K u, K v, C v and M v. The time loop forms them once
@@ -75,13 +76,13 @@ impl StepOperator {
     /// with the out-of-plane strain as a variable (Ps.1), plus −(a²/b) k α D.
     pub fn new(ops: &Operators, kind: SchemeKind, k: f64) -> Result<StepOperator> {
         let alpha = if kind == SchemeKind::BackwardEuler { 1.0 } else { 0.5 };
-        let thickness = ops.thickness.as_ref().map(|th| (th.clone(), th.step(alpha, k)));
-        let d = thickness.as_ref().map(|(th, _)| th.d_matrix(ops.m.nrows())).transpose()?;
+        let thickness = ops.thickness.as_ref().map(|th| th.step(alpha, k));
+        let d = ops.thickness.as_ref().map(|th| th.d_matrix(ops.m.nrows())).transpose()?;
         let mut terms = match kind {
             SchemeKind::Midpoint | SchemeKind::Trapezoid => vec![(1.0 / k, &ops.m), (0.5, &ops.c), (0.25 * k, &ops.k)],
             SchemeKind::BackwardEuler => vec![(1.0 / k, &ops.m), (1.0, &ops.c), (k, &ops.k)],
         };
-        if let (Some((_, st)), Some(d)) = (&thickness, &d) {
+        if let (Some(st), Some(d)) = (&thickness, &d) {
             terms.push((-st.a * st.a / st.b * k * alpha, d));
         }
         let a = linalg::combine(&terms)?;
@@ -91,15 +92,15 @@ impl StepOperator {
 
     /// (S.2) without contact forces: b^n = (M/k − C/2 − kK/4) v^n − K u^n + f^{n+½}
     /// (backward Euler: M v^n/k − K u^n + f^{n+1}), so that A_k w = b^n − Hᵀ r, from the
-    /// products `p` of the state (u^n, v^n); with the out-of-plane strain s^n (`eps_zz`, Ps.1),
-    /// plus the known part of its trace stress.
-    pub fn rhs(&self, p: &StateProducts, f: &[f64], eps_zz: &[f64]) -> Vec<f64> {
+    /// products `p` of the state (u^n, v^n); with the out-of-plane strain s^n (`eps_zz`, Ps.1)
+    /// and its operator (the operators' `thickness`), plus the known part of its trace stress.
+    pub fn rhs(&self, p: &StateProducts, f: &[f64], thickness: Option<&ThicknessStrain>, eps_zz: &[f64]) -> Vec<f64> {
         let k = self.k;
         let mut b: Vec<f64> = match self.kind {
             SchemeKind::BackwardEuler => (0..f.len()).map(|i| p.mv[i] / k - p.ku[i] + f[i]).collect(),
             _ => (0..f.len()).map(|i| p.mv[i] / k - 0.5 * p.cv[i] - 0.25 * k * p.kv[i] - p.ku[i] + f[i]).collect(),
         };
-        if let Some((th, st)) = &self.thickness {
+        if let (Some(th), Some(st)) = (thickness, &self.thickness) {
             th.add_rhs(st, eps_zz, &p.eu, &p.ev, &mut b);
         }
         b
