@@ -32,6 +32,9 @@ use dyncontact::step::fixed_point::Inner;
 #[derive(Debug, Clone)]
 pub struct ThickPlan {
     pub boxes: Vec<[i64; 3]>,
+    /// boxes beyond the family, run in the hierarchical form only (the dense forms' W⁻¹ and
+    /// the route-before timing — d·n_c solve pairs — would take hours there)
+    pub beyond: Vec<[i64; 3]>,
     /// steps of academic3d's k = 5e-4 from t = 0
     pub steps: usize,
 }
@@ -43,12 +46,19 @@ impl ThickPlan {
         if largest {
             boxes.push([64, 32, 24]);
         }
-        ThickPlan { boxes, steps: 40 }
+        ThickPlan { boxes, beyond: Vec::new(), steps: 40 }
+    }
+    /// With `--thick-beyond`: the slope past the family's 2,112 contact nodes — 80×40×32 (3,280
+    /// nodes, 324,720 unknowns, ~11 GB) and 96×48×32 (4,704 nodes, 465,696 unknowns, `check`
+    /// estimates 18.5 GiB), hierarchical form only.
+    pub fn with_beyond(mut self) -> ThickPlan {
+        self.beyond = vec![[80, 40, 32], [96, 48, 32]];
+        self
     }
     /// The smoke test's plan: the smallest boxes whose W has the GEMV_FROM (256) components the
     /// velocity form needs (12×6×4 has 252: no velocity form, no row).
     pub fn quick() -> ThickPlan {
-        ThickPlan { boxes: vec![[16, 8, 4], [20, 10, 6]], steps: 3 }
+        ThickPlan { boxes: vec![[16, 8, 4], [20, 10, 6]], beyond: Vec::new(), steps: 3 }
     }
 }
 
@@ -112,8 +122,9 @@ fn min_median(mut v: Vec<f64>) -> [f64; 2] {
 /// (dense).
 pub const FORMS: [&str; 3] = ["hierarchical", "near field", "node blocks"];
 
-/// One run in `form` (one of FORMS).
-fn measure(p: &Problem, cells: [i64; 3], form: &'static str) -> Result<ThickRow> {
+/// One run in `form` (one of FORMS); `route_before` also times W by the d·n_c solve pairs
+/// beside the hierarchical run.
+fn measure(p: &Problem, cells: [i64; 3], form: &'static str, route_before: bool) -> Result<ThickRow> {
     let estimate_mb = dyncontact::resources::estimate(&p.model, Path::new("."))?.total() / 1e6;
     dyncontact::resources::reset_peak_memory();
     let clock = Instant::now();
@@ -147,7 +158,7 @@ fn measure(p: &Problem, cells: [i64; 3], form: &'static str) -> Result<ThickRow>
     }
     let peak_mb = dyncontact::resources::peak_memory().unwrap_or(f64::NAN) / 1e6;
     // the route before: W by the solves, then its Cholesky inverse (timed, then dropped)
-    let delassus_solves = match (form == FORMS[0], p.contact.as_ref()) {
+    let delassus_solves = match (form == FORMS[0] && route_before, p.contact.as_ref()) {
         (true, Some(c)) => {
             let clock = Instant::now();
             let built = dyncontact::step::delassus::build_with_responses(
@@ -196,8 +207,13 @@ pub fn run(plan: &ThickPlan, progress: &dyn Fn(&str)) -> Result<Vec<ThickRow>> {
         let p = Problem::from_scene(&scene(cells, plan.steps)?, Path::new("."))?;
         for form in FORMS {
             progress(&format!("thick: {}x{}x{}, {form}", cells[0], cells[1], cells[2]));
-            rows.push(measure(&p, cells, form)?);
+            rows.push(measure(&p, cells, form, true)?);
         }
+    }
+    for &cells in &plan.beyond {
+        let p = Problem::from_scene(&scene(cells, plan.steps)?, Path::new("."))?;
+        progress(&format!("thick, beyond the family: {}x{}x{}, {}", cells[0], cells[1], cells[2], FORMS[0]));
+        rows.push(measure(&p, cells, FORMS[0], false)?);
     }
     Ok(rows)
 }
@@ -241,10 +257,27 @@ fn points(rows: &[ThickRow], form: &str, value: fn(&ThickRow) -> f64) -> Vec<(f6
     rows.iter().filter(|r| r.form == form).map(|r| (r.contact_nodes as f64, value(r))).collect()
 }
 
-/// The log–log slope of the median contact solve per step against n_c for `form`.
-pub fn slope(rows: &[ThickRow], form: &str) -> f64 {
-    let (x, y): (Vec<f64>, Vec<f64>) = points(rows, form, |r| r.contact[1]).into_iter().unzip();
+/// The log–log slope of the median contact solve per step against n_c for `form`, over the
+/// rows whose box is in `boxes`.
+pub fn slope(rows: &[ThickRow], form: &str, boxes: &[[i64; 3]]) -> f64 {
+    let (x, y): (Vec<f64>, Vec<f64>) = rows
+        .iter()
+        .filter(|r| r.form == form && boxes.contains(&r.cells))
+        .map(|r| (r.contact_nodes as f64, r.contact[1]))
+        .unzip();
     if x.len() >= 2 { loglog_slope(&x, &y) } else { f64::NAN }
+}
+
+/// The slopes between neighbouring boxes of `form` (in the order run), each with its two n_c.
+pub fn segment_slopes(rows: &[ThickRow], form: &str) -> Vec<(usize, usize, f64)> {
+    let r: Vec<&ThickRow> = rows.iter().filter(|r| r.form == form).collect();
+    r.windows(2)
+        .map(|w| {
+            let s =
+                (w[1].contact[1] / w[0].contact[1]).ln() / (w[1].contact_nodes as f64 / w[0].contact_nodes as f64).ln();
+            (w[0].contact_nodes, w[1].contact_nodes, s)
+        })
+        .collect()
 }
 
 /// thick.svg: the median contact solve per step of both forms and the free solve, against n_c.
@@ -262,14 +295,17 @@ pub fn svg(rows: &[ThickRow], plan: &ThickPlan) -> Result<String> {
             name: "contact solve, node blocks (before)".into(),
             points: points(rows, "node blocks", |r| r.contact[1]),
         },
-        LogSeries { name: "free solve (one A_k solve pair)".into(), points: points(rows, "near field", |r| r.free[1]) },
+        LogSeries {
+            name: "free solve (one A_k solve pair)".into(),
+            points: points(rows, "hierarchical", |r| r.free[1]),
+        },
     ];
     let title = format!("thick academic3d boxes, first {} steps: median seconds per step", plan.steps);
     loglog::loglog_chart("thick.svg", &title, ("contact nodes n_c", "seconds per step"), &series, (1.0, 3.0))
 }
 
 /// The printed lines of the thick part.
-pub fn report(rows: &[ThickRow]) -> String {
+pub fn report(rows: &[ThickRow], plan: &ThickPlan) -> String {
     let mut s = String::from("thick 3-D boxes (academic3d refined, velocity form): per step min / median\n");
     let _ = writeln!(
         s,
@@ -313,13 +349,26 @@ pub fn report(rows: &[ThickRow]) -> String {
             if r.fill_order == "nested dissection" { "ND" } else { "AMD" }
         );
     }
+    let family = &plan.boxes;
     let _ = writeln!(
         s,
-        "median contact solve per step against n_c: log–log slope {:.2} hierarchical, {:.2} with the near field, {:.2} with node blocks",
-        slope(rows, "hierarchical"),
-        slope(rows, "near field"),
-        slope(rows, "node blocks")
+        "median contact solve per step against n_c along the family: log–log slope {:.2} hierarchical, {:.2} with the near field, {:.2} with node blocks",
+        slope(rows, "hierarchical", family),
+        slope(rows, "near field", family),
+        slope(rows, "node blocks", family)
     );
+    let segments: Vec<String> =
+        segment_slopes(rows, "hierarchical").iter().map(|(a, b, s)| format!("{a} → {b}: {s:.2}")).collect();
+    let _ = writeln!(s, "hierarchical, between neighbouring boxes: {}", segments.join(", "));
+    if let Some(last) = family.last().filter(|_| !plan.beyond.is_empty()) {
+        let past: Vec<[i64; 3]> = std::iter::once(*last).chain(plan.beyond.iter().copied()).collect();
+        let _ = writeln!(
+            s,
+            "hierarchical, from the family's largest box on ({} boxes): log–log slope {:.2}",
+            past.len(),
+            slope(rows, "hierarchical", &past)
+        );
+    }
     s
 }
 

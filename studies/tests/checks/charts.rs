@@ -48,3 +48,63 @@ fn scaling_legend_is_outside_the_axes() {
         assert!(ys[0] > page, "{label}: legend at y = {} inside the plotting page (height {page})", ys[0]);
     }
 }
+
+/// A thick row of `form` whose median contact solve is `contact` seconds per step.
+fn thick_row(cells: [i64; 3], contact_nodes: usize, form: &'static str, contact: f64) -> studies::thick::ThickRow {
+    studies::thick::ThickRow {
+        cells,
+        unknowns: 0,
+        contact_nodes,
+        form,
+        steps: 40,
+        free: [contact, contact],
+        contact: [contact, contact],
+        assembly: 0.0,
+        factorization: 0.0,
+        delassus: 0.0,
+        route: "schur",
+        delassus_solves: f64::NAN,
+        newton_iterations: 0,
+        cg_iterations: 0,
+        near_density: 0.0,
+        h_share: f64::NAN,
+        peak_mb: 0.0,
+        estimate_mb: 0.0,
+        factor_entries: 0,
+        fill_order: "nested dissection",
+    }
+}
+
+/// Requirement: the thick part's slope is fitted over the family's boxes only (the boxes of
+/// `--thick-beyond` have their own fit), and the segment slopes are those between neighbouring
+/// boxes of one form. Costs n_c^1.5 on the family and n_c^2 past it: the fits return 1.5 and
+/// 2 to round-off (1e-12: logarithms of exact powers), the segments the exponent of each.
+#[test]
+fn thick_slopes_are_fitted_over_the_boxes_they_name() {
+    use studies::thick::{ThickPlan, segment_slopes, slope};
+    let plan = ThickPlan::full(true).with_beyond();
+    let nodes = [312usize, 544, 1200, 2112, 3280, 4704];
+    let mut rows = Vec::new();
+    for (i, (&cells, &n)) in plan.boxes.iter().chain(&plan.beyond).zip(&nodes).enumerate() {
+        // family: 1e-6 n^1.5; beyond: continuous at 2,112, then n^2
+        let t = if i < plan.boxes.len() {
+            1e-6 * (n as f64).powf(1.5)
+        } else {
+            1e-6 * 2112f64.powf(1.5) * (n as f64 / 2112.0).powi(2)
+        };
+        rows.push(thick_row(cells, n, "hierarchical", t));
+        if i < plan.boxes.len() {
+            rows.push(thick_row(cells, n, "node blocks", 3.0 * t));
+        }
+    }
+    assert!((slope(&rows, "hierarchical", &plan.boxes) - 1.5).abs() < 1e-12);
+    assert!((slope(&rows, "node blocks", &plan.boxes) - 1.5).abs() < 1e-12);
+    let past: Vec<[i64; 3]> = std::iter::once(plan.boxes[3]).chain(plan.beyond.iter().copied()).collect();
+    assert!((slope(&rows, "hierarchical", &past) - 2.0).abs() < 1e-12);
+    let seg = segment_slopes(&rows, "hierarchical");
+    assert_eq!(seg.len(), 5);
+    for (k, &(a, b, s)) in seg.iter().enumerate() {
+        assert_eq!((a, b), (nodes[k], nodes[k + 1]));
+        assert!((s - if k < 3 { 1.5 } else { 2.0 }).abs() < 1e-12, "segment {a} → {b}: {s}");
+    }
+}
