@@ -40,7 +40,7 @@ pub struct ThickPlan {
 }
 
 impl ThickPlan {
-    /// The family up to 48×24×16 (1,225 contact nodes), 40 steps each.
+    /// The family up to 48×24×16 (1,200 contact nodes; 64×32×24 with `largest`), 40 steps each.
     pub fn full(largest: bool) -> ThickPlan {
         let mut boxes = vec![[24, 12, 8], [32, 16, 12], [48, 24, 16]];
         if largest {
@@ -81,7 +81,7 @@ pub struct ThickRow {
     /// how the run computed W and W⁻¹ ("schur" from SCHUR_FROM components on, else "solves")
     pub route: &'static str,
     /// seconds W and W⁻¹ take by d n_c solve pairs and W's Cholesky inverse (the route before
-    /// the Schur complement), measured beside the run (near-field rows only, else NaN)
+    /// the Schur complement), measured beside the run (the hierarchical rows of the family, else NaN)
     pub delassus_solves: f64,
     pub newton_iterations: usize,
     pub cg_iterations: usize,
