@@ -39,8 +39,9 @@ enum Study {
         /// the thick boxes also at 64×32×24 (158,400 unknowns: minutes of setup and GBs of memory)
         #[arg(long)]
         thick_largest: bool,
-        /// the thick boxes also at 80×40×32 and 96×48×32, hierarchical form only (the slope past
-        /// 2,112 contact nodes: up to 465,696 unknowns, ~18 GB, tens of minutes)
+        /// the thick boxes also at 80×40×32 and 96×48×32, pressed in the hierarchical form only,
+        /// and shaken (the slope past 2,112 contact nodes: up to 465,696 unknowns, ~18 GB, about
+        /// an hour and a half)
         #[arg(long)]
         thick_beyond: bool,
     },
