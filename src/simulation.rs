@@ -249,12 +249,23 @@ pub struct Simulation<'p> {
     /// G = A_k⁻¹ Hᵀ (n × d n_c), kept beside a dense W when small (the recovery reads its
     /// columns instead of solving)
     responses: Option<faer::Mat<f64>>,
+    /// the part of A_k's factor the contact unknowns reach, when the step splits its solves
+    /// there (see [`Simulation::step`]): a supernodal factor, no kept responses
+    reach: Option<crate::linalg::Reach>,
     /// K u^n, K v^n, C v^n, M v^n: the (E.1) terms of the last step formed them, the next
     /// right-hand side (S.2) reads them
     products: StateProducts,
     pub kinematics: ContactKinematics,
     pub state: State,
     pub setup_timing: SetupTiming,
+}
+
+/// The free motion of a step (see [`Simulation::step`]).
+enum FreeMotion {
+    /// v_free = A_k⁻¹ b, whole
+    Whole(Vec<f64>),
+    /// z = L⁻¹ P b (the forward half, in the factor's order) and the contact velocities H v_free
+    Split { z: Vec<f64>, y_free: Vec<f64> },
 }
 
 /// What the contact solve of one step produced.
@@ -305,6 +316,8 @@ impl<'p> Simulation<'p> {
             None => (None, None, None),
         };
         stepper.release_matrix();
+        let reach =
+            problem.contact.as_ref().filter(|_| responses.is_none()).and_then(|c| stepper.factor().reach(&c.dofs));
         let t_delassus = clock.elapsed().as_secs_f64();
         let nc = problem.contact.as_ref().map(ContactModel::n).unwrap_or(0);
         let (u, v) = (problem.u0.clone(), problem.v0.clone());
@@ -363,10 +376,17 @@ impl<'p> Simulation<'p> {
             delassus_factors: delassus::DelassusFactors::default(),
             inverse,
             responses,
+            reach,
             products,
             state,
             setup_timing: SetupTiming { assembly, factorization, delassus: t_delassus, delassus_route },
         })
+    }
+
+    /// The part of A_k's factor the contact unknowns reach, when the step splits its free solve
+    /// and recovery there (see [`Simulation::step`]); None when it solves them whole.
+    pub fn reach(&self) -> Option<&crate::linalg::Reach> {
+        self.reach.as_ref()
     }
 
     /// The remaining steps of the scene, one record each: `for rec in sim.steps() { … }`.
@@ -438,9 +458,20 @@ impl<'p> Simulation<'p> {
     }
 
     /// Advance one step: free solve → contact solve → recovery → advance (S.1) → balance (E.1).
+    ///
+    /// The free solve and the recovery (S.2) are one solve pair with A_k's factor L (of P A_k Pᵀ)
+    /// split around the contact solve, which needs only the free motion's contact velocities:
+    /// - free solve: z = L⁻¹ P b (the whole forward pass), and y_free = H v_free from the backward
+    ///   pass over the part of L the contact unknowns reach ([`Reach`](crate::linalg::Reach));
+    /// - recovery: z ← z − L⁻¹ P Hᵀ r (the forward pass over that part only: Hᵀ r is zero off the
+    ///   contact unknowns), then v^{n+1} = Pᵀ L⁻ᵀ z (the whole backward pass).
+    ///
+    /// Two whole passes and two over the reach instead of two solve pairs; v^{n+1} = A_k⁻¹(b − Hᵀ r)
+    /// as before, to round-off. Where the responses G = A_k⁻¹ Hᵀ are kept (small problems) or the
+    /// factor is simplicial, v_free is solved whole and the recovery subtracts G r or a solve.
     pub fn step(&mut self) -> Result<StepRecord> {
         let clock = Instant::now();
-        let (mut v_new, f) = self.free_velocity();
+        let f = self.problem.loads.at(self.problem.load_time(self.state.n));
         if let Some(entry) = f.iter().position(|x| !x.is_finite()) {
             // name the load and where it is not finite (an expression like 1/(t − t0))
             let t = self.problem.load_time(self.state.n);
@@ -451,11 +482,25 @@ impl<'p> Simulation<'p> {
                 .err()
                 .unwrap_or_else(|| self.failure(StepFailureCause::NonFinite { entry })));
         }
+        let b = self.stepper.rhs(&self.products, &f, self.ops.thickness.as_ref(), &self.state.eps_zz);
+        let factor = self.stepper.factor();
+        let mut free = match (&self.reach, &self.problem.contact) {
+            (Some(reach), Some(c)) => {
+                let z = factor.forward(&b);
+                let y_free = c.restrict(&factor.backward_at(reach, &z));
+                FreeMotion::Split { z, y_free }
+            }
+            _ => {
+                let mut v_free = b;
+                self.stepper.solve_in_place(&mut v_free);
+                FreeMotion::Whole(v_free)
+            }
+        };
         let mut timing = StepTiming { free_solve: clock.elapsed().as_secs_f64(), ..StepTiming::default() };
         // the factor cache leaves the simulation for the contact solve, which reads the
         // operators and the state (shared) and updates the cache (exclusive), and comes back
         let mut factors = std::mem::take(&mut self.delassus_factors);
-        let solved = self.contact_solve(&mut factors, &v_new);
+        let solved = self.contact_solve(&mut factors, &mut free);
         self.delassus_factors = factors;
         let contact = match solved {
             Some(Ok(cs)) => Some(cs),
@@ -464,9 +509,7 @@ impl<'p> Simulation<'p> {
         };
         timing.contact_solve = clock.elapsed().as_secs_f64() - timing.free_solve;
         let clock = Instant::now();
-        if let (Some(c), Some(cs)) = (&self.problem.contact, &contact) {
-            self.recover(c, cs, &mut v_new);
-        }
+        let v_new = self.recover(free, contact.as_ref());
         timing.recovery = clock.elapsed().as_secs_f64();
         let u_new = self.stepper.displacement(&self.state.u, &self.state.v, &v_new);
         if let Some(entry) = u_new.iter().chain(&v_new).position(|x| !x.is_finite()) {
@@ -475,15 +518,19 @@ impl<'p> Simulation<'p> {
         self.balance(u_new, v_new, &f, contact, timing)
     }
 
-    /// The contact solve of the step for the free velocity `v_free` (None without contact), with
+    /// The contact solve of the step for the free motion `free` (None without contact), with
     /// the factor cache `factors`.
     fn contact_solve(
         &self,
         factors: &mut delassus::DelassusFactors,
-        v_free: &[f64],
+        free: &mut FreeMotion,
     ) -> Option<std::result::Result<ContactStep, ContactFailure>> {
         let c = self.problem.contact.as_ref()?;
-        let (data, p_tau_hat) = self.step_data(c.restrict(v_free))?;
+        let y_free = match free {
+            FreeMotion::Whole(v_free) => c.restrict(v_free),
+            FreeMotion::Split { y_free, .. } => std::mem::take(y_free),
+        };
+        let (data, p_tau_hat) = self.step_data(y_free)?;
         let d_n = data.nodes.iter().map(|nd| nd.d_n).collect();
         Some(self.solve_frozen_sequence(&data, factors, &p_tau_hat, &self.settings.inner, None).map(
             |(sol, s_bound, report)| {
@@ -493,12 +540,30 @@ impl<'p> Simulation<'p> {
         ))
     }
 
-    /// (S.2) Recovery: v^{n+1} = v_free − A_k⁻¹ Hᵀ r with the contact forces r of the solution: by
-    /// the kept responses G = A_k⁻¹ Hᵀ, column by column over the nonzero forces, when that reads
-    /// at most [`RESPONSES_ADVANTAGE`](crate::defaults::RESPONSES_ADVANTAGE) times the entries a
-    /// solve pair reads (2 × the factor's), else by a solve.
-    fn recover(&self, c: &ContactModel, cs: &ContactStep, v_new: &mut [f64]) {
-        let forces = cs.r.iter().filter(|v| **v != 0.0).count();
+    /// (S.2) Recovery: v^{n+1} = v_free − A_k⁻¹ Hᵀ r with the contact forces r of the solution
+    /// (v_free without contact or forces).
+    /// - split free motion (see [`Simulation::step`]): z ← z − L⁻¹ P Hᵀ r by the forward pass over
+    ///   the contact unknowns' reach, then v^{n+1} = Pᵀ L⁻ᵀ z by the whole backward pass;
+    /// - whole v_free: by the kept responses G = A_k⁻¹ Hᵀ, column by column over the nonzero
+    ///   forces, when that reads at most [`RESPONSES_ADVANTAGE`](crate::defaults::RESPONSES_ADVANTAGE)
+    ///   times the entries a solve pair reads (2 × the factor's), else by a solve.
+    fn recover(&self, free: FreeMotion, contact: Option<&ContactStep>) -> Vec<f64> {
+        let c = self.problem.contact.as_ref();
+        let forces = contact.map_or(0, |cs| cs.r.iter().filter(|v| **v != 0.0).count());
+        let mut v_new = match free {
+            FreeMotion::Split { mut z, .. } => {
+                if let (Some(reach), Some(c), Some(cs)) = (&self.reach, c, contact)
+                    && forces > 0
+                {
+                    let mut hr = vec![0.0; z.len()];
+                    c.scatter_add(&cs.r, &mut hr);
+                    self.stepper.factor().forward_sub(reach, &hr, &mut z);
+                }
+                return self.stepper.factor().backward(z);
+            }
+            FreeMotion::Whole(v_free) => v_free,
+        };
+        let (Some(c), Some(cs)) = (c, contact) else { return v_new };
         if let Some(g) = self.responses.as_ref().filter(|_| {
             (forces * v_new.len()) as f64 <= RESPONSES_ADVANTAGE * 2.0 * self.stepper.factor().factor_len() as f64
         }) {
@@ -517,6 +582,7 @@ impl<'p> Simulation<'p> {
                 *vi -= ci;
             }
         }
+        v_new
     }
 
     /// (E.1) terms of the step, (R.2) persistency, the contact records; the energy guard; then

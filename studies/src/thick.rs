@@ -4,8 +4,10 @@
 //! velocity form (conjugate gradients on (W⁻¹)_FF + Ĝ_F). Each box runs its first `steps` steps
 //! (the pressing phase: half the contact nodes slipping outward) twice from the same setup
 //! data: with the near-field preconditioner (the Cholesky factor of W⁻¹'s near field, today's
-//! form) and with node blocks (the form before it). Per step: the free solve and the contact
-//! solve, min and median over the steps; per run: the setup split (assembly, factorization of
+//! form) and with node blocks (the form before it). Per step: the free solve (A_k's whole forward
+//! pass and the backward pass over the part of its factor the contact unknowns reach, since the
+//! step splits its solve pair: `Simulation::step`) and the contact solve, min and median over the
+//! steps; per run: the setup split (assembly, factorization of
 //! A_k, W and W⁻¹), the run's peak memory (the process's peak started again before each run:
 //! setup and steps, not the route-before timing beside it) and `check`'s estimate of it.
 //!
@@ -295,7 +297,7 @@ pub fn svg(rows: &[ThickRow], plan: &ThickPlan) -> Result<String> {
             points: points(rows, "node blocks", |r| r.contact[1]),
         },
         LogSeries {
-            name: "free solve (one A_k solve pair)".into(),
+            name: "free solve (forward pass + backward over the contact reach)".into(),
             points: points(rows, "hierarchical", |r| r.free[1]),
         },
     ];
