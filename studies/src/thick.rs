@@ -76,6 +76,12 @@ pub struct ThickRow {
     /// per step, seconds: [min, median]
     pub free: [f64; 2],
     pub contact: [f64; 2],
+    pub recovery: [f64; 2],
+    /// one whole solve pair with A_k's factor (seconds, median of PAIR_REPEATS after the steps):
+    /// the yardstick of the issue's "3× the free solve", which was one pair before the step split
+    /// its pair around the contact solve (the free solve is now a forward pass and a partial
+    /// backward one)
+    pub pair: f64,
     /// setup seconds: assembly, factorization of A_k, W and W⁻¹ (with its near field)
     pub assembly: f64,
     pub factorization: f64,
@@ -118,6 +124,24 @@ fn min_median(mut v: Vec<f64>) -> [f64; 2] {
     if v.is_empty() { [f64::NAN; 2] } else { [v[0], v[v.len() / 2]] }
 }
 
+/// Repetitions of the solve pair timed beside each run (`ThickRow::pair`).
+pub const PAIR_REPEATS: usize = 9;
+
+/// The median time of one whole solve pair with the run's factor of A_k, seconds.
+fn solve_pair(sim: &Simulation) -> f64 {
+    let n = sim.stepper.factor().dim();
+    let b: Vec<f64> = (0..n).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
+    let times = (0..PAIR_REPEATS)
+        .map(|_| {
+            let mut x = b.clone();
+            let clock = Instant::now();
+            sim.stepper.solve_in_place(&mut x);
+            clock.elapsed().as_secs_f64()
+        })
+        .collect();
+    min_median(times)[1]
+}
+
 /// The forms a box runs in: W⁻¹'s and W's products through their hierarchical forms with the
 /// near-field preconditioner (`auto`'s from HMATRIX_FROM components on; forced here at every
 /// size so the slope spans the family), the dense products with the near field, node blocks
@@ -151,14 +175,16 @@ fn measure(p: &Problem, cells: [i64; 3], form: &'static str, route_before: bool)
         return Err(Error::Study(format!("thick: {cells:?} does not run in velocity form")));
     }
     let t = sim.setup_timing;
-    let (mut free, mut contact, mut newton) = (Vec::new(), Vec::new(), 0);
+    let (mut free, mut contact, mut recovery, mut newton) = (Vec::new(), Vec::new(), Vec::new(), 0);
     for rec in sim.steps() {
         let rec = rec?;
         free.push(rec.timing.free_solve);
         contact.push(rec.timing.contact_solve);
+        recovery.push(rec.timing.recovery);
         newton += rec.report.inner_iterations;
     }
     let peak_mb = dyncontact::resources::peak_memory().unwrap_or(f64::NAN) / 1e6;
+    let pair = solve_pair(&sim);
     // the route before: W by the solves, then its Cholesky inverse (timed, then dropped)
     let delassus_solves = match (form == FORMS[0] && route_before, p.contact.as_ref()) {
         (true, Some(c)) => {
@@ -187,6 +213,8 @@ fn measure(p: &Problem, cells: [i64; 3], form: &'static str, route_before: bool)
         steps: free.len(),
         free: min_median(free),
         contact: min_median(contact),
+        recovery: min_median(recovery),
+        pair,
         assembly: t.assembly,
         factorization: t.factorization,
         delassus: t.delassus,
@@ -224,7 +252,8 @@ pub fn run(plan: &ThickPlan, progress: &dyn Fn(&str)) -> Result<Vec<ThickRow>> {
 pub fn csv(rows: &[ThickRow]) -> String {
     csv_table(
         "cells,unknowns,contact_nodes,form,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
-contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_by_solves_s,newton_iterations,cg_iterations,near_density,h_share,peak_mb,estimate_mb,factor_entries,fill_order",
+contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_by_solves_s,newton_iterations,cg_iterations,near_density,h_share,peak_mb,estimate_mb,factor_entries,fill_order,\
+recovery_min_s,recovery_median_s,pair_median_s,contact_over_pair",
         rows.iter().map(|r| {
             vec![
                 format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
@@ -250,6 +279,10 @@ contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_
                 format!("{:.0}", r.estimate_mb),
                 r.factor_entries.to_string(),
                 r.fill_order.to_string(),
+                format!("{:.6e}", r.recovery[0]),
+                format!("{:.6e}", r.recovery[1]),
+                format!("{:.6e}", r.pair),
+                format!("{:.3}", r.contact[1] / r.pair),
             ]
         }),
     )
@@ -310,7 +343,7 @@ pub fn report(rows: &[ThickRow], plan: &ThickPlan) -> String {
     let mut s = String::from("thick 3-D boxes (academic3d refined, velocity form): per step min / median\n");
     let _ = writeln!(
         s,
-        "{:>10} {:>8} {:>6} {:<13} {:>17} {:>19} {:>8} {:>10} {:>17} {:>8} {:>8} {:>15} {:>9}",
+        "{:>10} {:>8} {:>6} {:<13} {:>17} {:>19} {:>8} {:>8} {:>8} {:>8} {:>10} {:>17} {:>8} {:>8} {:>15} {:>9}",
         "cells",
         "unknowns",
         "n_c",
@@ -318,6 +351,9 @@ pub fn report(rows: &[ThickRow], plan: &ThickPlan) -> String {
         "free[ms]",
         "contact[ms]",
         "c/free",
+        "rec[ms]",
+        "pair[ms]",
+        "c/pair",
         "A_k+W[s]",
         "W route (solves)",
         "Newton",
@@ -328,7 +364,7 @@ pub fn report(rows: &[ThickRow], plan: &ThickPlan) -> String {
     for r in rows {
         let _ = writeln!(
             s,
-            "{:>10} {:>8} {:>6} {:<13} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>4.1}+{:<5.1} {:>7} ({:>7.1}) {:>8} {:>8} {:>7.0} ({:>5.0}) {:>6.1} {}",
+            "{:>10} {:>8} {:>6} {:<13} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>8.1} {:>8.1} {:>8.2} {:>4.1}+{:<5.1} {:>7} ({:>7.1}) {:>8} {:>8} {:>7.0} ({:>5.0}) {:>6.1} {}",
             format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
             r.unknowns,
             r.contact_nodes,
@@ -338,6 +374,9 @@ pub fn report(rows: &[ThickRow], plan: &ThickPlan) -> String {
             1e3 * r.contact[0],
             1e3 * r.contact[1],
             r.contact[1] / r.free[1],
+            1e3 * r.recovery[1],
+            1e3 * r.pair,
+            r.contact[1] / r.pair,
             r.factorization,
             r.delassus,
             r.route,
@@ -412,6 +451,8 @@ pub struct ShakeRow {
     /// per step, seconds: [min, median]
     pub free: [f64; 2],
     pub contact: [f64; 2],
+    /// one whole solve pair with A_k's factor, as [`ThickRow::pair`]
+    pub pair: f64,
     /// convex solves of F.1 over the window (0 where N.4 solved every step)
     pub convex_solves: usize,
     pub newton_iterations: usize,
@@ -461,6 +502,7 @@ pub fn run_shaking(plan: &ShakePlan, progress: &dyn Fn(&str)) -> Result<Vec<Shak
                 fallbacks += usize::from(rec.report.fallback.is_some());
                 last = (rec.slip_nodes, rec.stick_nodes);
             }
+            let pair = solve_pair(&sim);
             rows.push(ShakeRow {
                 cells,
                 unknowns: p.dofs.n_free,
@@ -469,6 +511,7 @@ pub fn run_shaking(plan: &ShakePlan, progress: &dyn Fn(&str)) -> Result<Vec<Shak
                 steps: free.len(),
                 free: min_median(free),
                 contact: min_median(contact),
+                pair,
                 convex_solves: convex,
                 newton_iterations,
                 cg_iterations: sim.delassus_factors.all_counts().velocity_iterations,
@@ -485,7 +528,8 @@ pub fn run_shaking(plan: &ShakePlan, progress: &dyn Fn(&str)) -> Result<Vec<Shak
 pub fn shaking_csv(rows: &[ShakeRow]) -> String {
     csv_table(
         "cells,unknowns,contact_nodes,inner,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
-contact_over_free,convex_solves,newton_iterations,cg_iterations,fallbacks,slip_nodes,stick_nodes",
+contact_over_free,convex_solves,newton_iterations,cg_iterations,fallbacks,slip_nodes,stick_nodes,pair_median_s,\
+contact_over_pair",
         rows.iter().map(|r| {
             vec![
                 format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
@@ -504,6 +548,8 @@ contact_over_free,convex_solves,newton_iterations,cg_iterations,fallbacks,slip_n
                 r.fallbacks.to_string(),
                 r.slip_nodes.to_string(),
                 r.stick_nodes.to_string(),
+                format!("{:.6e}", r.pair),
+                format!("{:.3}", r.contact[1] / r.pair),
             ]
         }),
     )
@@ -516,14 +562,25 @@ pub fn shaking_report(rows: &[ShakeRow]) -> String {
     );
     let _ = writeln!(
         s,
-        "{:>10} {:>6} {:<16} {:>17} {:>19} {:>8} {:>12} {:>12} {:>8} {:>9}",
-        "cells", "n_c", "inner", "free[ms]", "contact[ms]", "c/free", "convex/step", "Newton/step", "CG", "fallbacks"
+        "{:>10} {:>6} {:<16} {:>17} {:>19} {:>8} {:>8} {:>8} {:>12} {:>12} {:>8} {:>9}",
+        "cells",
+        "n_c",
+        "inner",
+        "free[ms]",
+        "contact[ms]",
+        "c/free",
+        "pair[ms]",
+        "c/pair",
+        "convex/step",
+        "Newton/step",
+        "CG",
+        "fallbacks"
     );
     for r in rows {
         let per = |v: usize| v as f64 / r.steps.max(1) as f64;
         let _ = writeln!(
             s,
-            "{:>10} {:>6} {:<16} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>12.1} {:>12.1} {:>8} {:>9}",
+            "{:>10} {:>6} {:<16} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>8.1} {:>8.2} {:>12.1} {:>12.1} {:>8} {:>9}",
             format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
             r.contact_nodes,
             r.inner,
@@ -532,6 +589,8 @@ pub fn shaking_report(rows: &[ShakeRow]) -> String {
             1e3 * r.contact[0],
             1e3 * r.contact[1],
             r.contact[1] / r.free[1],
+            1e3 * r.pair,
+            r.contact[1] / r.pair,
             per(r.convex_solves),
             per(r.newton_iterations),
             r.cg_iterations,

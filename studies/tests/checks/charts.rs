@@ -59,6 +59,8 @@ fn thick_row(cells: [i64; 3], contact_nodes: usize, form: &'static str, contact:
         steps: 40,
         free: [contact, contact],
         contact: [contact, contact],
+        recovery: [contact, contact],
+        pair: contact,
         assembly: 0.0,
         factorization: 0.0,
         delassus: 0.0,
