@@ -232,7 +232,8 @@ pub fn dense_solve(j: &Mat<f64>, r: &[f64]) -> Option<Vec<f64>> {
 /// forward pass visits them). Every nonzero L_ij has i an ancestor of j, so
 /// - a forward solve L z = P c with c nonzero only on the unknowns changes only these
 ///   supernodes' rows, and reads only their columns;
-/// - the unknowns' values of a backward solve Lᵀ x = z depend only on these supernodes' rows.
+/// - the unknowns' values of a backward solve Lᵀ x = z depend only on these supernodes' rows,
+///   and the other supernodes' rows can be finished afterwards from them.
 ///
 /// The contact unknowns of a thick body reach ~0.68–0.77 of A_k's factor under its nested
 /// dissection (academic3d, 64×32×24 → 24×12×8): the free solve and the recovery (S.2) each read
@@ -241,8 +242,12 @@ pub fn dense_solve(j: &Mat<f64>, r: &[f64]) -> Option<Vec<f64>> {
 pub struct Reach {
     /// the reached supernodes, ascending
     supernodes: Vec<usize>,
+    /// the other supernodes, ascending
+    rest: Vec<usize>,
     /// the unknowns, in the factor's order (P's)
     rows: Vec<usize>,
+    /// per column of L (the factor's order): whether a reached supernode holds it
+    covered: Vec<bool>,
     /// entries of L in the reached supernodes
     entries: usize,
 }
@@ -264,13 +269,19 @@ impl Cholesky {
         }
     }
 
+    /// The supernodal factor of the passes below, which only a factor with a [`Reach`] takes.
+    /// Panics on a simplicial factor (whose `reach` is None): a caller's error, not an input's.
+    fn passes(&self) -> SupernodalLltRef<'_, usize, f64> {
+        self.supernodal().expect("the split passes need a supernodal factor (Cholesky::reach is Some only for one)")
+    }
+
     /// The position of unknown i in the factor's order: (P x)_{pos(i)} = x_i.
     fn position(&self, i: usize) -> usize {
         self.symbolic.perm().map_or(i, |p| p.arrays().1[i])
     }
 
     /// The reach of the unknowns `rows` (see [`Reach`]); None for a simplicial factor, or when
-    /// the reach is the whole factor (the split solves would gain nothing).
+    /// the reach is the whole factor (the split passes would gain nothing).
     pub fn reach(&self, rows: &[usize]) -> Option<Reach> {
         let l = self.supernodal()?;
         let sym = l.symbolic();
@@ -283,7 +294,8 @@ impl Cholesky {
         let rows: Vec<usize> = rows.iter().map(|&i| self.position(i)).collect();
         for &r in &rows {
             let mut s = of_col[r];
-            // up the elimination tree: a supernode's parent holds the first row of its pattern
+            // up the elimination tree: a supernode's parent holds the first (smallest) row of
+            // its pattern (faer's patterns are ascending and exclude the supernode's own columns)
             while !std::mem::replace(&mut hit[s], true) {
                 match sym.supernode(s).pattern().first() {
                     Some(&p) => s = of_col[p],
@@ -291,62 +303,68 @@ impl Cholesky {
                 }
             }
         }
-        let supernodes: Vec<usize> = (0..sym.n_supernodes()).filter(|&s| hit[s]).collect();
+        let (supernodes, rest): (Vec<usize>, Vec<usize>) = (0..sym.n_supernodes()).partition(|&s| hit[s]);
+        if rest.is_empty() {
+            return None;
+        }
+        let covered = of_col.iter().map(|&s| hit[s]).collect();
         let entries = supernodes
             .iter()
             .map(|&s| (end[s] - begin[s]) * (end[s] - begin[s] + sym.supernode(s).pattern().len()))
             .sum();
-        (supernodes.len() < sym.n_supernodes()).then_some(Reach { supernodes, rows, entries })
+        Some(Reach { supernodes, rest, rows, covered, entries })
     }
 
-    /// z = L⁻¹ P b: the forward half of a solve, in the factor's order. (`Cholesky::reach` is
-    /// Some only for a supernodal factor: this and the passes below are for those.)
+    /// z = L⁻¹ P b: the forward half of a solve, in the factor's order (faer's whole pass).
+    /// Supernodal factors only (see `passes`).
     pub fn forward(&self, b: &[f64]) -> Vec<f64> {
+        let l = self.passes();
         let mut z: Vec<f64> = match self.symbolic.perm() {
             Some(p) => p.arrays().0.iter().map(|&i| b[i]).collect(),
             None => b.to_vec(),
         };
         let par = faer::get_global_parallelism();
         let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(1, par));
-        if let Some(l) = self.supernodal() {
-            l.l_solve_with_conj(
-                Conj::No,
-                faer::ColMut::from_slice_mut(&mut z).as_mat_mut(),
-                par,
-                MemStack::new(&mut mem),
-            );
-        }
+        l.l_solve_with_conj(Conj::No, faer::ColMut::from_slice_mut(&mut z).as_mat_mut(), par, MemStack::new(&mut mem));
         z
     }
 
-    /// x = Pᵀ L⁻ᵀ z: the backward half of a solve, from the factor's order.
+    /// x = Pᵀ L⁻ᵀ z: the backward half of a solve, from the factor's order (faer's whole pass).
     pub fn backward(&self, mut z: Vec<f64>) -> Vec<f64> {
+        let l = self.passes();
         let par = faer::get_global_parallelism();
         let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(1, par));
-        if let Some(l) = self.supernodal() {
-            l.l_transpose_solve_with_conj(
-                Conj::No,
-                faer::ColMut::from_slice_mut(&mut z).as_mat_mut(),
-                par,
-                MemStack::new(&mut mem),
-            );
-        }
+        l.l_transpose_solve_with_conj(
+            Conj::No,
+            faer::ColMut::from_slice_mut(&mut z).as_mat_mut(),
+            par,
+            MemStack::new(&mut mem),
+        );
+        self.unpermute(&z)
+    }
+
+    /// Pᵀ x: from the factor's order back to the unknowns'.
+    fn unpermute(&self, x: &[f64]) -> Vec<f64> {
         match self.symbolic.perm() {
-            Some(p) => p.arrays().1.iter().map(|&i| z[i]).collect(),
-            None => z,
+            Some(p) => p.arrays().1.iter().map(|&i| x[i]).collect(),
+            None => x.to_vec(),
         }
     }
 
     /// z ← z − L⁻¹ P c for a c that is zero off the reach's unknowns: the forward pass over the
     /// reach's supernodes only (the others' rows of L⁻¹ P c are zero). Each visited supernode
-    /// takes the same kernels as faer's whole pass, so L⁻¹ P c equals that pass's to the bit.
+    /// takes the kernels of faer's whole pass (`l_solve_with_conj`) with the same arguments, so
+    /// L⁻¹ P c equals that pass's to the bit. A nonzero c_i off the reach is a caller's error
+    /// (checked in debug builds).
     pub fn forward_sub(&self, reach: &Reach, c: &[f64], z: &mut [f64]) {
-        let Some(l) = self.supernodal() else { return };
+        let l = self.passes();
         let par = faer::get_global_parallelism();
         let mut x = vec![0.0; self.dim()];
         for (i, &ci) in c.iter().enumerate() {
             if ci != 0.0 {
-                x[self.position(i)] = ci;
+                let j = self.position(i);
+                debug_assert!(reach.covered[j], "c is nonzero at unknown {i}, off the reach");
+                x[j] = ci;
             }
         }
         let mut tmp = Vec::new();
@@ -377,25 +395,43 @@ impl Cholesky {
                 x[i] -= t;
             }
         }
-        for &s in &reach.supernodes {
-            let node = l.supernode(s);
-            for j in node.start()..node.start() + node.val().ncols() {
-                z[j] -= x[j];
+        for (zj, (xj, &covered)) in z.iter_mut().zip(x.iter().zip(&reach.covered)) {
+            if covered {
+                *zj -= xj;
             }
         }
     }
 
-    /// (Pᵀ L⁻ᵀ z)_i at every unknown i the reach was built for, the other entries 0: the
-    /// backward pass over the reach's supernodes only. Each visited supernode takes the same
-    /// kernels as faer's whole pass on the same rows, so these entries equal the whole
-    /// backward's ([`backward`](Self::backward)) to the bit.
-    pub fn backward_at(&self, reach: &Reach, z: &[f64]) -> Vec<f64> {
-        let n = self.dim();
-        let Some(l) = self.supernodal() else { return vec![0.0; n] };
-        let par = faer::get_global_parallelism();
+    /// The backward pass Lᵀ x = z over the reach's supernodes only: x (the factor's order) with
+    /// the reach's rows final, and (Pᵀ x)_i at every unknown i the reach was built for (the other
+    /// entries 0). Each visited supernode takes the kernels of faer's whole pass
+    /// (`l_transpose_solve_with_conj`) with the same arguments, in the same order, on rows that
+    /// only reached supernodes write: these entries equal the whole backward's to the bit.
+    pub fn backward_over(&self, reach: &Reach, z: &[f64]) -> (Vec<f64>, Vec<f64>) {
         let mut x = z.to_vec();
+        self.backward_pass(reach.supernodes.iter().rev().copied(), &mut x);
+        let mut out = vec![0.0; self.dim()];
+        let fwd = self.symbolic.perm().map(|p| p.arrays().0);
+        for &r in &reach.rows {
+            out[fwd.map_or(r, |f| f[r])] = x[r];
+        }
+        (x, out)
+    }
+
+    /// Finish the backward pass that [`backward_over`](Self::backward_over) began, over the
+    /// supernodes off the reach (descending: each reads only its ancestors' rows, final by
+    /// then): Pᵀ L⁻ᵀ z, equal to [`backward`](Self::backward) of the same z to the bit.
+    pub fn backward_rest(&self, reach: &Reach, mut x: Vec<f64>) -> Vec<f64> {
+        self.backward_pass(reach.rest.iter().rev().copied(), &mut x);
+        self.unpermute(&x)
+    }
+
+    /// The backward pass of faer's `l_transpose_solve_with_conj` over `supernodes` (descending).
+    fn backward_pass(&self, supernodes: impl Iterator<Item = usize>, x: &mut [f64]) {
+        let l = self.passes();
+        let par = faer::get_global_parallelism();
         let mut tmp = Vec::new();
-        for &s in reach.supernodes.iter().rev() {
+        for s in supernodes {
             let node = l.supernode(s);
             let (ls, size) = (node.val(), node.val().ncols());
             let (ls_top, ls_bot) = ls.split_at_row(size);
@@ -419,19 +455,5 @@ impl Cholesky {
                 par,
             );
         }
-        let mut out = vec![0.0; n];
-        match self.symbolic.perm() {
-            Some(p) => {
-                for &r in &reach.rows {
-                    out[p.arrays().0[r]] = x[r];
-                }
-            }
-            None => {
-                for &r in &reach.rows {
-                    out[r] = x[r];
-                }
-            }
-        }
-        out
     }
 }

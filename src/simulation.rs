@@ -264,8 +264,9 @@ pub struct Simulation<'p> {
 enum FreeMotion {
     /// v_free = A_k⁻¹ b, whole
     Whole(Vec<f64>),
-    /// z = L⁻¹ P b (the forward half, in the factor's order) and the contact velocities H v_free
-    Split { z: Vec<f64>, y_free: Vec<f64> },
+    /// z = L⁻¹ P b (the forward half, in the factor's order), x = L⁻ᵀ z solved over the contact
+    /// unknowns' reach (its rows final, the rest to finish) and the contact velocities H v_free
+    Split { z: Vec<f64>, x: Vec<f64>, y_free: Vec<f64> },
 }
 
 /// What the contact solve of one step produced.
@@ -316,9 +317,9 @@ impl<'p> Simulation<'p> {
             None => (None, None, None),
         };
         stepper.release_matrix();
+        let t_delassus = clock.elapsed().as_secs_f64();
         let reach =
             problem.contact.as_ref().filter(|_| responses.is_none()).and_then(|c| stepper.factor().reach(&c.dofs));
-        let t_delassus = clock.elapsed().as_secs_f64();
         let nc = problem.contact.as_ref().map(ContactModel::n).unwrap_or(0);
         let (u, v) = (problem.u0.clone(), problem.v0.clone());
         // (Ps.1) s^0 and its part of the stored energy
@@ -466,12 +467,13 @@ impl<'p> Simulation<'p> {
     /// - recovery: z ← z − L⁻¹ P Hᵀ r (the forward pass over that part only: Hᵀ r is zero off the
     ///   contact unknowns), then v^{n+1} = Pᵀ L⁻ᵀ z (the whole backward pass).
     ///
-    /// Two whole passes and two over the reach instead of two solve pairs; v^{n+1} = A_k⁻¹(b − Hᵀ r)
-    /// as before, to round-off. Where the responses G = A_k⁻¹ Hᵀ are kept (small problems) or the
+    /// Two whole passes and two over the reach instead of two solve pairs (one pair when no
+    /// force acts: the backward pass is finished off the reach); v^{n+1} = A_k⁻¹(b − Hᵀ r) as
+    /// before, to round-off. Where the responses G = A_k⁻¹ Hᵀ are kept (small problems) or the
     /// factor is simplicial, v_free is solved whole and the recovery subtracts G r or a solve.
     pub fn step(&mut self) -> Result<StepRecord> {
         let clock = Instant::now();
-        let f = self.problem.loads.at(self.problem.load_time(self.state.n));
+        let (b, f) = self.rhs();
         if let Some(entry) = f.iter().position(|x| !x.is_finite()) {
             // name the load and where it is not finite (an expression like 1/(t − t0))
             let t = self.problem.load_time(self.state.n);
@@ -482,13 +484,12 @@ impl<'p> Simulation<'p> {
                 .err()
                 .unwrap_or_else(|| self.failure(StepFailureCause::NonFinite { entry })));
         }
-        let b = self.stepper.rhs(&self.products, &f, self.ops.thickness.as_ref(), &self.state.eps_zz);
         let factor = self.stepper.factor();
         let mut free = match (&self.reach, &self.problem.contact) {
             (Some(reach), Some(c)) => {
                 let z = factor.forward(&b);
-                let y_free = c.restrict(&factor.backward_at(reach, &z));
-                FreeMotion::Split { z, y_free }
+                let (x, at) = factor.backward_over(reach, &z);
+                FreeMotion::Split { z, x, y_free: c.restrict(&at) }
             }
             _ => {
                 let mut v_free = b;
@@ -543,7 +544,8 @@ impl<'p> Simulation<'p> {
     /// (S.2) Recovery: v^{n+1} = v_free − A_k⁻¹ Hᵀ r with the contact forces r of the solution
     /// (v_free without contact or forces).
     /// - split free motion (see [`Simulation::step`]): z ← z − L⁻¹ P Hᵀ r by the forward pass over
-    ///   the contact unknowns' reach, then v^{n+1} = Pᵀ L⁻ᵀ z by the whole backward pass;
+    ///   the contact unknowns' reach, then v^{n+1} = Pᵀ L⁻ᵀ z by the whole backward pass; without a
+    ///   force, v_free by finishing the free solve's backward pass off the reach;
     /// - whole v_free: by the kept responses G = A_k⁻¹ Hᵀ, column by column over the nonzero
     ///   forces, when that reads at most [`RESPONSES_ADVANTAGE`](crate::defaults::RESPONSES_ADVANTAGE)
     ///   times the entries a solve pair reads (2 × the factor's), else by a solve.
@@ -551,15 +553,19 @@ impl<'p> Simulation<'p> {
         let c = self.problem.contact.as_ref();
         let forces = contact.map_or(0, |cs| cs.r.iter().filter(|v| **v != 0.0).count());
         let mut v_new = match free {
-            FreeMotion::Split { mut z, .. } => {
-                if let (Some(reach), Some(c), Some(cs)) = (&self.reach, c, contact)
-                    && forces > 0
-                {
-                    let mut hr = vec![0.0; z.len()];
-                    c.scatter_add(&cs.r, &mut hr);
-                    self.stepper.factor().forward_sub(reach, &hr, &mut z);
-                }
-                return self.stepper.factor().backward(z);
+            FreeMotion::Split { mut z, x, .. } => {
+                let (factor, reach) = (self.stepper.factor(), self.reach.as_ref());
+                return match (reach, c, contact) {
+                    (Some(reach), Some(c), Some(cs)) if forces > 0 => {
+                        let mut hr = vec![0.0; z.len()];
+                        c.scatter_add(&cs.r, &mut hr);
+                        factor.forward_sub(reach, &hr, &mut z);
+                        factor.backward(z)
+                    }
+                    // no force: v_free, its backward pass finished off the reach
+                    (Some(reach), ..) => factor.backward_rest(reach, x),
+                    (None, ..) => factor.backward(z),
+                };
             }
             FreeMotion::Whole(v_free) => v_free,
         };
@@ -782,10 +788,15 @@ impl<'p> Simulation<'p> {
 
     /// The free velocity A_k⁻¹ b^n of the current state and the load used.
     pub fn free_velocity(&self) -> (Vec<f64>, Vec<f64>) {
-        let f = self.problem.loads.at(self.problem.load_time(self.state.n));
-        let mut v_free = self.stepper.rhs(&self.products, &f, self.ops.thickness.as_ref(), &self.state.eps_zz);
+        let (mut v_free, f) = self.rhs();
         self.stepper.solve_in_place(&mut v_free);
         (v_free, f)
+    }
+
+    /// The step's right-hand side b^n (S.2) and the load f^{n+½} it holds.
+    fn rhs(&self) -> (Vec<f64>, Vec<f64>) {
+        let f = self.problem.loads.at(self.problem.load_time(self.state.n));
+        (self.stepper.rhs(&self.products, &f, self.ops.thickness.as_ref(), &self.state.eps_zz), f)
     }
 
     /// The condensed contact problem of the current state for a given free contact velocity

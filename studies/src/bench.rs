@@ -16,8 +16,9 @@
 //!    - `error_disp`: the relative L²(0, T) error of the displacement at [`PROBES`], points that
 //!      are nodes of every nested structured mesh, compared at the run's step times.
 //! 2. **The floor**: per run, the time of two sparse triangular-solve pairs with the run's own
-//!    factor of A_k (free solve + recovery solve: the least a step with contact can cost), and
-//!    time per step ÷ floor.
+//!    factor of A_k (free solve + recovery solve: what a step with contact cost before the step
+//!    split its pair around the contact solve; a step that splits now reads less, `Simulation::step`),
+//!    and time per step ÷ floor.
 //!    Also on the default scene itself (`floor.csv`): min and median over repeated runs.
 //! 3. **The race** (`race.csv`, `race.svg`): `newton` (F.1, the paper's sequence of convex
 //!    problems) against `newton-unfrozen` (N.4, F.1 as fallback) on the academic friction law and

@@ -7,7 +7,8 @@
 //! form) and with node blocks (the form before it). Per step: the free solve (A_k's whole forward
 //! pass and the backward pass over the part of its factor the contact unknowns reach, since the
 //! step splits its solve pair: `Simulation::step`) and the contact solve, min and median over the
-//! steps; per run: the setup split (assembly, factorization of
+//! steps, and the recovery; one whole solve pair timed after the steps (the yardstick the free
+//! solve was before the split); per run: the setup split (assembly, factorization of
 //! A_k, W and W⁻¹), the run's peak memory (the process's peak started again before each run:
 //! setup and steps, not the route-before timing beside it) and `check`'s estimate of it.
 //!

@@ -467,11 +467,12 @@ fn a_thick_box_is_factored_under_the_nested_dissection() {
 /// (S.2) The step's split solve pair equals the whole one: with A_k's factor L (of P A_k Pᵀ)
 /// supernodal, the free motion's contact velocities from the whole forward pass and the backward
 /// pass over the contact unknowns' reach are those of the whole solve bit for bit (the same
-/// kernels on the same rows), and v^{n+1} = Pᵀ L⁻ᵀ (L⁻¹ P b − L⁻¹ P Hᵀ r), its second forward pass
-/// over the reach only, equals A_k⁻¹ b − A_k⁻¹ Hᵀ r within 1e-14 of its largest entry (the same
-/// passes summed in another order: round-off of a well-conditioned A_k; measured 2.0e-16). The
-/// reach is a strict part of the factor (measured 0.69 of its entries at 16×12×12), and a run
-/// takes the split.
+/// kernels on the same rows); so is L⁻¹ P Hᵀ r by the forward pass over the reach, and v_free when
+/// that backward pass is finished off the reach (a step without force). v^{n+1} =
+/// Pᵀ L⁻ᵀ (L⁻¹ P b − L⁻¹ P Hᵀ r) equals A_k⁻¹ b − A_k⁻¹ Hᵀ r within 1e-14 of its largest entry (the
+/// same passes summed in another order: round-off of a well-conditioned A_k; measured 2.0e-16
+/// here). The reach is a strict part of the factor (measured 0.69 of its entries at 16×12×12),
+/// and a run takes the split.
 #[test]
 fn the_split_solve_pair_equals_the_whole_one() {
     let mut s = fixture("academic3d");
@@ -484,27 +485,29 @@ fn the_split_solve_pair_equals_the_whole_one() {
     let share = reach.entries() as f64 / a.factor_len() as f64;
     let n = a.dim();
     let b: Vec<f64> = (0..n).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
+    let mut whole = b.clone();
+    a.solve_in_place(&mut whole);
+    let z = a.forward(&b);
+    let (x, at) = a.backward_over(reach, &z);
+    assert!(c.restrict(&at) == c.restrict(&whole), "the contact velocities differ: {:.3e}", rel(&whole, &at));
+    assert!(a.backward_rest(reach, x) == whole, "v_free finished off the reach differs from the whole solve");
     // forces on every node, and on one node only
     let mut worst = 0.0f64;
     for stride in [1, c.dofs.len()] {
         let r: Vec<f64> =
             (0..c.dofs.len()).map(|l| if l % stride == 0 { ((l * 37 % 11) as f64 - 5.0) * 1e3 } else { 0.0 }).collect();
-        let mut whole = b.clone();
-        a.solve_in_place(&mut whole);
-        let y_whole = c.restrict(&whole);
         let mut hr = vec![0.0; n];
         c.scatter_add(&r, &mut hr);
+        let mut minus = vec![0.0; n];
+        a.forward_sub(reach, &hr, &mut minus);
+        let forward: Vec<f64> = a.forward(&hr).iter().map(|v| -v).collect();
+        assert!(minus == forward, "L⁻¹ P Hᵀ r over the reach differs from the whole pass");
         let mut corr = hr.clone();
         a.solve_in_place(&mut corr);
-        for (v, x) in whole.iter_mut().zip(&corr) {
-            *v -= x;
-        }
-        let mut z = a.forward(&b);
-        let y_split = c.restrict(&a.backward_at(reach, &z));
-        assert!(y_split == y_whole, "the contact velocities differ: {:.3e}", rel(&y_whole, &y_split));
+        let expected: Vec<f64> = whole.iter().zip(&corr).map(|(v, x)| v - x).collect();
+        let mut z = z.clone();
         a.forward_sub(reach, &hr, &mut z);
-        let split = a.backward(z);
-        worst = worst.max(rel(&whole, &split));
+        worst = worst.max(rel(&expected, &a.backward(z)));
     }
     println!("reach {share:.3} of the factor; v split against whole {worst:.3e}");
     measured("the_split_solve_pair_equals_the_whole_one", "relative difference of v", worst, "≤ 1e-14");
