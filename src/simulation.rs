@@ -264,9 +264,9 @@ pub struct Simulation<'p> {
 enum FreeMotion {
     /// v_free = A_k⁻¹ b, whole
     Whole(Vec<f64>),
-    /// z = L⁻¹ P b (the forward half, in the factor's order), x = L⁻ᵀ z solved over the contact
-    /// unknowns' reach (its rows final, the rest to finish) and the contact velocities H v_free
-    Split { z: Vec<f64>, x: Vec<f64>, y_free: Vec<f64> },
+    /// z = L⁻¹ P b (the forward half, in the factor's order) and x = L⁻ᵀ z solved over the contact
+    /// unknowns' reach (its rows final, the rest to finish)
+    Split { z: Vec<f64>, x: Vec<f64> },
 }
 
 /// What the contact solve of one step produced.
@@ -485,23 +485,25 @@ impl<'p> Simulation<'p> {
                 .unwrap_or_else(|| self.failure(StepFailureCause::NonFinite { entry })));
         }
         let factor = self.stepper.factor();
-        let mut free = match (&self.reach, &self.problem.contact) {
+        // the free motion, and its contact velocities H v_free (None without contact)
+        let (free, y_free) = match (&self.reach, &self.problem.contact) {
             (Some(reach), Some(c)) => {
                 let z = factor.forward(&b);
                 let (x, at) = factor.backward_over(reach, &z);
-                FreeMotion::Split { z, x, y_free: c.restrict(&at) }
+                (FreeMotion::Split { z, x }, Some(c.restrict(&at)))
             }
-            _ => {
+            (_, c) => {
                 let mut v_free = b;
                 self.stepper.solve_in_place(&mut v_free);
-                FreeMotion::Whole(v_free)
+                let y_free = c.as_ref().map(|c| c.restrict(&v_free));
+                (FreeMotion::Whole(v_free), y_free)
             }
         };
         let mut timing = StepTiming { free_solve: clock.elapsed().as_secs_f64(), ..StepTiming::default() };
         // the factor cache leaves the simulation for the contact solve, which reads the
         // operators and the state (shared) and updates the cache (exclusive), and comes back
         let mut factors = std::mem::take(&mut self.delassus_factors);
-        let solved = self.contact_solve(&mut factors, &mut free);
+        let solved = y_free.and_then(|y_free| self.contact_solve(&mut factors, y_free));
         self.delassus_factors = factors;
         let contact = match solved {
             Some(Ok(cs)) => Some(cs),
@@ -519,18 +521,13 @@ impl<'p> Simulation<'p> {
         self.balance(u_new, v_new, &f, contact, timing)
     }
 
-    /// The contact solve of the step for the free motion `free` (None without contact), with
-    /// the factor cache `factors`.
+    /// The contact solve of the step for the free motion's contact velocities `y_free` (None
+    /// without contact), with the factor cache `factors`.
     fn contact_solve(
         &self,
         factors: &mut delassus::DelassusFactors,
-        free: &mut FreeMotion,
+        y_free: Vec<f64>,
     ) -> Option<std::result::Result<ContactStep, ContactFailure>> {
-        let c = self.problem.contact.as_ref()?;
-        let y_free = match free {
-            FreeMotion::Whole(v_free) => c.restrict(v_free),
-            FreeMotion::Split { y_free, .. } => std::mem::take(y_free),
-        };
         let (data, p_tau_hat) = self.step_data(y_free)?;
         let d_n = data.nodes.iter().map(|nd| nd.d_n).collect();
         Some(self.solve_frozen_sequence(&data, factors, &p_tau_hat, &self.settings.inner, None).map(

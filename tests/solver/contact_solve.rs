@@ -405,6 +405,13 @@ fn the_hierarchical_inverse_is_certified_positive_definite() {
     assert!(lmin_h >= 0.9 * lmin - 1e-12 * lmax, "λ_min(H) {lmin_h:e} against λ_min(W⁻¹) {lmin:e}");
 }
 
+/// academic3d at 16×12×12 cells: a box as thick as it is wide, small enough for the suite.
+fn thick_box() -> Problem {
+    let mut s = fixture("academic3d");
+    s.domain.cells = Some(vec![16, 12, 12]);
+    problem(s)
+}
+
 /// (S.2) A_k of a thick box is factored under the nested dissection of its DOFs' positions
 /// (`ordering`: its factor holds fewer than 0.85 of AMD's entries there) and that factor solves
 /// A_k x = b as faer's AMD factor does: the two solutions agree within 1e-12 of the largest
@@ -416,9 +423,7 @@ fn the_hierarchical_inverse_is_certified_positive_definite() {
 fn a_thick_box_is_factored_under_the_nested_dissection() {
     use dyncontact::linalg::Cholesky;
     use dyncontact::ordering::FillOrder;
-    let mut s = fixture("academic3d");
-    s.domain.cells = Some(vec![16, 12, 12]);
-    let p = problem(s);
+    let p = thick_box();
     let c = p.contact.as_ref().expect("contact");
     let sim = Simulation::new(&p).expect("setup");
     let stepper = dyncontact::scheme::StepOperator::new(&sim.ops, p.model.time.scheme, p.k).expect("A_k");
@@ -475,9 +480,7 @@ fn a_thick_box_is_factored_under_the_nested_dissection() {
 /// and a run takes the split.
 #[test]
 fn the_split_solve_pair_equals_the_whole_one() {
-    let mut s = fixture("academic3d");
-    s.domain.cells = Some(vec![16, 12, 12]);
-    let p = problem(s);
+    let p = thick_box();
     let c = p.contact.as_ref().expect("contact");
     let sim = Simulation::new(&p).expect("setup");
     let a = sim.stepper.factor();
