@@ -8,7 +8,9 @@
 //! pass and the backward pass over the part of its factor the contact unknowns reach, since the
 //! step splits its solve pair: `Simulation::step`) and the contact solve, min and median over the
 //! steps, and the recovery; one whole solve pair timed after the steps (the yardstick the free
-//! solve was before the split); per run: the setup split (assembly, factorization of
+//! solve was before the split) and one timed right after each step, with the median of the
+//! contact solve over it step by step (a ratio of two timings at the same speed of the
+//! machine); per run: the setup split (assembly, factorization of
 //! A_k, W and W⁻¹), the run's peak memory (the process's peak started again before each run:
 //! setup and steps, not the route-before timing beside it) and `check`'s estimate of it.
 //!
@@ -83,6 +85,8 @@ pub struct ThickRow {
     /// its pair around the contact solve (the free solve is now a forward pass and a partial
     /// backward one)
     pub pair: f64,
+    /// one whole solve pair timed right after each step, and the contact solve against it
+    pub adjacent: Adjacent,
     /// setup seconds: assembly, factorization of A_k, W and W⁻¹ (with its near field)
     pub assembly: f64,
     pub factorization: f64,
@@ -125,22 +129,67 @@ fn min_median(mut v: Vec<f64>) -> [f64; 2] {
     if v.is_empty() { [f64::NAN; 2] } else { [v[0], v[v.len() / 2]] }
 }
 
+/// One whole solve pair timed right after each step of a run (`steps_with_adjacent_pairs`).
+#[derive(Debug, Clone, Copy)]
+pub struct Adjacent {
+    /// the pairs' seconds: [min, median]
+    pub pair: [f64; 2],
+    /// the contact solve over the pair after it, step by step: [min, median, max]
+    pub ratio: [f64; 3],
+}
+
+impl Adjacent {
+    fn of(pairs: Vec<f64>, mut ratios: Vec<f64>) -> Adjacent {
+        ratios.sort_by(f64::total_cmp);
+        let max = ratios.last().copied().unwrap_or(f64::NAN);
+        let [min, median] = min_median(ratios);
+        Adjacent { pair: min_median(pairs), ratio: [min, median, max] }
+    }
+}
+
 /// Repetitions of the solve pair timed beside each run (`ThickRow::pair`).
 pub const PAIR_REPEATS: usize = 9;
 
+/// The right-hand side the solve pairs are timed with (a fixed pattern, no load evaluation).
+fn pair_rhs(sim: &Simulation) -> Vec<f64> {
+    (0..sim.stepper.factor().dim()).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect()
+}
+
+/// The seconds of one whole solve pair with the run's factor of A_k on `b`.
+fn pair_once(sim: &Simulation, b: &[f64]) -> f64 {
+    let mut x = b.to_vec();
+    let clock = Instant::now();
+    sim.stepper.solve_in_place(&mut x);
+    clock.elapsed().as_secs_f64()
+}
+
 /// The median time of one whole solve pair with the run's factor of A_k, seconds.
 fn solve_pair(sim: &Simulation) -> f64 {
-    let n = sim.stepper.factor().dim();
-    let b: Vec<f64> = (0..n).map(|l| ((l * 7919 + 13) % 101) as f64 / 101.0 - 0.5).collect();
-    let times = (0..PAIR_REPEATS)
-        .map(|_| {
-            let mut x = b.clone();
-            let clock = Instant::now();
-            sim.stepper.solve_in_place(&mut x);
-            clock.elapsed().as_secs_f64()
-        })
-        .collect();
-    min_median(times)[1]
+    let b = pair_rhs(sim);
+    min_median((0..PAIR_REPEATS).map(|_| pair_once(sim, &b)).collect())[1]
+}
+
+/// The steps of a run with one whole solve pair timed right after each (`ThickRow::adjacent`):
+/// calls `each` with every record, and returns the pairs' seconds and the step-by-step ratios
+/// of the contact solve to its adjacent pair. The machine's speed drifts between runs and
+/// within one (this 2-core machine: the same 40 steps 86 → 163 ms per contact solve within half
+/// an hour); a ratio taken step by step sees both solves at the same speed, where the pair timed
+/// after the steps does not.
+fn steps_with_adjacent_pairs(
+    sim: &mut Simulation,
+    mut each: impl FnMut(&dyncontact::simulation::StepRecord),
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    let b = pair_rhs(sim);
+    let (mut pairs, mut ratios) = (Vec::new(), Vec::new());
+    let mut steps = sim.steps();
+    while let Some(rec) = steps.next() {
+        let rec = rec?;
+        let pair = pair_once(steps.simulation(), &b);
+        ratios.push(rec.timing.contact_solve / pair);
+        pairs.push(pair);
+        each(&rec);
+    }
+    Ok((pairs, ratios))
 }
 
 /// The forms a box runs in: W⁻¹'s and W's products through their hierarchical forms with the
@@ -177,13 +226,12 @@ fn measure(p: &Problem, cells: [i64; 3], form: &'static str, route_before: bool)
     }
     let t = sim.setup_timing;
     let (mut free, mut contact, mut recovery, mut newton) = (Vec::new(), Vec::new(), Vec::new(), 0);
-    for rec in sim.steps() {
-        let rec = rec?;
+    let (adjacent_pairs, ratios) = steps_with_adjacent_pairs(&mut sim, |rec| {
         free.push(rec.timing.free_solve);
         contact.push(rec.timing.contact_solve);
         recovery.push(rec.timing.recovery);
         newton += rec.report.inner_iterations;
-    }
+    })?;
     let peak_mb = dyncontact::resources::peak_memory().unwrap_or(f64::NAN) / 1e6;
     let pair = solve_pair(&sim);
     // the route before: W by the solves, then its Cholesky inverse (timed, then dropped)
@@ -216,6 +264,7 @@ fn measure(p: &Problem, cells: [i64; 3], form: &'static str, route_before: bool)
         contact: min_median(contact),
         recovery: min_median(recovery),
         pair,
+        adjacent: Adjacent::of(adjacent_pairs, ratios),
         assembly: t.assembly,
         factorization: t.factorization,
         delassus: t.delassus,
@@ -254,7 +303,8 @@ pub fn csv(rows: &[ThickRow]) -> String {
     csv_table(
         "cells,unknowns,contact_nodes,form,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
 contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_by_solves_s,newton_iterations,cg_iterations,near_density,h_share,peak_mb,estimate_mb,factor_entries,fill_order,\
-recovery_min_s,recovery_median_s,pair_median_s,contact_over_pair",
+recovery_min_s,recovery_median_s,pair_median_s,contact_over_pair,adjacent_pair_median_s,contact_over_adjacent_pair_min,\
+contact_over_adjacent_pair_median,contact_over_adjacent_pair_max",
         rows.iter().map(|r| {
             vec![
                 format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
@@ -284,6 +334,10 @@ recovery_min_s,recovery_median_s,pair_median_s,contact_over_pair",
                 format!("{:.6e}", r.recovery[1]),
                 format!("{:.6e}", r.pair),
                 format!("{:.3}", r.contact[1] / r.pair),
+                format!("{:.6e}", r.adjacent.pair[1]),
+                format!("{:.3}", r.adjacent.ratio[0]),
+                format!("{:.3}", r.adjacent.ratio[1]),
+                format!("{:.3}", r.adjacent.ratio[2]),
             ]
         }),
     )
@@ -344,7 +398,7 @@ pub fn report(rows: &[ThickRow], plan: &ThickPlan) -> String {
     let mut s = String::from("thick 3-D boxes (academic3d refined, velocity form): per step min / median\n");
     let _ = writeln!(
         s,
-        "{:>10} {:>8} {:>6} {:<13} {:>17} {:>19} {:>8} {:>8} {:>8} {:>8} {:>10} {:>17} {:>8} {:>8} {:>15} {:>9}",
+        "{:>10} {:>8} {:>6} {:<13} {:>17} {:>19} {:>8} {:>8} {:>8} {:>8} {:>8} {:>10} {:>17} {:>8} {:>8} {:>15} {:>9}",
         "cells",
         "unknowns",
         "n_c",
@@ -355,6 +409,7 @@ pub fn report(rows: &[ThickRow], plan: &ThickPlan) -> String {
         "rec[ms]",
         "pair[ms]",
         "c/pair",
+        "c/adj",
         "A_k+W[s]",
         "W route (solves)",
         "Newton",
@@ -365,7 +420,7 @@ pub fn report(rows: &[ThickRow], plan: &ThickPlan) -> String {
     for r in rows {
         let _ = writeln!(
             s,
-            "{:>10} {:>8} {:>6} {:<13} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>8.1} {:>8.1} {:>8.2} {:>4.1}+{:<5.1} {:>7} ({:>7.1}) {:>8} {:>8} {:>7.0} ({:>5.0}) {:>6.1} {}",
+            "{:>10} {:>8} {:>6} {:<13} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>8.1} {:>8.1} {:>8.2} {:>8.2} {:>4.1}+{:<5.1} {:>7} ({:>7.1}) {:>8} {:>8} {:>7.0} ({:>5.0}) {:>6.1} {}",
             format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
             r.unknowns,
             r.contact_nodes,
@@ -378,6 +433,7 @@ pub fn report(rows: &[ThickRow], plan: &ThickPlan) -> String {
             1e3 * r.recovery[1],
             1e3 * r.pair,
             r.contact[1] / r.pair,
+            r.adjacent.ratio[1],
             r.factorization,
             r.delassus,
             r.route,
@@ -454,6 +510,8 @@ pub struct ShakeRow {
     pub contact: [f64; 2],
     /// one whole solve pair with A_k's factor, as [`ThickRow::pair`]
     pub pair: f64,
+    /// as [`ThickRow::adjacent`]
+    pub adjacent: Adjacent,
     /// convex solves of F.1 over the window (0 where N.4 solved every step)
     pub convex_solves: usize,
     pub newton_iterations: usize,
@@ -494,15 +552,14 @@ pub fn run_shaking(plan: &ShakePlan, progress: &dyn Fn(&str)) -> Result<Vec<Shak
             sim.settings.inner = if inner == "newton" { Inner::Newton(newton) } else { Inner::NewtonUnfrozen(newton) };
             let (mut free, mut contact) = (Vec::new(), Vec::new());
             let (mut convex, mut newton_iterations, mut fallbacks, mut last) = (0, 0, 0, (0, 0));
-            for rec in sim.steps() {
-                let rec = rec?;
+            let (adjacent_pairs, ratios) = steps_with_adjacent_pairs(&mut sim, |rec| {
                 free.push(rec.timing.free_solve);
                 contact.push(rec.timing.contact_solve);
                 convex += rec.report.fixed_point_iterations;
                 newton_iterations += rec.report.inner_iterations;
                 fallbacks += usize::from(rec.report.fallback.is_some());
                 last = (rec.slip_nodes, rec.stick_nodes);
-            }
+            })?;
             let pair = solve_pair(&sim);
             rows.push(ShakeRow {
                 cells,
@@ -513,6 +570,7 @@ pub fn run_shaking(plan: &ShakePlan, progress: &dyn Fn(&str)) -> Result<Vec<Shak
                 free: min_median(free),
                 contact: min_median(contact),
                 pair,
+                adjacent: Adjacent::of(adjacent_pairs, ratios),
                 convex_solves: convex,
                 newton_iterations,
                 cg_iterations: sim.delassus_factors.all_counts().velocity_iterations,
@@ -530,7 +588,8 @@ pub fn shaking_csv(rows: &[ShakeRow]) -> String {
     csv_table(
         "cells,unknowns,contact_nodes,inner,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
 contact_over_free,convex_solves,newton_iterations,cg_iterations,fallbacks,slip_nodes,stick_nodes,pair_median_s,\
-contact_over_pair",
+contact_over_pair,adjacent_pair_median_s,contact_over_adjacent_pair_min,contact_over_adjacent_pair_median,\
+contact_over_adjacent_pair_max",
         rows.iter().map(|r| {
             vec![
                 format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
@@ -551,6 +610,10 @@ contact_over_pair",
                 r.stick_nodes.to_string(),
                 format!("{:.6e}", r.pair),
                 format!("{:.3}", r.contact[1] / r.pair),
+                format!("{:.6e}", r.adjacent.pair[1]),
+                format!("{:.3}", r.adjacent.ratio[0]),
+                format!("{:.3}", r.adjacent.ratio[1]),
+                format!("{:.3}", r.adjacent.ratio[2]),
             ]
         }),
     )
@@ -563,7 +626,7 @@ pub fn shaking_report(rows: &[ShakeRow]) -> String {
     );
     let _ = writeln!(
         s,
-        "{:>10} {:>6} {:<16} {:>17} {:>19} {:>8} {:>8} {:>8} {:>12} {:>12} {:>8} {:>9}",
+        "{:>10} {:>6} {:<16} {:>17} {:>19} {:>8} {:>8} {:>8} {:>8} {:>12} {:>12} {:>8} {:>9}",
         "cells",
         "n_c",
         "inner",
@@ -572,6 +635,7 @@ pub fn shaking_report(rows: &[ShakeRow]) -> String {
         "c/free",
         "pair[ms]",
         "c/pair",
+        "c/adj",
         "convex/step",
         "Newton/step",
         "CG",
@@ -581,7 +645,7 @@ pub fn shaking_report(rows: &[ShakeRow]) -> String {
         let per = |v: usize| v as f64 / r.steps.max(1) as f64;
         let _ = writeln!(
             s,
-            "{:>10} {:>6} {:<16} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>8.1} {:>8.2} {:>12.1} {:>12.1} {:>8} {:>9}",
+            "{:>10} {:>6} {:<16} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>8.1} {:>8.2} {:>8.2} {:>12.1} {:>12.1} {:>8} {:>9}",
             format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
             r.contact_nodes,
             r.inner,
@@ -592,6 +656,7 @@ pub fn shaking_report(rows: &[ShakeRow]) -> String {
             r.contact[1] / r.free[1],
             1e3 * r.pair,
             r.contact[1] / r.pair,
+            r.adjacent.ratio[1],
             per(r.convex_solves),
             per(r.newton_iterations),
             r.cg_iterations,

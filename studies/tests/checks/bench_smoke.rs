@@ -73,6 +73,7 @@ fn quick_bench_writes_its_files() {
         // the run's peak and `check`'s estimate of it, side by side (not compared here: other
         // tests share this process's memory)
         assert!(number(r, "peak_mb") > 0.0 && number(r, "estimate_mb") > 0.0, "{r:?}");
+        adjacent_pairs_are_ordered(r);
     }
     assert!(dir.join("thick.svg").is_file());
 
@@ -91,6 +92,7 @@ fn quick_bench_writes_its_files() {
             "newton" => assert!(convex >= steps && fallbacks == 0.0, "{r:?}"),
             _ => assert!((convex == 0.0) == (fallbacks == 0.0), "{r:?}"),
         }
+        adjacent_pairs_are_ordered(r);
     }
 
     let (header, rows) = read_csv(&dir.join("work_precision.csv"));
@@ -146,4 +148,12 @@ fn quick_bench_writes_its_files() {
         assert!(text.starts_with("<svg") && text.contains("</svg>"), "{svg} is not an SVG document");
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A thick row's pairs timed after each step: a positive median pair, and the step-by-step
+/// ratios of the contact solve to it ordered min ≤ median ≤ max, all positive.
+fn adjacent_pairs_are_ordered(r: &std::collections::HashMap<String, String>) {
+    assert!(number(r, "adjacent_pair_median_s") > 0.0, "{r:?}");
+    let [min, median, max] = ["min", "median", "max"].map(|q| number(r, &format!("contact_over_adjacent_pair_{q}")));
+    assert!(0.0 < min && min <= median && median <= max, "{r:?}");
 }
