@@ -9,10 +9,10 @@
 //! step splits its solve pair: `Simulation::step`) and the contact solve, min and median over the
 //! steps, and the recovery; one whole solve pair timed after the steps (the yardstick the free
 //! solve was before the split) and one timed right after each step, with the median of the
-//! contact solve over it step by step (a ratio of two timings at the same speed of the
+//! contact solve over it step by step (a ratio of two timings at about the same speed of the
 //! machine); per run: the setup split (assembly, factorization of
 //! A_k, W and W⁻¹), the run's peak memory (the process's peak started again before each run:
-//! setup and steps, not the route-before timing beside it) and `check`'s estimate of it.
+//! setup and steps with their adjacent pairs, not the route-before timing beside it) and `check`'s estimate of it.
 //!
 //! The shaking window (thick_shaking.csv): each box pressed until the shaking starts (t = 0.2 s,
 //! under F.1 in the form the run picks itself), then the same state run `steps` steps further
@@ -173,8 +173,8 @@ fn solve_pair(sim: &Simulation) -> f64 {
 /// calls `each` with every record, and returns the pairs' seconds and the step-by-step ratios
 /// of the contact solve to its adjacent pair. The machine's speed drifts between runs and
 /// within one (this 2-core machine: the same 40 steps 86 → 163 ms per contact solve within half
-/// an hour); a ratio taken step by step sees both solves at the same speed, where the pair timed
-/// after the steps does not.
+/// an hour); a ratio taken step by step sees both solves at about the same speed, where the pair timed
+/// after the steps does not (it reduces the drift; it does not remove it).
 fn steps_with_adjacent_pairs(
     sim: &mut Simulation,
     mut each: impl FnMut(&dyncontact::simulation::StepRecord),
