@@ -10,9 +10,9 @@
 //! steps, and the recovery; one whole solve pair timed after the steps (the yardstick the free
 //! solve was before the split) and one timed right after each step, with the median of the
 //! contact solve over it step by step (a ratio of two timings at about the same speed of the
-//! machine); per run: the setup split (assembly, factorization of
-//! A_k, W and W⁻¹), the run's peak memory (the process's peak started again before each run:
-//! setup and steps with their adjacent pairs, not the route-before timing beside it) and `check`'s estimate of it.
+//! machine); per run: the setup split (assembly, factorization of A_k, W and W⁻¹), the run's
+//! peak memory (the process's peak started again before each run: setup and steps with their
+//! adjacent pairs, not the route-before timing beside it) and `check`'s estimate of it.
 //!
 //! The shaking window (thick_shaking.csv): each box pressed until the shaking starts (t = 0.2 s,
 //! under F.1 in the form the run picks itself), then the same state run `steps` steps further
@@ -132,18 +132,29 @@ fn min_median(mut v: Vec<f64>) -> [f64; 2] {
 /// One whole solve pair timed right after each step of a run (`steps_with_adjacent_pairs`).
 #[derive(Debug, Clone, Copy)]
 pub struct Adjacent {
-    /// the pairs' seconds: [min, median]
-    pub pair: [f64; 2],
+    /// the pairs' median seconds
+    pub pair: f64,
     /// the contact solve over the pair after it, step by step: [min, median, max]
     pub ratio: [f64; 3],
 }
 
+/// The columns thick.csv and thick_shaking.csv append for [`Adjacent`].
+const ADJACENT_COLUMNS: &str = "adjacent_pair_median_s,contact_over_adjacent_pair_min,\
+contact_over_adjacent_pair_median,contact_over_adjacent_pair_max";
+
 impl Adjacent {
     fn of(pairs: Vec<f64>, mut ratios: Vec<f64>) -> Adjacent {
         ratios.sort_by(f64::total_cmp);
-        let max = ratios.last().copied().unwrap_or(f64::NAN);
-        let [min, median] = min_median(ratios);
-        Adjacent { pair: min_median(pairs), ratio: [min, median, max] }
+        let (min, max) = (ratios.first().copied(), ratios.last().copied());
+        let median = ratios.get(ratios.len() / 2).copied();
+        let ratio = [min, median, max].map(|v| v.unwrap_or(f64::NAN));
+        Adjacent { pair: min_median(pairs)[1], ratio }
+    }
+
+    /// The values of ADJACENT_COLUMNS.
+    fn fields(&self) -> [String; 4] {
+        let [min, median, max] = self.ratio;
+        [format!("{:.6e}", self.pair), format!("{min:.3}"), format!("{median:.3}"), format!("{max:.3}")]
     }
 }
 
@@ -173,8 +184,8 @@ fn solve_pair(sim: &Simulation) -> f64 {
 /// calls `each` with every record, and returns the pairs' seconds and the step-by-step ratios
 /// of the contact solve to its adjacent pair. The machine's speed drifts between runs and
 /// within one (this 2-core machine: the same 40 steps 86 → 163 ms per contact solve within half
-/// an hour); a ratio taken step by step sees both solves at about the same speed, where the pair timed
-/// after the steps does not (it reduces the drift; it does not remove it).
+/// an hour); a ratio taken step by step sees both solves at about the same speed, where the pair
+/// timed after the steps does not (it reduces the drift; it does not remove it).
 fn steps_with_adjacent_pairs(
     sim: &mut Simulation,
     mut each: impl FnMut(&dyncontact::simulation::StepRecord),
@@ -301,10 +312,11 @@ pub fn run(plan: &ThickPlan, progress: &dyn Fn(&str)) -> Result<Vec<ThickRow>> {
 /// thick.csv.
 pub fn csv(rows: &[ThickRow]) -> String {
     csv_table(
-        "cells,unknowns,contact_nodes,form,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
+        &format!(
+            "cells,unknowns,contact_nodes,form,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
 contact_over_free,assembly_s,factorization_s,delassus_s,delassus_route,delassus_by_solves_s,newton_iterations,cg_iterations,near_density,h_share,peak_mb,estimate_mb,factor_entries,fill_order,\
-recovery_min_s,recovery_median_s,pair_median_s,contact_over_pair,adjacent_pair_median_s,contact_over_adjacent_pair_min,\
-contact_over_adjacent_pair_median,contact_over_adjacent_pair_max",
+recovery_min_s,recovery_median_s,pair_median_s,contact_over_pair,{ADJACENT_COLUMNS}"
+        ),
         rows.iter().map(|r| {
             vec![
                 format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
@@ -334,11 +346,10 @@ contact_over_adjacent_pair_median,contact_over_adjacent_pair_max",
                 format!("{:.6e}", r.recovery[1]),
                 format!("{:.6e}", r.pair),
                 format!("{:.3}", r.contact[1] / r.pair),
-                format!("{:.6e}", r.adjacent.pair[1]),
-                format!("{:.3}", r.adjacent.ratio[0]),
-                format!("{:.3}", r.adjacent.ratio[1]),
-                format!("{:.3}", r.adjacent.ratio[2]),
             ]
+            .into_iter()
+            .chain(r.adjacent.fields())
+            .collect()
         }),
     )
 }
@@ -586,10 +597,11 @@ pub fn run_shaking(plan: &ShakePlan, progress: &dyn Fn(&str)) -> Result<Vec<Shak
 /// thick_shaking.csv.
 pub fn shaking_csv(rows: &[ShakeRow]) -> String {
     csv_table(
-        "cells,unknowns,contact_nodes,inner,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
+        &format!(
+            "cells,unknowns,contact_nodes,inner,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
 contact_over_free,convex_solves,newton_iterations,cg_iterations,fallbacks,slip_nodes,stick_nodes,pair_median_s,\
-contact_over_pair,adjacent_pair_median_s,contact_over_adjacent_pair_min,contact_over_adjacent_pair_median,\
-contact_over_adjacent_pair_max",
+contact_over_pair,{ADJACENT_COLUMNS}"
+        ),
         rows.iter().map(|r| {
             vec![
                 format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
@@ -610,11 +622,10 @@ contact_over_adjacent_pair_max",
                 r.stick_nodes.to_string(),
                 format!("{:.6e}", r.pair),
                 format!("{:.3}", r.contact[1] / r.pair),
-                format!("{:.6e}", r.adjacent.pair[1]),
-                format!("{:.3}", r.adjacent.ratio[0]),
-                format!("{:.3}", r.adjacent.ratio[1]),
-                format!("{:.3}", r.adjacent.ratio[2]),
             ]
+            .into_iter()
+            .chain(r.adjacent.fields())
+            .collect()
         }),
     )
 }

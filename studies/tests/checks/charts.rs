@@ -61,7 +61,7 @@ fn thick_row(cells: [i64; 3], contact_nodes: usize, form: &'static str, contact:
         contact: [contact, contact],
         recovery: [contact, contact],
         pair: contact,
-        adjacent: studies::thick::Adjacent { pair: [contact, contact], ratio: [1.0; 3] },
+        adjacent: studies::thick::Adjacent { pair: contact, ratio: [1.0; 3] },
         assembly: 0.0,
         factorization: 0.0,
         delassus: 0.0,
