@@ -17,7 +17,7 @@ use crate::fem::thickness::{ThicknessStep, ThicknessStrain};
 use crate::linalg;
 use crate::model::contact::ContactModel;
 use crate::model::kinds::{
-    BoundAt, EnergyResidualAction, FixedPointAcceleration, FrictionBound, InnerSolver, SchemeKind,
+    BoundAt, EnergyResidualAction, FixedPointAcceleration, FixedPointStart, FrictionBound, InnerSolver, SchemeKind,
 };
 use crate::problem::Problem;
 use crate::scheme::{ContactKinematics, StateProducts, StepOperator};
@@ -173,7 +173,12 @@ pub struct EnergyGuard {
 
 impl Settings {
     pub fn from_problem(p: &Problem) -> Settings {
-        let s = &p.model.solver;
+        Settings::from_solver(p, &p.model.solver)
+    }
+
+    /// The settings of `p` with the solver parameters `s` instead of its own (the studies that
+    /// run one problem with several solvers).
+    pub fn from_solver(p: &Problem, s: &crate::model::SolverParams) -> Settings {
         let newton = NewtonSettings {
             tolerance: s.newton_tolerance,
             max_iterations: s.max_newton_iterations,
@@ -194,6 +199,7 @@ impl Settings {
                 max_iterations: s.max_fixed_point_iterations,
                 relaxation: s.relaxation,
                 anderson: s.fixed_point_acceleration == FixedPointAcceleration::Anderson,
+                start_unfrozen: starts_unfrozen(p, s),
             },
             energy_guard: (p.model.time.scheme == SchemeKind::Midpoint).then_some(EnergyGuard {
                 limit: s.energy_residual_limit,
@@ -201,6 +207,30 @@ impl Settings {
             }),
         }
     }
+}
+
+/// Whether (F.1) starts at the unfrozen Newton's root (`solver.fixed_point_start`): always for
+/// "unfrozen", never for "predictor"; for "auto" from ROOT_START_FROM contact unknowns on, where
+/// the step satisfies (C.k) with a varying μ
+/// — the unfrozen step problem is convex, so its root is the only fixed point of F.1 and the
+/// start changes where F.1 begins, not where it ends — and S is Anderson-extrapolated (the plain
+/// iteration, "none", keeps the paper's start as well as its update).
+/// Only the Newton inner solver with the bound at the predictor starts there (N.4's system).
+fn starts_unfrozen(p: &Problem, s: &crate::model::SolverParams) -> bool {
+    let applies = s.inner == InnerSolver::Newton
+        && p.contact.as_ref().is_some_and(|c| {
+            c.friction.is_some() && c.friction_bound != FrictionBound::Total && c.bound_at == BoundAt::Predictor
+        });
+    applies
+        && match s.fixed_point_start {
+            FixedPointStart::Predictor => false,
+            FixedPointStart::Unfrozen => true,
+            FixedPointStart::Auto => {
+                s.fixed_point_acceleration == FixedPointAcceleration::Anderson
+                    && p.contact.as_ref().is_some_and(|c| c.dim * c.n() >= crate::defaults::ROOT_START_FROM)
+                    && matches!(p.convexity_limit(), crate::problem::ConvexityLimit::Step { k, .. } if p.k <= k)
+            }
+        }
 }
 
 /// The state at the end of step n: everything the next step reads (and a checkpoint stores).

@@ -124,6 +124,21 @@ pub enum FixedPointAcceleration {
     None,
 }
 
+/// Where (F.1) starts each step (`[solver] fixed_point_start`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum FixedPointStart {
+    /// `unfrozen` where the step satisfies (C.k) with a varying μ (the unfrozen problem is
+    /// convex, its root F.1's only fixed point), S is Anderson-extrapolated and the contact has
+    /// at least ROOT_START_FROM unknowns; else `predictor`
+    #[default]
+    Auto,
+    /// S at the initial guess of the contact velocities (the paper's start)
+    Predictor,
+    /// S at the root of the unfrozen Newton (N.4), wherever it converges (beyond (C.k) too)
+    Unfrozen,
+}
+
 /// The form of the Delassus operator and so of the contact solve (`[solver] contact_solve`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "lowercase")]

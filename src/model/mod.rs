@@ -10,8 +10,8 @@ pub mod material;
 
 use expr::{Expr, VecExpr};
 use kinds::{
-    Bound, BoundAt, ContactSolve, EnergyResidualAction, FixedPointAcceleration, FrictionBound, InnerSolver, MassKind,
-    Plane, SchemeKind,
+    Bound, BoundAt, ContactSolve, EnergyResidualAction, FixedPointAcceleration, FixedPointStart, FrictionBound,
+    InnerSolver, MassKind, Plane, SchemeKind,
 };
 use laws::FrictionCoefficient;
 
@@ -189,6 +189,8 @@ pub struct SolverParams {
     pub contact_solve: ContactSolve,
     /// Anderson extrapolation of S in (F.1), or the plain iteration
     pub fixed_point_acceleration: FixedPointAcceleration,
+    /// where (F.1) starts: the predictor's S, or the unfrozen Newton's root (auto: inside (C.k))
+    pub fixed_point_start: FixedPointStart,
     /// the (E.1) guard of a midpoint run: the largest relative residual of a step, and what a
     /// step beyond it does
     pub energy_residual_limit: f64,

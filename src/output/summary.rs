@@ -134,6 +134,11 @@ impl ModelInfo {
             FixedPointAcceleration::Anderson => "F.1 with Anderson extrapolation of S",
             FixedPointAcceleration::None => "plain F.1",
         };
+        let update = if crate::simulation::Settings::from_problem(p).fixed_point.start_unfrozen {
+            format!("{update}, started at the root of the unfrozen Newton (N.4)")
+        } else {
+            update.to_string()
+        };
         self.contact_solve = format!("{form}; {update}");
         self.contact_nodes = c.n();
         self.normal_law = if cs.compliance > 0.0 {

@@ -19,7 +19,7 @@ pub mod validate;
 
 pub use crate::model::kinds::{
     Bound, BoundAt, ContactSolve, DomainKind, EnergyResidualAction, EnforcementKind, FixedPointAcceleration,
-    FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind,
+    FixedPointStart, FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind,
 };
 pub use parse::{one_paragraph, overridden_text};
 pub use schema::{

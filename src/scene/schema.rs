@@ -6,8 +6,8 @@ use serde::{Deserialize, Deserializer};
 
 use crate::defaults;
 use crate::model::kinds::{
-    BoundAt, ContactSolve, DomainKind, EnergyResidualAction, EnforcementKind, FixedPointAcceleration, FrictionBound,
-    FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind,
+    BoundAt, ContactSolve, DomainKind, EnergyResidualAction, EnforcementKind, FixedPointAcceleration, FixedPointStart,
+    FrictionBound, FrictionLaw, InnerSolver, MassKind, Plane, SchemeKind,
 };
 
 #[derive(Debug, Clone, Deserialize)]
@@ -255,6 +255,9 @@ pub struct Solver {
     /// "anderson" | "none": how (F.1) updates S
     #[serde(default)]
     pub fixed_point_acceleration: FixedPointAcceleration,
+    /// "auto" | "predictor" | "unfrozen": where (F.1) starts each step
+    #[serde(default)]
+    pub fixed_point_start: FixedPointStart,
     /// the (E.1) guard of a midpoint run: a step whose residual exceeds this fraction of the
     /// energy scale ends the run ("fail") or is reported ("warn")
     #[serde(default = "default_energy_residual_limit")]
@@ -302,6 +305,7 @@ impl Default for Solver {
             persistency: false,
             contact_solve: ContactSolve::Auto,
             fixed_point_acceleration: FixedPointAcceleration::Anderson,
+            fixed_point_start: FixedPointStart::Auto,
             energy_residual_limit: default_energy_residual_limit(),
             energy_residual_action: EnergyResidualAction::Fail,
         }

@@ -454,6 +454,7 @@ impl Scene {
             persistency: s.persistency,
             contact_solve: s.contact_solve,
             fixed_point_acceleration: s.fixed_point_acceleration,
+            fixed_point_start: s.fixed_point_start,
             energy_residual_limit: s.energy_residual_limit,
             energy_residual_action: s.energy_residual_action,
         })

@@ -36,6 +36,9 @@ pub struct FixedPointSettings {
     /// Anderson(m) extrapolation of S (m = ANDERSON_DEPTH, with θ = 1): the same fixed point and
     /// the same stopping test, fewer convex solves; false: the plain iteration (the paper's F.1)
     pub anderson: bool,
+    /// start at the root of the unfrozen Newton (N.4) instead of the predictor's bound: set only
+    /// where the unfrozen step problem is convex ((C.k)), so its root is F.1's unique fixed point
+    pub start_unfrozen: bool,
 }
 
 /// What the step did (one history.csv row's worth of solver facts).
@@ -57,6 +60,8 @@ pub struct StepReport {
     pub unfrozen: bool,
     /// `newton-unfrozen` only: it failed and the step fell back to F.1 (why)
     pub fallback: Option<NewtonFailure>,
+    /// F.1 started at the unfrozen Newton's root (`FixedPointSettings::start_unfrozen`)
+    pub started_unfrozen: bool,
 }
 
 impl StepReport {
@@ -204,7 +209,28 @@ pub fn solve(
             None => {}
         }
     }
-    iterate(step, factors, mu, normal, y0, (lambda0, t0), inner, fp, trace, report)
+    if let (true, Inner::Newton(set), NormalPart::Predictor(p_tau_hat)) = (fp.start_unfrozen, inner, normal) {
+        match newton::solve_unfrozen(step, factors, mu, p_tau_hat, lambda0, t0, set) {
+            Ok(root) => {
+                report.inner_iterations = root.iterations;
+                report.started_unfrozen = true;
+                return iterate(step, factors, mu, normal, Start::Root(&root), (lambda0, t0), inner, fp, trace, report);
+            }
+            Err(f) => {
+                report.inner_iterations = f.iterations;
+                report.fallback = Some(f);
+            }
+        }
+    }
+    iterate(step, factors, mu, normal, Start::Predictor(y0), (lambda0, t0), inner, fp, trace, report)
+}
+
+/// Where (F.1) starts: S at the initial guess of the contact velocities (the predictor), or at
+/// the root of the unfrozen Newton (its velocities and forces also start the first convex solve).
+#[derive(Clone, Copy)]
+enum Start<'a> {
+    Predictor(&'a [f64]),
+    Root(&'a ContactSolution),
 }
 
 /// The fixed-point iterations of (F.1) proper: solve with S frozen, update S from the new slip
@@ -215,7 +241,7 @@ fn iterate(
     factors: &mut DelassusFactors,
     mu: &FrictionCoefficient,
     normal: &NormalPart,
-    y0: &[f64],
+    start: Start,
     (lambda0, t0): (&[f64], &[f64]),
     inner: &Inner,
     fp: &FixedPointSettings,
@@ -224,6 +250,10 @@ fn iterate(
 ) -> Result<(ContactSolution, Vec<f64>, StepReport), ContactFailure> {
     let n = step.n();
     let fail = |l: usize| move |inner: InnerFailure| ContactFailure { fixed_point_iteration: l, inner };
+    let (y0, lambda0, t0, from_root) = match start {
+        Start::Predictor(y0) => (y0, lambda0, t0, false),
+        Start::Root(root) => (root.y.as_slice(), root.lambda.as_slice(), root.t.as_slice(), true),
+    };
     let mut s_bound = friction_bound(step, mu, normal, y0, lambda0);
     let mut y_prev = y0.to_vec();
     let (mut lam, mut tf) = (lambda0.to_vec(), t0.to_vec());
@@ -231,11 +261,13 @@ fn iterate(
     // G(S) and G(S) − S of the last ANDERSON_DEPTH iterations, oldest first, for the extrapolation
     let mut history: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
     // the relative change of S the last iteration saw (the inner solves' forcing)
-    let mut change = crate::defaults::INNER_FORCING_START;
+    // (from the root, whose S is expected to be the fixed point: the first solve exact)
+    let mut change = if from_root { 0.0 } else { crate::defaults::INNER_FORCING_START };
     for l in 1..=fp.max_iterations.max(1) {
         let loose = inexact(inner, change);
-        // from the second convex solve on, Newton starts at the last one's solution
-        let start = (l > 1).then_some(y_prev.as_slice());
+        // from the second convex solve on (from the first, started at the root), Newton starts
+        // at the last one's solution
+        let start = (l > 1 || from_root).then_some(y_prev.as_slice());
         let mut sol = inner_solve(step, factors, &s_bound, start, &lam, &tf, &loose).map_err(fail(l))?;
         if let Some(tr) = trace.as_deref_mut() {
             tr.push(sol.y.clone());

@@ -14,11 +14,14 @@
 //! peak memory (the process's peak started again before each run: setup and steps with their
 //! adjacent pairs, not the route-before timing beside it) and `check`'s estimate of it.
 //!
-//! The shaking window (thick_shaking.csv): each box pressed until the shaking starts (t = 0.2 s,
-//! under F.1 in the form the run picks itself), then the same state run `steps` steps further
-//! twice, with F.1 (`inner = "newton"`, the fixture's solver) and with the unfrozen Newton (N.4,
+//! The shaking window (thick_shaking.csv): each box at academic3d's step scaled with its cell
+//! height, k = 5e-4 · 8/n_z (inside (C.k) on every box: the refinement a convergence study
+//! makes), pressed until the shaking starts (t = 0.2 s, in the form and start the run picks
+//! itself), then the same state run over 0.02 s three times ([`SHAKING_RUNS`]): F.1 from the
+//! predictor's S (the paper's start), F.1 as the fixture runs it (`fixed_point_start = "auto"`:
+//! from the unfrozen Newton's root inside (C.k)), and the unfrozen Newton (N.4,
 //! `"newton-unfrozen"`): per step the free and contact solves and the convex solves and Newton
-//! iterations each solver spends — where the shaking's cost comes from.
+//! iterations each spends — where the shaking's cost comes from.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -27,11 +30,12 @@ use std::time::Instant;
 use dyncontact::error::{Error, Result};
 use dyncontact::output::csv::csv_table;
 use dyncontact::output::loglog::{self, LogSeries, loglog_slope};
+use dyncontact::problem::ConvexityLimit;
 use dyncontact::problem::Problem;
 use dyncontact::scene::Scene;
-use dyncontact::simulation::Simulation;
+use dyncontact::scene::{FixedPointStart, InnerSolver};
+use dyncontact::simulation::{Settings, Simulation};
 use dyncontact::step::delassus::DelassusFactors;
-use dyncontact::step::fixed_point::Inner;
 
 /// What the thick part runs.
 #[derive(Debug, Clone)]
@@ -504,8 +508,24 @@ impl ShakePlan {
     }
 }
 
-/// The inner solvers of the shaking window, as the scene names them.
-pub const SHAKING_INNER: [&str; 2] = ["newton", "newton-unfrozen"];
+/// The runs of the shaking window: a label (thick_shaking.csv's `inner`), the inner solver and
+/// F.1's start, as the scene names them.
+pub const SHAKING_RUNS: [(&str, InnerSolver, FixedPointStart); 3] = [
+    ("newton-predictor", InnerSolver::Newton, FixedPointStart::Predictor),
+    ("newton", InnerSolver::Newton, FixedPointStart::Auto),
+    ("newton-unfrozen", InnerSolver::NewtonUnfrozen, FixedPointStart::Auto),
+];
+
+/// The shaking window's step on a box: academic3d's k = 5e-4 scaled with the cell height,
+/// 5e-4 · 8/n_z (never above 5e-4): (C.k) bounds k by a multiple of the contact nodes' mass over
+/// their area, which shrinks with the height, so this keeps every box of the family inside it
+/// (margins of 4%: limits 5.21e-4, 3.47e-4, 2.60e-4, 1.74e-4 from 24×12×8 to 64×32×24).
+pub fn shaking_step(cells: [i64; 3]) -> f64 {
+    ACADEMIC3D_STEP * (8.0 / cells[2] as f64).min(1.0)
+}
+
+/// academic3d's time step.
+const ACADEMIC3D_STEP: f64 = 5e-4;
 
 /// One solver's shaking window on one box.
 #[derive(Debug, Clone)]
@@ -513,8 +533,10 @@ pub struct ShakeRow {
     pub cells: [i64; 3],
     pub unknowns: usize,
     pub contact_nodes: usize,
-    /// one of SHAKING_INNER
+    /// the label of one of SHAKING_RUNS
     pub inner: &'static str,
+    /// the time step, s ([`shaking_step`])
+    pub step: f64,
     pub steps: usize,
     /// per step, seconds: [min, median]
     pub free: [f64; 2],
@@ -539,28 +561,35 @@ pub fn run_shaking(plan: &ShakePlan, progress: &dyn Fn(&str)) -> Result<Vec<Shak
     let mut rows = Vec::new();
     for &cells in &plan.boxes {
         let mut s = scene(cells, 1)?;
+        s.time.step = shaking_step(cells);
         let pressing = (SHAKING_FROM / s.time.step).round() as usize;
-        s.time.end = s.time.step * (pressing + plan.steps) as f64;
+        // the window: plan.steps of academic3d's step, in simulated time
+        let window = (plan.steps as f64 * ACADEMIC3D_STEP / s.time.step).round() as usize;
+        s.time.end = s.time.step * (pressing + window) as f64;
         // the run's own choice of form (dense products below HMATRIX_FROM = 400 components,
         // hierarchical above; node blocks below NEAR_FIELD_FROM = 1,200, the near field above)
         s.solver.contact_solve = dyncontact::model::kinds::ContactSolve::Auto;
         let p = Problem::from_scene(&s, Path::new("."))?;
-        progress(&format!("thick shaking: {}x{}x{}, {pressing} pressing steps", cells[0], cells[1], cells[2]));
+        if !matches!(p.convexity_limit(), ConvexityLimit::Step { k, .. } if p.k <= k) {
+            return Err(Error::Study(format!("thick shaking: k = {:e} on {cells:?} is beyond (C.k)", p.k)));
+        }
+        progress(&format!(
+            "thick shaking: {}x{}x{}, k = {:.3e}, {pressing} pressing steps",
+            cells[0], cells[1], cells[2], p.k
+        ));
         let mut sim = Simulation::new(&p)?;
         for rec in sim.steps().take(pressing) {
             rec?;
         }
         let onset = sim.state.clone();
-        let newton = match sim.settings.inner {
-            Inner::Newton(set) | Inner::NewtonUnfrozen(set) => set,
-            Inner::Conic(_) => return Err(Error::Study("thick shaking: academic3d's solver is Newton".into())),
-        };
-        for inner in SHAKING_INNER {
+        for (inner, solver, start) in SHAKING_RUNS {
             progress(&format!("thick shaking: {}x{}x{}, {inner}", cells[0], cells[1], cells[2]));
             sim.restore(onset.clone())?;
-            // both solvers start cold: a fresh factor cache, the same state
+            // every run starts cold: a fresh factor cache, the same state
             sim.delassus_factors = DelassusFactors::default();
-            sim.settings.inner = if inner == "newton" { Inner::Newton(newton) } else { Inner::NewtonUnfrozen(newton) };
+            let mut variant = p.model.solver;
+            (variant.inner, variant.fixed_point_start) = (solver, start);
+            sim.settings = Settings::from_solver(&p, &variant);
             let (mut free, mut contact) = (Vec::new(), Vec::new());
             let (mut convex, mut newton_iterations, mut fallbacks, mut last) = (0, 0, 0, (0, 0));
             let (adjacent_pairs, ratios) = steps_with_adjacent_pairs(&mut sim, |rec| {
@@ -577,6 +606,7 @@ pub fn run_shaking(plan: &ShakePlan, progress: &dyn Fn(&str)) -> Result<Vec<Shak
                 unknowns: p.dofs.n_free,
                 contact_nodes: p.contact.as_ref().map_or(0, |c| c.n()),
                 inner,
+                step: p.k,
                 steps: free.len(),
                 free: min_median(free),
                 contact: min_median(contact),
@@ -598,7 +628,7 @@ pub fn run_shaking(plan: &ShakePlan, progress: &dyn Fn(&str)) -> Result<Vec<Shak
 pub fn shaking_csv(rows: &[ShakeRow]) -> String {
     csv_table(
         &format!(
-            "cells,unknowns,contact_nodes,inner,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
+            "cells,unknowns,contact_nodes,inner,step_s,steps,free_min_s,free_median_s,contact_min_s,contact_median_s,\
 contact_over_free,convex_solves,newton_iterations,cg_iterations,fallbacks,slip_nodes,stick_nodes,pair_median_s,\
 contact_over_pair,{ADJACENT_COLUMNS}"
         ),
@@ -608,6 +638,7 @@ contact_over_pair,{ADJACENT_COLUMNS}"
                 r.unknowns.to_string(),
                 r.contact_nodes.to_string(),
                 r.inner.to_string(),
+                format!("{:e}", r.step),
                 r.steps.to_string(),
                 format!("{:.6e}", r.free[0]),
                 format!("{:.6e}", r.free[1]),
@@ -633,13 +664,14 @@ contact_over_pair,{ADJACENT_COLUMNS}"
 /// The printed lines of the shaking window.
 pub fn shaking_report(rows: &[ShakeRow]) -> String {
     let mut s = format!(
-        "thick 3-D boxes while shaken (from t = {SHAKING_FROM} s, the same state for both solvers): per step min / median\n"
+        "thick 3-D boxes while shaken (from t = {SHAKING_FROM} s over 0.02 s, k = 5e-4 · 8/n_z inside (C.k), the same state for every run): per step min / median\n"
     );
     let _ = writeln!(
         s,
-        "{:>10} {:>6} {:<16} {:>17} {:>19} {:>8} {:>8} {:>8} {:>8} {:>12} {:>12} {:>8} {:>9}",
+        "{:>10} {:>6} {:>9} {:<16} {:>17} {:>19} {:>8} {:>8} {:>8} {:>8} {:>12} {:>12} {:>8} {:>9}",
         "cells",
         "n_c",
+        "k",
         "inner",
         "free[ms]",
         "contact[ms]",
@@ -656,9 +688,10 @@ pub fn shaking_report(rows: &[ShakeRow]) -> String {
         let per = |v: usize| v as f64 / r.steps.max(1) as f64;
         let _ = writeln!(
             s,
-            "{:>10} {:>6} {:<16} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>8.1} {:>8.2} {:>8.2} {:>12.1} {:>12.1} {:>8} {:>9}",
+            "{:>10} {:>6} {:>9.3e} {:<16} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>8.1} {:>8.2} {:>8.2} {:>12.1} {:>12.1} {:>8} {:>9}",
             format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
             r.contact_nodes,
+            r.step,
             r.inner,
             1e3 * r.free[0],
             1e3 * r.free[1],
