@@ -11,7 +11,7 @@ use dyncontact::scene::{Bound, FixedPointAcceleration, FrictionLaw, NumOrStr};
 use dyncontact::simulation::{Settings, Simulation};
 use dyncontact::step::conic::ConicSettings;
 use dyncontact::step::delassus::DelassusFactors;
-use dyncontact::step::fixed_point::Inner;
+use dyncontact::step::fixed_point::{FixedPointSettings, Inner, StepReport};
 use dyncontact::step::newton::{self, NewtonSettings};
 use dyncontact::step::{StepData, conic};
 use faer::linalg::solvers::DenseSolveCore;
@@ -433,6 +433,37 @@ fn reduced_newton_system_agrees_with_the_full_one_in_3d() {
     }
 }
 
+/// F.1 (Newton inner solver) on the step `sim` is about to take, from its state, once per
+/// fixed-point setting: each run's contact forces and report.
+fn f1_from_the_state<const N: usize>(
+    sim: &Simulation,
+    p: &Problem,
+    factors: &mut DelassusFactors,
+    runs: [FixedPointSettings; N],
+) -> [(Vec<f64>, StepReport); N] {
+    let (w, _) = sim.free_velocity();
+    let c = p.contact.as_ref().expect("contact");
+    let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
+    let normal = dyncontact::step::fixed_point::NormalPart::Predictor(&p_hat);
+    let vn = c.restrict(&sim.state.v);
+    runs.map(|fp| {
+        let (sol, _, report) = dyncontact::step::fixed_point::solve(
+            &data,
+            factors,
+            c.friction.as_ref(),
+            &normal,
+            &vn,
+            &sim.state.lambda,
+            &sim.state.t_fric,
+            &Inner::Newton(NewtonSettings::default()),
+            &fp,
+            None,
+        )
+        .expect("F.1");
+        (data.forces(&sol.y, &sol.lambda, &sol.t), report)
+    })
+}
+
 /// (F.1) The Anderson-extrapolated fixed point and the plain one, each from the same state on
 /// every step of the academic scene's first 0.6 s (press, then stick–slip), give the same step
 /// solution to 1e-6 of the force scale: both stop when ‖G(S) − S‖ ≤ 1e-8 ‖S‖, which puts each
@@ -444,37 +475,14 @@ fn f1_anderson_reaches_the_plain_fixed_point() {
     s.time.end = 0.6;
     let p = problem(s);
     let mut sim = Simulation::new(&p).expect("setup");
-    let set = NewtonSettings::default();
-    let plain = dyncontact::step::fixed_point::FixedPointSettings { anderson: false, ..sim.settings.fixed_point };
-    let accelerated = dyncontact::step::fixed_point::FixedPointSettings { anderson: true, ..sim.settings.fixed_point };
+    let plain = FixedPointSettings { anderson: false, ..sim.settings.fixed_point };
+    let accelerated = FixedPointSettings { anderson: true, ..sim.settings.fixed_point };
     let (mut worst, mut solves) = (0.0f64, [0usize; 2]);
     let mut factors = DelassusFactors::default();
     for rec in sim.steps().before_each(|sim| {
-        let (w, _) = sim.free_velocity();
-        let c = p.contact.as_ref().expect("contact");
-        let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
-        let normal = dyncontact::step::fixed_point::NormalPart::Predictor(&p_hat);
-        let vn = c.restrict(&sim.state.v);
-        let mut run = |fp| {
-            dyncontact::step::fixed_point::solve(
-                &data,
-                &mut factors,
-                c.friction.as_ref(),
-                &normal,
-                &vn,
-                &sim.state.lambda,
-                &sim.state.t_fric,
-                &Inner::Newton(set),
-                &fp,
-                None,
-            )
-            .expect("F.1")
-        };
-        let (a, _, ra) = run(plain);
-        let (b, _, rb) = run(accelerated);
+        let [(fa, ra), (fb, rb)] = f1_from_the_state(sim, &p, &mut factors, [plain, accelerated]);
         solves[0] += ra.fixed_point_iterations;
         solves[1] += rb.fixed_point_iterations;
-        let (fa, fb) = (data.forces(&a.y, &a.lambda, &a.t), data.forces(&b.y, &b.lambda, &b.t));
         if linalg::norm_inf(&fa) > 0.0 {
             worst = worst.max(rel(&fa, &fb, linalg::norm_inf(&fa)));
         }
@@ -513,47 +521,22 @@ fn f1_root_start_reaches_the_fixed_point_inside_ck() {
     let mut sim = Simulation::new(&p).expect("setup");
     assert!(sim.settings.fixed_point.start_unfrozen, "auto starts at the root inside (C.k)");
     assert!(sim.inverse.is_some(), "the velocity form (the thick family's path)");
-    let set = NewtonSettings::default();
     let root = sim.settings.fixed_point;
-    let predictor = dyncontact::step::fixed_point::FixedPointSettings { start_unfrozen: false, ..root };
-    let reference =
-        dyncontact::step::fixed_point::FixedPointSettings { tolerance: 1e-13, max_iterations: 200, ..predictor };
+    let predictor = FixedPointSettings { start_unfrozen: false, ..root };
+    let reference = FixedPointSettings { tolerance: 1e-13, max_iterations: 200, ..predictor };
     let (mut worst, mut worst_predictor, mut newton_its, mut slipped) = (0.0f64, 0.0f64, [0usize; 2], 0usize);
     let mut factors = DelassusFactors::default();
     for rec in sim.steps().before_each(|sim| {
-        let (w, _) = sim.free_velocity();
-        let c = p.contact.as_ref().expect("contact");
-        let (data, p_hat) = sim.step_data(c.restrict(&w)).expect("data");
-        let normal = dyncontact::step::fixed_point::NormalPart::Predictor(&p_hat);
-        let vn = c.restrict(&sim.state.v);
-        let mut run = |fp| {
-            dyncontact::step::fixed_point::solve(
-                &data,
-                &mut factors,
-                c.friction.as_ref(),
-                &normal,
-                &vn,
-                &sim.state.lambda,
-                &sim.state.t_fric,
-                &Inner::Newton(set),
-                &fp,
-                None,
-            )
-            .expect("F.1")
-        };
-        let (a, _, ra) = run(reference);
-        let (b, _, rb) = run(root);
-        let (d, _, rd) = run(predictor);
+        let [(fa, ra), (fb, rb), (fd, rd)] = f1_from_the_state(sim, &p, &mut factors, [reference, root, predictor]);
         assert_eq!(ra.fixed_point, dyncontact::failure::FixedPointStatus::Converged, "the reference converges");
         assert!(rb.started_unfrozen && rb.fallback.is_none(), "the unfrozen Newton converges inside (C.k)");
         newton_its[0] += rb.inner_iterations;
         newton_its[1] += rd.inner_iterations;
         slipped += usize::from(rd.fixed_point_iterations > 1);
-        let fa = data.forces(&a.y, &a.lambda, &a.t);
         let scale = linalg::norm_inf(&fa);
         if scale > 0.0 {
-            worst = worst.max(rel(&fa, &data.forces(&b.y, &b.lambda, &b.t), scale));
-            worst_predictor = worst_predictor.max(rel(&fa, &data.forces(&d.y, &d.lambda, &d.t), scale));
+            worst = worst.max(rel(&fa, &fb, scale));
+            worst_predictor = worst_predictor.max(rel(&fa, &fd, scale));
         }
     }) {
         rec.expect("step");
