@@ -123,7 +123,8 @@ pub const PCG_FORCING_MAX: f64 = 1e-3;
 
 /// `fixed_point_start = "auto"` starts (F.1) at the unfrozen Newton's root (inside (C.k)) from
 /// this many contact unknowns (d n_c) on, where the velocity form's Newton iterations are what a
-/// step costs: academic3d 24×12×8 (936), 40 shaken steps, 43.4 → 14.1 ms per contact solve.
+/// step costs: academic3d 24×12×8 (936), 40 shaken steps, 26.0 → 9.6 ms per contact solve (the
+/// thick bench's medians).
 /// Below, a convex solve costs little, and small scenes keep the predictor's start and their
 /// outputs.
 pub const ROOT_START_FROM: usize = 256;

@@ -213,8 +213,8 @@ impl Settings {
 /// "unfrozen", never for "predictor"; for "auto" from ROOT_START_FROM contact unknowns on, where
 /// the step satisfies (C.k) with a varying μ
 /// — the unfrozen step problem is convex, so its root is the only fixed point of F.1 and the
-/// start changes where F.1 begins, not where it ends — and S is Anderson-extrapolated (the plain
-/// iteration, "none", keeps the paper's start as well as its update).
+/// start changes where F.1 begins, not where it ends — and S is Anderson-extrapolated (θ = 1 and
+/// "anderson"; the plain iteration keeps the paper's start as well as its update).
 /// Only the Newton inner solver with the bound at the predictor starts there (N.4's system).
 fn starts_unfrozen(p: &Problem, s: &crate::model::SolverParams) -> bool {
     let applies = s.inner == InnerSolver::Newton
@@ -227,6 +227,7 @@ fn starts_unfrozen(p: &Problem, s: &crate::model::SolverParams) -> bool {
             FixedPointStart::Unfrozen => true,
             FixedPointStart::Auto => {
                 s.fixed_point_acceleration == FixedPointAcceleration::Anderson
+                    && s.relaxation == 1.0
                     && p.contact.as_ref().is_some_and(|c| c.dim * c.n() >= crate::defaults::ROOT_START_FROM)
                     && matches!(p.convexity_limit(), crate::problem::ConvexityLimit::Step { k, .. } if p.k <= k)
             }

@@ -129,13 +129,15 @@ pub enum FixedPointAcceleration {
 #[serde(rename_all = "lowercase")]
 pub enum FixedPointStart {
     /// `unfrozen` where the step satisfies (C.k) with a varying μ (the unfrozen problem is
-    /// convex, its root F.1's only fixed point), S is Anderson-extrapolated and the contact has
-    /// at least ROOT_START_FROM unknowns; else `predictor`
+    /// convex, its root F.1's only fixed point), S is Anderson-extrapolated (θ = 1), the contact
+    /// has at least ROOT_START_FROM unknowns, the inner solver is Newton and the bound is p_τ at
+    /// the predictor; else `predictor`
     #[default]
     Auto,
     /// S at the initial guess of the contact velocities (the paper's start)
     Predictor,
-    /// S at the root of the unfrozen Newton (N.4), wherever it converges (beyond (C.k) too)
+    /// S at the root of the unfrozen Newton (N.4) wherever N.4 applies (Newton inner solver, bound
+    /// at the predictor) and converges, beyond (C.k) too
     Unfrozen,
 }
 

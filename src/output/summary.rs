@@ -450,7 +450,8 @@ pub struct RunDetails {
     pub fixed_point_iterations_total: usize,
     pub fixed_point_iterations_max: usize,
     pub fixed_point_cap_hits: usize,
-    /// `newton-unfrozen` only: steps where it failed and the fixed point (F.1) took over
+    /// `newton-unfrozen`, or F.1's root start (`fixed_point_start`): steps where the unfrozen
+    /// Newton failed and the fixed point (F.1) took over from the predictor
     pub unfrozen_fallbacks: usize,
     pub max_abs_energy_residual: f64,
     pub max_relative_energy_residual: f64,

@@ -58,7 +58,8 @@ pub struct StepReport {
     pub friction_unknowns: usize,
     /// `newton-unfrozen` only: the unfrozen Newton solved the step (no fixed point)
     pub unfrozen: bool,
-    /// `newton-unfrozen` only: it failed and the step fell back to F.1 (why)
+    /// `newton-unfrozen`, or F.1's root start: the unfrozen Newton failed and the step fell back
+    /// to F.1 from the predictor (why)
     pub fallback: Option<NewtonFailure>,
     /// F.1 started at the unfrozen Newton's root (`FixedPointSettings::start_unfrozen`)
     pub started_unfrozen: bool,
