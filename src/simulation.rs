@@ -209,14 +209,14 @@ impl Settings {
     }
 }
 
-/// Whether (F.1) starts at the unfrozen Newton's root (`solver.fixed_point_start`): always for
-/// "unfrozen", never for "predictor"; for "auto" from ROOT_START_FROM contact unknowns on, where
-/// the step satisfies (C.k) with a varying μ
-/// — the unfrozen step problem is convex, so its root is the only fixed point of F.1 and the
-/// start changes where F.1 begins, not where it ends — and S is Anderson-extrapolated (θ = 1 and
-/// "anderson"; the plain iteration keeps the paper's start as well as its update).
-/// Only the Newton inner solver with the bound at the predictor starts there (N.4's system).
-fn starts_unfrozen(p: &Problem, s: &crate::model::SolverParams) -> bool {
+/// Whether (F.1) starts at the unfrozen Newton's root (`solver.fixed_point_start`) with the
+/// solver parameters `s`: always for "unfrozen", never for "predictor"; for "auto" from
+/// ROOT_START_FROM contact unknowns on, where the step satisfies (C.k) with a varying μ (the
+/// unfrozen step problem is convex, so its root is the only fixed point of F.1 and the start
+/// changes where F.1 begins, not where it ends) and S is Anderson-extrapolated (θ = 1 and
+/// "anderson"; the plain iteration keeps the paper's start as well as its update). Only the
+/// Newton inner solver with the bound at the predictor starts there (N.4's system).
+pub fn starts_unfrozen(p: &Problem, s: &crate::model::SolverParams) -> bool {
     let applies = s.inner == InnerSolver::Newton
         && p.contact.as_ref().is_some_and(|c| {
             c.friction.is_some() && c.friction_bound != FrictionBound::Total && c.bound_at == BoundAt::Predictor

@@ -134,7 +134,7 @@ impl ModelInfo {
             FixedPointAcceleration::Anderson => "F.1 with Anderson extrapolation of S",
             FixedPointAcceleration::None => "plain F.1",
         };
-        let update = if crate::simulation::Settings::from_problem(p).fixed_point.start_unfrozen {
+        let update = if crate::simulation::starts_unfrozen(p, &p.model.solver) {
             format!("{update}, started at the root of the unfrozen Newton (N.4)")
         } else {
             update.to_string()

@@ -578,6 +578,8 @@ pub struct ShakeRow {
 /// checked against (C.k) before any runs.
 pub fn run_shaking(plan: &ShakePlan, progress: &dyn Fn(&str)) -> Result<Vec<ShakeRow>> {
     let mut rows = Vec::new();
+    // every box checked before the first one's hours of runs; its problem built again below
+    // rather than all kept (GBs for the largest boxes)
     for &cells in &plan.boxes {
         let p = Problem::from_scene(&shaking_scene(cells, plan.steps)?, Path::new("."))?;
         if !matches!(p.convexity_limit(), ConvexityLimit::Step { k, .. } if p.k <= k) {
