@@ -182,7 +182,8 @@ fn new_run_id(out: &Path) -> String {
 
 /// The summary of a run that is starting.
 fn new_summary(problem: &Problem, sim: &Simulation, opts: &RunOptions, start: Instant, run_id: String) -> Summary {
-    let info = ModelInfo::of(problem);
+    let mut info = ModelInfo::of(problem);
+    info.set_sharp_convexity(sim.sharp_convexity);
     let t = sim.setup_timing;
     let details = RunDetails {
         description: problem.model.description.clone(),
@@ -202,6 +203,7 @@ fn new_summary(problem: &Problem, sim: &Simulation, opts: &RunOptions, start: In
             assembly_s: t.assembly,
             factorization_s: t.factorization,
             delassus_s: t.delassus,
+            sharp_convexity_s: t.sharp_convexity,
             ..Timing::default()
         },
         contact_solve: sim.delassus.as_ref().map_or("none", |w| w.form()).to_string(),

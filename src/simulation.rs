@@ -22,7 +22,7 @@ use crate::model::kinds::{
 use crate::problem::Problem;
 use crate::scheme::{ContactKinematics, StateProducts, StepOperator};
 use crate::step::conic::ConicSettings;
-use crate::step::fixed_point::{self, FixedPointSettings, Inner, NormalPart, StepReport};
+use crate::step::fixed_point::{self, F1Start, FixedPointSettings, Inner, NormalPart, StepReport};
 use crate::step::newton::NewtonSettings;
 use crate::step::{ContactSolution, NodeData, NodeStatus, StepData, delassus};
 
@@ -80,6 +80,8 @@ pub struct SetupTiming {
     pub delassus: f64,
     /// how W was computed: "solves", "schur", "probed" (`delassus::Built::route`), or "" without contact
     pub delassus_route: &'static str,
+    /// (Ck.1)'s test through W (0 where it did not run)
+    pub sharp_convexity: f64,
 }
 
 /// Wall-clock split of one step, in seconds.
@@ -199,7 +201,7 @@ impl Settings {
                 max_iterations: s.max_fixed_point_iterations,
                 relaxation: s.relaxation,
                 anderson: s.fixed_point_acceleration == FixedPointAcceleration::Anderson,
-                start_unfrozen: starts_unfrozen(p, s),
+                start: f1_start(p, s),
             },
             energy_guard: (p.model.time.scheme == SchemeKind::Midpoint).then_some(EnergyGuard {
                 limit: s.energy_residual_limit,
@@ -209,29 +211,36 @@ impl Settings {
     }
 }
 
-/// Whether (F.1) starts at the unfrozen Newton's root (`solver.fixed_point_start`) with the
-/// solver parameters `s`: always for "unfrozen", never for "predictor"; for "auto" from
-/// ROOT_START_FROM contact unknowns on, where the step satisfies (C.k) with a varying μ (the
-/// unfrozen step problem is convex, so its root is the only fixed point of F.1 and the start
-/// changes where F.1 begins, not where it ends) and S is Anderson-extrapolated (θ = 1 and
-/// "anderson"; the plain iteration keeps the paper's start as well as its update). Only the
-/// Newton inner solver with the bound at the predictor starts there (N.4's system).
-pub fn starts_unfrozen(p: &Problem, s: &crate::model::SolverParams) -> bool {
+/// Where (F.1) starts (`solver.fixed_point_start`) with the solver parameters `s`: at the
+/// predictor for "predictor", at the unfrozen Newton's root for "unfrozen"; for "auto", at the
+/// root from ROOT_START_FROM contact unknowns on where the step problem is convex with a varying
+/// μ, so its root is the only fixed point of F.1 and the start changes where F.1 begins, not
+/// where it ends (inside (C.k): `Root`; beyond it, where no constant bounds the bound:
+/// `RootIfSharpConvex`, for the setup to decide by (Ck.1)), and S is Anderson-extrapolated
+/// (θ = 1 and "anderson"; the plain iteration keeps the paper's start as well as its update).
+/// Only the Newton inner solver with the bound at the predictor starts at the root (N.4's system).
+pub fn f1_start(p: &Problem, s: &crate::model::SolverParams) -> F1Start {
     let applies = s.inner == InnerSolver::Newton
         && p.contact.as_ref().is_some_and(|c| {
             c.friction.is_some() && c.friction_bound != FrictionBound::Total && c.bound_at == BoundAt::Predictor
         });
-    applies
-        && match s.fixed_point_start {
-            FixedPointStart::Predictor => false,
-            FixedPointStart::Unfrozen => true,
-            FixedPointStart::Auto => {
-                s.fixed_point_acceleration == FixedPointAcceleration::Anderson
-                    && s.relaxation == 1.0
-                    && p.contact.as_ref().is_some_and(|c| c.dim * c.n() >= crate::defaults::ROOT_START_FROM)
-                    && matches!(p.convexity_limit(), crate::problem::ConvexityLimit::Step { k, .. } if p.k <= k)
+    if !applies {
+        return F1Start::Predictor;
+    }
+    match s.fixed_point_start {
+        FixedPointStart::Predictor => F1Start::Predictor,
+        FixedPointStart::Unfrozen => F1Start::Root,
+        FixedPointStart::Auto => {
+            let auto = s.fixed_point_acceleration == FixedPointAcceleration::Anderson
+                && s.relaxation == 1.0
+                && p.contact.as_ref().is_some_and(|c| c.dim * c.n() >= crate::defaults::ROOT_START_FROM);
+            match p.convexity_limit() {
+                crate::problem::ConvexityLimit::Step { k, .. } if auto && p.k <= k => F1Start::Root,
+                crate::problem::ConvexityLimit::Step { .. } if auto => F1Start::RootIfSharpConvex,
+                _ => F1Start::Predictor,
             }
         }
+    }
 }
 
 /// The state at the end of step n: everything the next step reads (and a checkpoint stores).
@@ -287,6 +296,10 @@ pub struct Simulation<'p> {
     /// right-hand side (S.2) reads them
     products: StateProducts,
     pub kinematics: ContactKinematics,
+    /// (Ck.1) at setup: Some(true) when W showed every step problem strictly convex, Some(false)
+    /// when it did not; None where the test did not run (only an "auto" start beyond (C.k) with
+    /// the dense W asks it)
+    pub sharp_convexity: Option<bool>,
     pub state: State,
     pub setup_timing: SetupTiming,
 }
@@ -349,6 +362,19 @@ impl<'p> Simulation<'p> {
         };
         stepper.release_matrix();
         let t_delassus = clock.elapsed().as_secs_f64();
+        // (Ck.1) decides an "auto" root start beyond (C.k), with the exact W
+        let clock = Instant::now();
+        let mut settings = settings;
+        let sharp_convexity = match (settings.fixed_point.start, problem.contact.as_ref(), &delassus) {
+            (F1Start::RootIfSharpConvex, Some(c), Some(delassus::Delassus::Dense(w))) => {
+                delassus::sharp_convex(w, c, stepper.contact_kinematics().a_v)
+            }
+            _ => None,
+        };
+        if settings.fixed_point.start == F1Start::RootIfSharpConvex {
+            settings.fixed_point.start = if sharp_convexity == Some(true) { F1Start::Root } else { F1Start::Predictor };
+        }
+        let t_sharp = clock.elapsed().as_secs_f64();
         let reach =
             problem.contact.as_ref().filter(|_| responses.is_none()).and_then(|c| stepper.factor().reach(&c.dofs));
         let nc = problem.contact.as_ref().map(ContactModel::n).unwrap_or(0);
@@ -411,7 +437,14 @@ impl<'p> Simulation<'p> {
             reach,
             products,
             state,
-            setup_timing: SetupTiming { assembly, factorization, delassus: t_delassus, delassus_route },
+            sharp_convexity,
+            setup_timing: SetupTiming {
+                assembly,
+                factorization,
+                delassus: t_delassus,
+                delassus_route,
+                sharp_convexity: t_sharp,
+            },
         })
     }
 

@@ -12,6 +12,13 @@ use crate::model::kinds::{self, Bound, BoundAt, ContactSolve, FixedPointAccelera
 use crate::model::laws::FrictionCoefficient;
 use crate::model::{ContactParams, Enforcement};
 use crate::problem::{ConvexityLimit, Problem};
+use crate::step::fixed_point::F1Start;
+
+/// How the contact solve's words name F.1's start at the unfrozen Newton's root, and the start
+/// that the setup decides by (Ck.1).
+const ROOT_START: &str = ", started at the root of the unfrozen Newton (N.4)";
+const ROOT_START_IF_SHARP: &str =
+    ", started at the root of the unfrozen Newton (N.4) if (Ck.1), the sharp (C.k) through W, holds (tested at setup)";
 
 /// The model a scene switches on — printed by `dyncontact check`, stored in summary.json.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
@@ -47,6 +54,11 @@ pub struct ModelInfo {
     pub ck_limiting_name: String,
     /// why (C.k) gives no limit, when it does not
     pub ck_note: String,
+    /// (Ck.1), the sharp form of (C.k) through W, as the run's setup found it: true when every
+    /// step problem is strictly convex, false when the test did not show it; null where it did not
+    /// run (only "auto" F.1 starts beyond (C.k) ask it; `check` never builds W)
+    #[serde(default)]
+    pub ck_sharp: Option<bool>,
     /// the unit of every numeric column of history.csv and contact.csv (forces and energies per
     /// unit thickness in 2-D, absolute in 3-D); absent from summaries written before it
     #[serde(default)]
@@ -103,6 +115,7 @@ impl ModelInfo {
             ck_limiting_node: None,
             ck_limiting_name: String::new(),
             ck_note: "no velocity-dependent friction: every step problem is convex".into(),
+            ck_sharp: None,
             units: super::units::Units::of(p.mesh.dim()),
             scene_warnings: s.warnings.clone(),
         };
@@ -134,10 +147,10 @@ impl ModelInfo {
             FixedPointAcceleration::Anderson => "F.1 with Anderson extrapolation of S",
             FixedPointAcceleration::None => "plain F.1",
         };
-        let update = if crate::simulation::starts_unfrozen(p, &p.model.solver) {
-            format!("{update}, started at the root of the unfrozen Newton (N.4)")
-        } else {
-            update.to_string()
+        let update = match crate::simulation::f1_start(p, &p.model.solver) {
+            F1Start::Predictor => update.to_string(),
+            F1Start::Root => format!("{update}{ROOT_START}"),
+            F1Start::RootIfSharpConvex => format!("{update}{ROOT_START_IF_SHARP}"),
         };
         self.contact_solve = format!("{form}; {update}");
         self.contact_nodes = c.n();
@@ -184,6 +197,18 @@ impl ModelInfo {
             };
             self.convexity_limit(p);
         }
+    }
+
+    /// What the run's setup found of (Ck.1) (`Simulation::sharp_convexity`): the contact solve's
+    /// words say where F.1 started, and a k beyond (C.k) that (Ck.1) admits is no longer warned of.
+    pub fn set_sharp_convexity(&mut self, found: Option<bool>) {
+        self.ck_sharp = found;
+        let start = match found {
+            Some(true) => format!("{ROOT_START}: (Ck.1) holds (W shows every step problem strictly convex)"),
+            Some(false) => ", started at the predictor: (Ck.1) does not hold either".to_string(),
+            None => return,
+        };
+        self.contact_solve = self.contact_solve.replace(ROOT_START_IF_SHARP, &start);
     }
 
     /// (C.k) for the scene, as the problem states it: the step limit and the limiting node, or
@@ -281,12 +306,19 @@ impl ModelInfo {
         if k == 0.0 {
             return Some(format!("(C.k): {}", self.ck_note));
         }
-        (self.step > k).then(|| {
+        let sharp_pending = self.ck_sharp.is_none() && self.contact_solve.contains(ROOT_START_IF_SHARP);
+        (self.step > k && self.ck_sharp != Some(true)).then(|| {
             format!(
                 "time.step = {} exceeds the (C.k) limit {k:.4e} ({}), a sufficient condition for a convex step \
                  problem: F.1 may need more convex solves per step (relaxation < 1 does not help); steps that reach \
-                 its cap are counted in summary.json, and a step whose Newton fails stops the run with its residuals",
-                self.step, self.ck_limiting_name
+                 its cap are counted in summary.json, and a step whose Newton fails stops the run with its residuals{}",
+                self.step,
+                self.ck_limiting_name,
+                if sharp_pending {
+                    "; the run's setup tests the sharper (Ck.1) through W, and where it holds this warning goes"
+                } else {
+                    ""
+                }
             )
         })
     }
@@ -333,6 +365,9 @@ pub struct Timing {
     pub assembly_s: f64,
     pub factorization_s: f64,
     pub delassus_s: f64,
+    /// (Ck.1)'s test through W (0 where it did not run); absent from summaries written before it
+    #[serde(default)]
+    pub sharp_convexity_s: f64,
     pub free_solve_s: f64,
     pub contact_solve_s: f64,
     pub recovery_s: f64,

@@ -36,9 +36,22 @@ pub struct FixedPointSettings {
     /// Anderson(m) extrapolation of S (m = ANDERSON_DEPTH, with θ = 1): the same fixed point and
     /// the same stopping test, fewer convex solves; false: the plain iteration (the paper's F.1)
     pub anderson: bool,
-    /// start at the root of the unfrozen Newton (N.4) instead of the predictor's bound: set only
-    /// where the unfrozen step problem is convex ((C.k)), so its root is F.1's unique fixed point
-    pub start_unfrozen: bool,
+    /// where F.1 starts each step
+    pub start: F1Start,
+}
+
+/// Where (F.1) starts each step (`solver.fixed_point_start`, resolved by
+/// [`f1_start`](crate::simulation::f1_start)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum F1Start {
+    /// S at the predictor's velocities (the paper's start)
+    Predictor,
+    /// S at the root of the unfrozen Newton (N.4); the predictor's where N.4 fails
+    Root,
+    /// `Root` if (Ck.1) finds every step problem strictly convex, `Predictor` otherwise: the test
+    /// needs W, so the simulation's setup decides; a step handed it unresolved starts at the
+    /// predictor
+    RootIfSharpConvex,
 }
 
 /// What the step did (one history.csv row's worth of solver facts).
@@ -61,7 +74,7 @@ pub struct StepReport {
     /// `newton-unfrozen`, or F.1's root start: the unfrozen Newton failed and the step fell back
     /// to F.1 from the predictor (why)
     pub fallback: Option<NewtonFailure>,
-    /// F.1 started at the unfrozen Newton's root (`FixedPointSettings::start_unfrozen`)
+    /// F.1 started at the unfrozen Newton's root (`FixedPointSettings::start`)
     pub started_unfrozen: bool,
 }
 
@@ -210,7 +223,7 @@ pub fn solve(
             None => {}
         }
     }
-    if let (true, Inner::Newton(set), NormalPart::Predictor(p_tau_hat)) = (fp.start_unfrozen, inner, normal) {
+    if let (F1Start::Root, Inner::Newton(set), NormalPart::Predictor(p_tau_hat)) = (fp.start, inner, normal) {
         match newton::solve_unfrozen(step, factors, mu, p_tau_hat, lambda0, t0, set) {
             Ok(root) => {
                 report.inner_iterations = root.iterations;

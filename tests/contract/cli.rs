@@ -90,6 +90,59 @@ fn check_prints_the_ck_limit_and_warns() {
     assert!(out.contains("32 contact nodes") && out.contains("32 multipliers"));
 }
 
+/// (Ck.1) summary.json says what the run's setup found of the sharp (C.k) and where F.1 started:
+/// academic3d at 12×8×4 (324 contact unknowns, an "auto" start) at k = 1.2e-3, beyond (C.k)'s
+/// 1.04e-3 but inside (Ck.1): `model.ck_sharp` true, the contact solve "started at the root …:
+/// (Ck.1) holds", no (C.k) warning; at k = 2e-3, outside both: false, "started at the predictor",
+/// the warning; `check` (no W) says the setup will test it.
+#[test]
+fn summary_reports_the_sharp_ck() {
+    let dir = tmp("cli_sharp_ck");
+    for (k, sharp) in [("1.2e-3", true), ("2e-3", false)] {
+        let out = dir.join(k);
+        let st = Command::new(BIN)
+            .args(["run"])
+            .arg(scene("academic3d"))
+            .args(["--set", "domain.cells=[12, 8, 4]", "--set", &format!("time.step={k}")])
+            .args(["--set", &format!("time.end={}", 4.0 * k.parse::<f64>().expect("k"))])
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .expect("run");
+        assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+        let model = &summary["model"];
+        let words = model["contact_solve"].as_str().expect("contact_solve");
+        let warned = summary["warnings"]
+            .as_array()
+            .expect("warnings")
+            .iter()
+            .any(|w| w.as_str().is_some_and(|w| w.contains("exceeds the (C.k) limit")));
+        println!("k = {k}: {words}; warned {warned}");
+        assert_eq!(model["ck_sharp"], serde_json::Value::Bool(sharp), "k = {k}");
+        if sharp {
+            assert!(words.contains("started at the root of the unfrozen Newton (N.4): (Ck.1) holds"), "{words}");
+        } else {
+            assert!(words.contains("started at the predictor: (Ck.1) does not hold"), "{words}");
+        }
+        assert_eq!(warned, !sharp, "the (C.k) warning only where (Ck.1) does not show convexity");
+        assert!(summary["timing"]["sharp_convexity_s"].as_f64().expect("timing") > 0.0);
+    }
+    let st = Command::new(BIN)
+        .arg("check")
+        .arg(scene("academic3d"))
+        .args(["--set", "domain.cells=[12, 8, 4]", "--set", "time.step=1.2e-3", "--set", "time.end=0.6"])
+        .output()
+        .expect("check");
+    let (out, err) = (String::from_utf8_lossy(&st.stdout), String::from_utf8_lossy(&st.stderr));
+    assert!(
+        st.status.success() && out.contains("if (Ck.1), the sharp (C.k) through W, holds (tested at setup)"),
+        "{out}"
+    );
+    assert!(err.contains("the run's setup tests the sharper (Ck.1) through W"), "{err}");
+}
+
 /// `check`'s friction line (summary.json `model.friction`) says what a step solves, true for every
 /// friction bound: "one convex solve per step" only where S is known before the solve (μ
 /// constant, bound at the predictor), and there every step does at most one F.1 iteration; the

@@ -11,7 +11,7 @@ use dyncontact::scene::{Bound, BoundAt, FixedPointAcceleration, FrictionBound, F
 use dyncontact::simulation::{Settings, Simulation};
 use dyncontact::step::conic::ConicSettings;
 use dyncontact::step::delassus::DelassusFactors;
-use dyncontact::step::fixed_point::{FixedPointSettings, Inner, StepReport};
+use dyncontact::step::fixed_point::{F1Start, FixedPointSettings, Inner, StepReport};
 use dyncontact::step::newton::{self, NewtonSettings};
 use dyncontact::step::{StepData, conic};
 use faer::linalg::solvers::DenseSolveCore;
@@ -511,26 +511,61 @@ fn f1_anderson_reaches_the_plain_fixed_point() {
 /// Newton iterations (measured 2,395 against 4,207).
 #[test]
 fn f1_root_start_reaches_the_fixed_point_inside_ck() {
+    let p = academic3d_12x8x4(None);
+    let limit = dyncontact::output::ModelInfo::of(&p).ck_step_limit.expect("C.k applies");
+    assert!(limit > p.k, "the test step must satisfy (C.k): {limit:e}");
+    root_start_against_the_reference(&p, None, "f1_root_start_reaches_the_fixed_point_inside_ck");
+}
+
+/// (Ck.1, F.1, N.4) Beyond (C.k) but inside its sharp form (Ck.1), F.1 starts at the unfrozen
+/// Newton's root as well (`fixed_point_start = "auto"`; the setup tests (Ck.1) through W): the
+/// step problem is convex there too, so the root is F.1's only fixed point. The same comparison
+/// as the test above on academic3d at 12×8×4 cells over 0.3 s at k = 1.2e-3, 1.15× the (C.k)
+/// limit 1.04e-3 and inside (Ck.1) (λ_max ≈ 0.92 at this k, probed), with the same requirement
+/// and the same reasons for its bounds.
+#[test]
+fn f1_root_start_reaches_the_fixed_point_inside_ck1_beyond_ck() {
+    let p = academic3d_12x8x4(Some(1.2e-3));
+    let limit = dyncontact::output::ModelInfo::of(&p).ck_step_limit.expect("C.k applies");
+    assert!(limit < p.k, "the test step must exceed (C.k): {limit:e}");
+    root_start_against_the_reference(&p, Some(true), "f1_root_start_reaches_the_fixed_point_inside_ck1_beyond_ck");
+}
+
+/// academic3d at 12×8×4 cells over 0.3 s, at its own k or at `step`.
+fn academic3d_12x8x4(step: Option<f64>) -> Problem {
     let mut s = fixture("academic3d");
     s.domain.cells = Some(vec![12, 8, 4]);
     s.time.end = 0.3;
     s.output.every = 0;
-    let p = problem(s);
-    let limit = dyncontact::output::ModelInfo::of(&p).ck_step_limit.expect("C.k applies");
-    assert!(limit > p.k, "the test step must satisfy (C.k): {limit:e}");
-    let mut sim = Simulation::new(&p).expect("setup");
-    assert!(sim.settings.fixed_point.start_unfrozen, "auto starts at the root inside (C.k)");
+    if let Some(k) = step {
+        s.time.step = k;
+    }
+    problem(s)
+}
+
+/// Each step of `p` solved from the same state by F.1 three ways — from the predictor's S to
+/// 1e-13 (the reference), from the unfrozen root, from the predictor at the default 1e-8 — with
+/// the requirements of [`f1_root_start_reaches_the_fixed_point_inside_ck`]; `sharp`: what the
+/// setup must have found of (Ck.1) (None: not tested, inside (C.k)).
+fn root_start_against_the_reference(p: &Problem, sharp: Option<bool>, name: &str) {
+    let mut sim = Simulation::new(p).expect("setup");
+    assert_eq!(sim.sharp_convexity, sharp, "what the setup found of (Ck.1)");
+    assert_eq!(
+        sim.settings.fixed_point.start,
+        F1Start::Root,
+        "auto starts at the root where the step problem is convex"
+    );
     assert!(sim.inverse.is_some(), "the velocity form (the thick family's path)");
     let root = sim.settings.fixed_point;
-    let predictor = FixedPointSettings { start_unfrozen: false, ..root };
+    let predictor = FixedPointSettings { start: F1Start::Predictor, ..root };
     let reference = FixedPointSettings { tolerance: 1e-13, max_iterations: 200, ..predictor };
     let (mut worst, mut worst_predictor, mut newton_its, mut slipped) = (0.0f64, 0.0f64, [0usize; 2], 0usize);
     let mut accepted_at_once = 0usize;
     let mut factors = DelassusFactors::default();
     for rec in sim.steps().before_each(|sim| {
-        let [(fa, ra), (fb, rb), (fd, rd)] = f1_from_the_state(sim, &p, &mut factors, [reference, root, predictor]);
+        let [(fa, ra), (fb, rb), (fd, rd)] = f1_from_the_state(sim, p, &mut factors, [reference, root, predictor]);
         assert_eq!(ra.fixed_point, dyncontact::failure::FixedPointStatus::Converged, "the reference converges");
-        assert!(rb.started_unfrozen && rb.fallback.is_none(), "the unfrozen Newton converges inside (C.k)");
+        assert!(rb.started_unfrozen && rb.fallback.is_none(), "the unfrozen Newton converges on a convex step problem");
         newton_its[0] += rb.inner_iterations;
         newton_its[1] += rd.inner_iterations;
         slipped += usize::from(rd.fixed_point_iterations > 1);
@@ -543,15 +578,10 @@ fn f1_root_start_reaches_the_fixed_point_inside_ck() {
     }) {
         rec.expect("step");
     }
-    common::measured(
-        "f1_root_start_reaches_the_fixed_point_inside_ck",
-        "worst per-step force difference to the 1e-13 fixed point, root start",
-        worst,
-        "≤ 1e-9",
-    );
+    common::measured(name, "worst per-step force difference to the 1e-13 fixed point, root start", worst, "≤ 1e-9");
     println!(
-        "root start: {worst:.3e}; predictor start at 1e-8: {worst_predictor:.3e}; Newton iterations root {} vs predictor {}; {slipped} steps iterated",
-        newton_its[0], newton_its[1]
+        "root start: {worst:.3e}; predictor start at 1e-8: {worst_predictor:.3e}; Newton iterations root {} vs predictor {}; {slipped} steps iterated, {accepted_at_once} of {} accepted after one convex solve",
+        newton_its[0], newton_its[1], p.steps
     );
     assert!(slipped > 0, "the window must make F.1 iterate (slip-rate-dependent S)");
     // the root is the fixed point to Newton's tolerance, so F.1's test accepts its S after the
@@ -568,14 +598,24 @@ fn f1_root_start_reaches_the_fixed_point_inside_ck() {
 #[test]
 fn f1_root_start_rule() {
     use dyncontact::scene::{FixedPointStart, InnerSolver};
-    let starts = |cells: [i64; 3], edit: &dyn Fn(&mut dyncontact::scene::Scene)| {
+    let start = |cells: [i64; 3], edit: &dyn Fn(&mut dyncontact::scene::Scene)| {
         let mut s = fixture("academic3d");
         s.domain.cells = Some(cells.to_vec());
         edit(&mut s);
-        Settings::from_problem(&problem(s)).fixed_point.start_unfrozen
+        Settings::from_problem(&problem(s)).fixed_point.start
     };
+    let starts = |cells: [i64; 3], edit: &dyn Fn(&mut dyncontact::scene::Scene)| start(cells, edit) == F1Start::Root;
     assert!(starts([12, 8, 4], &|_| ()), "inside (C.k), 324 unknowns");
-    assert!(!starts([12, 8, 4], &|s| s.time.step = 2e-3), "beyond (C.k)");
+    assert_eq!(
+        start([12, 8, 4], &|s| s.time.step = 2e-3),
+        F1Start::RootIfSharpConvex,
+        "beyond (C.k): the setup decides by (Ck.1)"
+    );
+    assert_eq!(
+        start([12, 6, 4], &|s| s.time.step = 2e-3),
+        F1Start::Predictor,
+        "beyond (C.k) below ROOT_START_FROM: no test"
+    );
     assert!(!starts([12, 6, 4], &|_| ()), "252 contact unknowns: below ROOT_START_FROM");
     assert!(!starts([12, 8, 4], &|s| s.solver.fixed_point_acceleration = FixedPointAcceleration::None));
     assert!(!starts([12, 8, 4], &|s| s.solver.fixed_point_start = FixedPointStart::Predictor));
@@ -683,6 +723,63 @@ fn ck_limit_is_the_problems_and_the_summary_reports_it() {
     let mut total = fixture("academic");
     total.contact.as_mut().expect("contact").friction_bound = FrictionBound::Total;
     assert_eq!(problem(total).convexity_limit(), ConvexityLimit::TotalBound);
+}
+
+/// (Ck.1) The sharp test decides the eigenvalue condition it states, and (C.k) implies it: on
+/// academic (2-D, 32 contact nodes) and academic3d at 8×4×4 (40 nodes), for k from 0.5 to 4
+/// times the (C.k) limit, `sharp_convex` (a Cholesky factorization) says true exactly when
+/// λ_max(a_v L_μ p̄_τ Ω^½ T W Tᵀ Ω^½) < 1 − δ, the matrix formed here with nalgebra and its
+/// eigenvalues by a symmetric eigensolver, on the same W; and it says true wherever k satisfies
+/// (C.k) (A_k ⪰ M/k, so W ⪯ k M⁻¹). A λ within 1e-9 of the threshold would make the comparison
+/// a matter of round-off and fails the test (the eigensolver's error is ~1e-15 of λ here).
+#[test]
+fn ck1_is_the_eigenvalue_condition_and_follows_from_ck() {
+    use dyncontact::problem::ConvexityLimit;
+    use dyncontact::step::delassus::{Delassus, SHARP_CONVEXITY_MARGIN, sharp_convex};
+    for (name, cells) in [("academic", None), ("academic3d", Some(vec![8, 4, 4]))] {
+        let (mut sharp_inside, mut beyond_ck_inside_sharp) = (0, 0);
+        for factor in [0.5, 0.9, 1.1, 1.3, 1.6, 2.0, 3.0, 4.0] {
+            let mut s = fixture(name);
+            if let Some(c) = &cells {
+                s.domain.cells = Some(c.clone());
+            }
+            let limit = match problem(s.clone()).convexity_limit() {
+                ConvexityLimit::Step { k, .. } => k,
+                other => panic!("{name}: {other:?}"),
+            };
+            s.time.step = factor * limit;
+            s.time.end = 10.0 * s.time.step;
+            let p = problem(s);
+            let sim = Simulation::new(&p).expect("setup");
+            let c = p.contact.as_ref().expect("contact");
+            let Some(Delassus::Dense(w_dense)) = sim.delassus.as_ref() else { panic!("{name}: the dense W") };
+            let (d, n) = (c.dim, c.n());
+            let scale = sim.kinematics.a_v * c.friction.as_ref().expect("friction").lipschitz() * c.p_tau.sup();
+            let t = nalgebra::DMatrix::from_fn((d - 1) * n, d * n, |r, col| {
+                let (i, a) = (r / (d - 1), r % (d - 1));
+                if col / d == i { (scale * c.omega[i]).sqrt() * c.frames[i].tangents[a][col % d] } else { 0.0 }
+            });
+            let w = nalgebra::DMatrix::from_fn(d * n, d * n, |r, col| w_dense[(r, col)]);
+            let b = &t * w * t.transpose();
+            let b = (&b + b.transpose()) * 0.5;
+            let lambda_max = b.symmetric_eigenvalues().max();
+            let threshold = 1.0 - SHARP_CONVEXITY_MARGIN;
+            assert!(
+                (lambda_max - threshold).abs() > 1e-9,
+                "{name} at {factor}× (C.k): λ_max {lambda_max} at the threshold"
+            );
+            let sharp = sharp_convex(w_dense, c, sim.kinematics.a_v).expect("(Ck.1) applies");
+            println!("{name} k = {factor} × (C.k): λ_max {lambda_max:.6}, sharp {sharp}");
+            assert_eq!(sharp, lambda_max < threshold, "{name} at {factor}× (C.k): λ_max {lambda_max}");
+            if factor <= 1.0 {
+                assert!(sharp, "{name}: (C.k) holds at {factor}× its limit, so (Ck.1) must");
+            }
+            sharp_inside += usize::from(sharp);
+            beyond_ck_inside_sharp += usize::from(sharp && factor > 1.0);
+        }
+        assert!(sharp_inside < 8, "{name}: some k must fail (Ck.1) for the comparison to test both answers");
+        assert!(beyond_ck_inside_sharp > 0, "{name}: (Ck.1) should admit some k beyond (C.k)");
+    }
 }
 
 /// (S.6) The velocity form's preconditioner: the Cholesky factor of W⁻¹'s near field (its

@@ -31,7 +31,7 @@ fn compare(p: &Problem, tol: f64) -> Agreement {
     // F.1 from the predictor's start: from the unfrozen root (`fixed_point_start = "auto"`
     // inside (C.k) from 256 contact unknowns) it would start at the other method's answer
     let mut settings = Settings::from_problem(p);
-    settings.fixed_point.start_unfrozen = false;
+    settings.fixed_point.start = dyncontact::step::fixed_point::F1Start::Predictor;
     let mut sim = Simulation::with_settings(p, settings).expect("setup");
     let set = NewtonSettings::default();
     let mut a = Agreement {

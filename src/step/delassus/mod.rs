@@ -17,9 +17,11 @@
 //! The files: this one holds the operator and its dense form; `sparse` the probed form;
 //! `frames` the slip frames the Newton matrices read it in; `factors` the kept factorization of
 //! those matrices (with conjugate gradients and their preconditioner); `inverse` W⁻¹ for the
-//! velocity form; `cg` the conjugate-gradient driver both use.
+//! velocity form; `cg` the conjugate-gradient driver both use; `convexity` the sharp form of
+//! (C.k) that W allows (Ck.1).
 
 mod cg;
+mod convexity;
 mod factors;
 mod frames;
 mod hmatrix;
@@ -27,6 +29,7 @@ mod inverse;
 mod schur;
 mod sparse;
 
+pub use convexity::{SHARP_CONVEXITY_MARGIN, sharp_convex};
 pub use factors::{DelassusFactors, FactorCounts, FactorKey};
 pub use frames::SlipFrames;
 pub use hmatrix::HMatrix;
