@@ -297,8 +297,8 @@ pub struct Simulation<'p> {
     products: StateProducts,
     pub kinematics: ContactKinematics,
     /// (Ck.1) at setup: Some(true) when W showed every step problem strictly convex, Some(false)
-    /// when it did not; None where the test did not run (only an "auto" start beyond (C.k) with
-    /// the dense W asks it)
+    /// when it did not; None where the test did not run (it runs beyond (C.k) with the bound at
+    /// the predictor and the dense W)
     pub sharp_convexity: Option<bool>,
     pub state: State,
     pub setup_timing: SetupTiming,
@@ -362,11 +362,13 @@ impl<'p> Simulation<'p> {
         };
         stepper.release_matrix();
         let t_delassus = clock.elapsed().as_secs_f64();
-        // (Ck.1) decides an "auto" root start beyond (C.k), with the exact W
+        // (Ck.1) beyond (C.k), with the exact W: it decides an "auto" root start and the warning
         let clock = Instant::now();
         let mut settings = settings;
-        let sharp_convexity = match (settings.fixed_point.start, problem.contact.as_ref(), &delassus) {
-            (F1Start::RootIfSharpConvex, Some(c), Some(delassus::Delassus::Dense(w))) => {
+        let beyond_ck =
+            matches!(problem.convexity_limit(), crate::problem::ConvexityLimit::Step { k, .. } if problem.k > k);
+        let sharp_convexity = match (problem.contact.as_ref(), &delassus) {
+            (Some(c), Some(delassus::Delassus::Dense(w))) if beyond_ck && c.bound_at == BoundAt::Predictor => {
                 delassus::sharp_convex(w, c, stepper.contact_kinematics().a_v)
             }
             _ => None,

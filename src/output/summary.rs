@@ -56,9 +56,14 @@ pub struct ModelInfo {
     pub ck_note: String,
     /// (Ck.1), the sharp form of (C.k) through W, as the run's setup found it: true when every
     /// step problem is strictly convex, false when the test did not show it; null where it did not
-    /// run (only "auto" F.1 starts beyond (C.k) ask it; `check` never builds W)
+    /// run (it runs beyond (C.k) with the bound at the predictor and a dense W; `check` never
+    /// builds W)
     #[serde(default)]
     pub ck_sharp: Option<bool>,
+    /// whether (Ck.1) applies to the scene at all (the bound at the predictor, not the total
+    /// bound), so that a run's setup tests it where W is dense
+    #[serde(skip)]
+    pub ck_sharp_applies: bool,
     /// the unit of every numeric column of history.csv and contact.csv (forces and energies per
     /// unit thickness in 2-D, absolute in 3-D); absent from summaries written before it
     #[serde(default)]
@@ -116,6 +121,7 @@ impl ModelInfo {
             ck_limiting_name: String::new(),
             ck_note: "no velocity-dependent friction: every step problem is convex".into(),
             ck_sharp: None,
+            ck_sharp_applies: false,
             units: super::units::Units::of(p.mesh.dim()),
             scene_warnings: s.warnings.clone(),
         };
@@ -219,6 +225,8 @@ impl ModelInfo {
             ConvexityLimit::Step { k, node } => {
                 self.ck_step_limit = Some(k);
                 self.ck_limiting_node = Some(node);
+                // a step limit means friction with the capped or uncapped bound, never the total one
+                self.ck_sharp_applies = p.contact.as_ref().is_some_and(|c| c.bound_at == BoundAt::Predictor);
                 self.ck_limiting_name = p.mesh.node_name(node);
                 if k == 0.0 {
                     "the modified mass puts zero mass on the contact nodes: the inertia no longer convexifies the \
@@ -306,7 +314,7 @@ impl ModelInfo {
         if k == 0.0 {
             return Some(format!("(C.k): {}", self.ck_note));
         }
-        let sharp_pending = self.ck_sharp.is_none() && self.contact_solve.contains(ROOT_START_IF_SHARP);
+        let sharp_pending = self.ck_sharp.is_none() && self.ck_sharp_applies;
         (self.step > k && self.ck_sharp != Some(true)).then(|| {
             format!(
                 "time.step = {} exceeds the (C.k) limit {k:.4e} ({}), a sufficient condition for a convex step \
@@ -315,7 +323,7 @@ impl ModelInfo {
                 self.step,
                 self.ck_limiting_name,
                 if sharp_pending {
-                    "; the run's setup tests the sharper (Ck.1) through W, and where it holds this warning goes"
+                    "; a run with a dense W tests the sharper (Ck.1) at setup, and where it holds this warning goes"
                 } else {
                     ""
                 }

@@ -94,7 +94,9 @@ fn check_prints_the_ck_limit_and_warns() {
 /// academic3d at 12×8×4 (324 contact unknowns, an "auto" start) at k = 1.2e-3, beyond (C.k)'s
 /// 1.04e-3 but inside (Ck.1): `model.ck_sharp` true, the contact solve "started at the root …:
 /// (Ck.1) holds", no (C.k) warning; at k = 2e-3, outside both: false, "started at the predictor",
-/// the warning; `check` (no W) says the setup will test it.
+/// the warning; `check` (no W) says a run will test it. The default scene (64 contact unknowns,
+/// the predictor's start) at its k = 5e-4, 1.44× its (C.k) limit, is inside (Ck.1): true and no
+/// warning, its start unchanged; at k = 1e-3 outside: false and the warning.
 #[test]
 fn summary_reports_the_sharp_ck() {
     let dir = tmp("cli_sharp_ck");
@@ -140,7 +142,22 @@ fn summary_reports_the_sharp_ck() {
         st.status.success() && out.contains("if (Ck.1), the sharp (C.k) through W, holds (tested at setup)"),
         "{out}"
     );
-    assert!(err.contains("the run's setup tests the sharper (Ck.1) through W"), "{err}");
+    assert!(err.contains("a run with a dense W tests the sharper (Ck.1) at setup"), "{err}");
+    for (k, sharp) in [("5e-4", true), ("1e-3", false)] {
+        let out = dir.join(format!("default_{k}"));
+        let st = Command::new(BIN)
+            .args(["run", "--set", &format!("time.step={k}"), "--set", "time.end=0.005", "--out"])
+            .arg(&out)
+            .output()
+            .expect("run");
+        let err = String::from_utf8_lossy(&st.stderr);
+        assert!(st.status.success(), "{err}");
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+        assert_eq!(summary["model"]["ck_sharp"], serde_json::Value::Bool(sharp), "default scene at k = {k}");
+        assert!(!summary["model"]["contact_solve"].as_str().expect("words").contains("root"), "the predictor's start");
+        assert_eq!(err.contains("exceeds the (C.k) limit"), !sharp, "default scene at k = {k}: {err}");
+    }
 }
 
 /// `check`'s friction line (summary.json `model.friction`) says what a step solves, true for every
