@@ -121,7 +121,8 @@ pub const ANDERSON_DEPTH: usize = 5;
 pub const PCG_FORCING: f64 = 0.1;
 pub const PCG_FORCING_MAX: f64 = 1e-3;
 
-/// `fixed_point_start = "auto"` starts (F.1) at the unfrozen Newton's root (inside (C.k)) from
+/// `fixed_point_start = "auto"` starts (F.1) at the unfrozen Newton's root (where (C.k) or (Ck.1)
+/// shows the step problem convex) from
 /// this many contact unknowns (d n_c) on, where the velocity form's Newton iterations are what a
 /// step costs: academic3d 24×12×8 (936), 40 shaken steps, 26.0 → 9.6 ms per contact solve (the
 /// thick bench's medians).

@@ -326,7 +326,9 @@ pub fn estimate(model: &Model, scene_dir: &Path) -> Result<Estimate> {
         mesh_bytes: 16.0 * nodes as f64 + 24.0 * triangles as f64 + 8.0 * 8.0 * n,
         operator_bytes: OPERATORS * row_entries * n * SPARSE_ENTRY,
         factor_bytes: factor_entries * SPARSE_ENTRY,
-        // the dense W and one Newton matrix, W⁻¹ where the velocity form may keep it (from
+        // the dense W and one Newton matrix ((Ck.1)'s test at setup holds W's tangent block,
+        // ((d − 1)/d)² m² values, before any Newton matrix exists: it fits that one's place),
+        // W⁻¹ where the velocity form may keep it (from
         // GEMV_FROM unknowns), and the responses G = A_k⁻¹ Hᵀ where they are kept
         // (the near field of W⁻¹ and its factor: a few node blocks per node, below 1% of these);
         // from HMATRIX_FROM unknowns the hierarchical W⁻¹ besides, at 1e-12 and at its loose ε

@@ -183,7 +183,7 @@ fn new_run_id(out: &Path) -> String {
 /// The summary of a run that is starting.
 fn new_summary(problem: &Problem, sim: &Simulation, opts: &RunOptions, start: Instant, run_id: String) -> Summary {
     let mut info = ModelInfo::of(problem);
-    info.set_sharp_convexity(sim.sharp_convexity);
+    info.set_sharp_convexity(sim.sharp_convexity, sim.settings.fixed_point.start);
     let t = sim.setup_timing;
     let details = RunDetails {
         description: problem.model.description.clone(),

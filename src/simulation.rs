@@ -215,8 +215,9 @@ impl Settings {
 /// predictor for "predictor", at the unfrozen Newton's root for "unfrozen"; for "auto", at the
 /// root from ROOT_START_FROM contact unknowns on where the step problem is convex with a varying
 /// μ, so its root is the only fixed point of F.1 and the start changes where F.1 begins, not
-/// where it ends (inside (C.k): `Root`; beyond it, where no constant bounds the bound:
-/// `RootIfSharpConvex`, for the setup to decide by (Ck.1)), and S is Anderson-extrapolated
+/// where it ends (inside (C.k) with the lumped mass: `Root`; beyond it, or with the consistent
+/// mass, which (C.k)'s lumped masses do not bound from below: `RootIfSharpConvex`, for the
+/// setup to decide by (Ck.1)), and S is Anderson-extrapolated
 /// (θ = 1 and "anderson"; the plain iteration keeps the paper's start as well as its update).
 /// Only the Newton inner solver with the bound at the predictor starts at the root (N.4's system).
 pub fn f1_start(p: &Problem, s: &crate::model::SolverParams) -> F1Start {
@@ -234,8 +235,9 @@ pub fn f1_start(p: &Problem, s: &crate::model::SolverParams) -> F1Start {
             let auto = s.fixed_point_acceleration == FixedPointAcceleration::Anderson
                 && s.relaxation == 1.0
                 && p.contact.as_ref().is_some_and(|c| c.dim * c.n() >= crate::defaults::ROOT_START_FROM);
+            let lumped = p.model.solver.mass != crate::model::kinds::MassKind::Consistent;
             match p.convexity_limit() {
-                crate::problem::ConvexityLimit::Step { k, .. } if auto && p.k <= k => F1Start::Root,
+                crate::problem::ConvexityLimit::Step { k, .. } if auto && lumped && p.k <= k => F1Start::Root,
                 crate::problem::ConvexityLimit::Step { .. } if auto => F1Start::RootIfSharpConvex,
                 _ => F1Start::Predictor,
             }
@@ -297,8 +299,8 @@ pub struct Simulation<'p> {
     products: StateProducts,
     pub kinematics: ContactKinematics,
     /// (Ck.1) at setup: Some(true) when W showed every step problem strictly convex, Some(false)
-    /// when it did not; None where the test did not run (it runs beyond (C.k) with the bound at
-    /// the predictor and the dense W)
+    /// when it did not; None where the test did not run (it runs with the bound at the predictor
+    /// and the dense W, beyond (C.k) or where it decides an "auto" root start)
     pub sharp_convexity: Option<bool>,
     pub state: State,
     pub setup_timing: SetupTiming,
@@ -362,13 +364,15 @@ impl<'p> Simulation<'p> {
         };
         stepper.release_matrix();
         let t_delassus = clock.elapsed().as_secs_f64();
-        // (Ck.1) beyond (C.k), with the exact W: it decides an "auto" root start and the warning
+        // (Ck.1) with the exact W beyond (C.k), and wherever it decides an "auto" root start: it
+        // decides that start and the (C.k) warning
         let clock = Instant::now();
         let mut settings = settings;
         let beyond_ck =
             matches!(problem.convexity_limit(), crate::problem::ConvexityLimit::Step { k, .. } if problem.k > k);
+        let wanted = beyond_ck || settings.fixed_point.start == F1Start::RootIfSharpConvex;
         let sharp_convexity = match (problem.contact.as_ref(), &delassus) {
-            (Some(c), Some(delassus::Delassus::Dense(w))) if beyond_ck && c.bound_at == BoundAt::Predictor => {
+            (Some(c), Some(delassus::Delassus::Dense(w))) if wanted && c.bound_at == BoundAt::Predictor => {
                 delassus::sharp_convex(w, c, stepper.contact_kinematics().a_v)
             }
             _ => None,

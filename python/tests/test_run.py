@@ -299,7 +299,7 @@ def test_stop_and_resume_equal_a_straight_run(tmp_path):
 
 
 def test_run_warnings_are_python_warnings():
-    # k = 1e-3 exceeds (C.k) (3.47e-4) and its sharp form (Ck.1) (~8e-4), so the run warns
+    # k = 1e-3 exceeds (C.k) (3.47e-4) and its sharp form (Ck.1) (~5.8e-4), so the run warns
     with pytest.warns(dc.DyncontactWarning, match=r"\(C\.k\) limit"):
         res = dc.run(dc.Scene.default().with_set({"time.end": 0.005, "time.step": 1e-3}))
     assert any("(C.k) limit" in w for w in res.summary["warnings"])

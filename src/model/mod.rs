@@ -189,7 +189,8 @@ pub struct SolverParams {
     pub contact_solve: ContactSolve,
     /// Anderson extrapolation of S in (F.1), or the plain iteration
     pub fixed_point_acceleration: FixedPointAcceleration,
-    /// where (F.1) starts: the predictor's S, or the unfrozen Newton's root (auto: inside (C.k))
+    /// where (F.1) starts: the predictor's S, or the unfrozen Newton's root (auto: where (C.k) or
+    /// (Ck.1) shows the step problem convex)
     pub fixed_point_start: FixedPointStart,
     /// the (E.1) guard of a midpoint run: the largest relative residual of a step, and what a
     /// step beyond it does

@@ -205,16 +205,17 @@ impl ModelInfo {
         }
     }
 
-    /// What the run's setup found of (Ck.1) (`Simulation::sharp_convexity`): the contact solve's
-    /// words say where F.1 started, and a k beyond (C.k) that (Ck.1) admits is no longer warned of.
-    pub fn set_sharp_convexity(&mut self, found: Option<bool>) {
+    /// What the run's setup found of (Ck.1) (`Simulation::sharp_convexity`) and where it made F.1
+    /// start (`start`, resolved): the contact solve's words say where F.1 started and why, and a k
+    /// beyond (C.k) that (Ck.1) admits is no longer warned of.
+    pub fn set_sharp_convexity(&mut self, found: Option<bool>, start: F1Start) {
         self.ck_sharp = found;
-        let start = match found {
-            Some(true) => format!("{ROOT_START}: (Ck.1) holds (W shows every step problem strictly convex)"),
-            Some(false) => ", started at the predictor: (Ck.1) does not hold either".to_string(),
-            None => return,
+        let words = match (start, found) {
+            (F1Start::Root, _) => format!("{ROOT_START}: (Ck.1) holds (W shows every step problem strictly convex)"),
+            (_, Some(false)) => ", started at the predictor: (Ck.1) does not hold".to_string(),
+            _ => ", started at the predictor: (Ck.1) not tested (it needs the dense W)".to_string(),
         };
-        self.contact_solve = self.contact_solve.replace(ROOT_START_IF_SHARP, &start);
+        self.contact_solve = self.contact_solve.replace(ROOT_START_IF_SHARP, &words);
     }
 
     /// (C.k) for the scene, as the problem states it: the step limit and the limiting node, or
@@ -312,7 +313,7 @@ impl ModelInfo {
     pub fn ck_warning(&self) -> Option<String> {
         let k = self.ck_step_limit?;
         if k == 0.0 {
-            return Some(format!("(C.k): {}", self.ck_note));
+            return (self.ck_sharp != Some(true)).then(|| format!("(C.k): {}", self.ck_note));
         }
         let sharp_pending = self.ck_sharp.is_none() && self.ck_sharp_applies;
         (self.step > k && self.ck_sharp != Some(true)).then(|| {

@@ -48,9 +48,11 @@ fn cli_run_default_scene_writes_outputs() {
     assert_eq!(summary["steps_completed"], 2000);
     assert!(summary["max_relative_energy_residual"].as_f64().expect("residual") <= 1e-9);
     assert_eq!(summary["fixed_point_cap_hits"], 0);
-    // the only warning allowed is the (C.k) note of decision 6 (k = 5e-4 exceeds the corner limit)
+    // no warning: k = 5e-4 exceeds (C.k)'s corner limit (decision 6), but (Ck.1) holds, and the
+    // setup says so instead of warning
     let warnings = summary["warnings"].as_array().expect("warnings");
-    assert!(warnings.iter().all(|w| w.as_str().unwrap_or("").contains("(C.k)")), "unexpected warnings: {warnings:?}");
+    assert!(warnings.is_empty(), "unexpected warnings: {warnings:?}");
+    assert_eq!(summary["model"]["ck_sharp"], true);
     // (issue 24, item 10) the README's figures of this run are this run's: "(E.1) defect 2e-16",
     // "5.7 convex solves per step … (15 at most" (rounded as printed there)
     let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).expect("README");
@@ -96,7 +98,8 @@ fn check_prints_the_ck_limit_and_warns() {
 /// (Ck.1) holds", no (C.k) warning; at k = 2e-3, outside both: false, "started at the predictor",
 /// the warning; `check` (no W) says a run will test it. The default scene (64 contact unknowns,
 /// the predictor's start) at its k = 5e-4, 1.44× its (C.k) limit, is inside (Ck.1): true and no
-/// warning, its start unchanged; at k = 1e-3 outside: false and the warning.
+/// warning, its start unchanged; at k = 1e-3 outside: false and the warning. With the sparse W
+/// at 1.2e-3 the test does not run (null), F.1 starts at the predictor and the words say why.
 #[test]
 fn summary_reports_the_sharp_ck() {
     let dir = tmp("cli_sharp_ck");
@@ -143,6 +146,22 @@ fn summary_reports_the_sharp_ck() {
         "{out}"
     );
     assert!(err.contains("a run with a dense W tests the sharper (Ck.1) at setup"), "{err}");
+    let out = dir.join("sparse");
+    let st = Command::new(BIN)
+        .arg("run")
+        .arg(scene("academic3d"))
+        .args(["--set", "domain.cells=[12, 8, 4]", "--set", "time.step=1.2e-3", "--set", "time.end=4.8e-3"])
+        .args(["--set", "solver.contact_solve=\"sparse\"", "--out"])
+        .arg(&out)
+        .output()
+        .expect("run");
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+    assert_eq!(summary["contact_solve"], "sparse");
+    assert_eq!(summary["model"]["ck_sharp"], serde_json::Value::Null, "no test without the dense W");
+    let words = summary["model"]["contact_solve"].as_str().expect("words");
+    assert!(words.contains("started at the predictor: (Ck.1) not tested (it needs the dense W)"), "{words}");
     for (k, sharp) in [("5e-4", true), ("1e-3", false)] {
         let out = dir.join(format!("default_{k}"));
         let st = Command::new(BIN)

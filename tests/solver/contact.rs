@@ -521,7 +521,7 @@ fn f1_root_start_reaches_the_fixed_point_inside_ck() {
 /// Newton's root as well (`fixed_point_start = "auto"`; the setup tests (Ck.1) through W): the
 /// step problem is convex there too, so the root is F.1's only fixed point. The same comparison
 /// as the test above on academic3d at 12×8×4 cells over 0.3 s at k = 1.2e-3, 1.15× the (C.k)
-/// limit 1.04e-3 and inside (Ck.1) (λ_max ≈ 0.92 at this k, probed), with the same requirement
+/// limit 1.04e-3 and inside (Ck.1) (λ_max 0.894 at this k, probed), with the same requirement
 /// and the same reasons for its bounds.
 #[test]
 fn f1_root_start_reaches_the_fixed_point_inside_ck1_beyond_ck() {
@@ -616,6 +616,26 @@ fn f1_root_start_rule() {
         F1Start::Predictor,
         "beyond (C.k) below ROOT_START_FROM: no test"
     );
+    assert_eq!(
+        start([12, 8, 4], &|s| s.solver.mass = dyncontact::scene::MassKind::Consistent),
+        F1Start::RootIfSharpConvex,
+        "the consistent mass inside (C.k): (C.k)'s lumped masses do not bound it, (Ck.1) decides"
+    );
+    for (what, edit) in [
+        (
+            "θ < 1",
+            &(|s: &mut dyncontact::scene::Scene| s.solver.relaxation = 0.7) as &dyn Fn(&mut dyncontact::scene::Scene),
+        ),
+        ("conic", &|s| s.solver.inner = InnerSolver::Conic),
+        ("bound at the midpoint", &|s| s.contact.as_mut().expect("contact").friction_bound_at = BoundAt::Midpoint),
+        ("total bound", &|s| s.contact.as_mut().expect("contact").friction_bound = FrictionBound::Total),
+    ] {
+        let beyond = |s: &mut dyncontact::scene::Scene| {
+            s.time.step = 2e-3;
+            edit(s);
+        };
+        assert_eq!(start([12, 8, 4], &beyond), F1Start::Predictor, "beyond (C.k) with {what}: no root start");
+    }
     assert!(!starts([12, 6, 4], &|_| ()), "252 contact unknowns: below ROOT_START_FROM");
     assert!(!starts([12, 8, 4], &|s| s.solver.fixed_point_acceleration = FixedPointAcceleration::None));
     assert!(!starts([12, 8, 4], &|s| s.solver.fixed_point_start = FixedPointStart::Predictor));
@@ -725,17 +745,28 @@ fn ck_limit_is_the_problems_and_the_summary_reports_it() {
     assert_eq!(problem(total).convexity_limit(), ConvexityLimit::TotalBound);
 }
 
-/// (Ck.1) The sharp test decides the eigenvalue condition it states, and (C.k) implies it: on
-/// academic (2-D, 32 contact nodes) and academic3d at 8×4×4 (40 nodes), for k from 0.5 to 4
-/// times the (C.k) limit, `sharp_convex` (a Cholesky factorization) says true exactly when
-/// λ_max(a_v L_μ p̄_τ Ω^½ T W Tᵀ Ω^½) < 1 − δ, the matrix formed here with nalgebra and its
-/// eigenvalues by a symmetric eigensolver, on the same W; and it says true wherever k satisfies
-/// (C.k) (A_k ⪰ M/k, so W ⪯ k M⁻¹). A λ within 1e-9 of the threshold would make the comparison
-/// a matter of round-off and fails the test (the eigensolver's error is ~1e-15 of λ here).
+/// (Ck.1) The sharp test decides the condition it states, and (C.k) implies it: on academic (2-D,
+/// 32 contact nodes) and academic3d at 8×4×4 (40 nodes), for k from 0.5 to 4 times the (C.k)
+/// limit, `sharp_convex` (a Cholesky factorization of W's tangent block) says true exactly when
+/// λ_max(D^½ H_τ A_k⁻¹ H_τᵀ D^½) < 1 − δ, formed here independently of W and of its frame
+/// ordering: A_k = M/k + C/2 + kK/4 assembled dense from the operators (midpoint), H_τ the
+/// Cartesian tangent vectors of each contact node at its DOFs, A_k⁻¹ by nalgebra's Cholesky and
+/// λ_max by a symmetric eigensolver; and it says true wherever k satisfies (C.k) (A_k ⪰ M/k, so
+/// W ⪯ k M⁻¹). A λ within 1e-9 of the threshold would make the comparison a matter of round-off
+/// and fails the test (the two routes agree to ~1e-12 here: W's solves and the dense ones).
 #[test]
 fn ck1_is_the_eigenvalue_condition_and_follows_from_ck() {
     use dyncontact::problem::ConvexityLimit;
     use dyncontact::step::delassus::{Delassus, SHARP_CONVEXITY_MARGIN, sharp_convex};
+    let dense = |a: &dyncontact::linalg::SpMat| {
+        let mut m = nalgebra::DMatrix::<f64>::zeros(a.nrows(), a.ncols());
+        for j in 0..a.ncols() {
+            for (&i, &v) in a.symbolic().row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
+                m[(i, j)] += v;
+            }
+        }
+        m
+    };
     for (name, cells) in [("academic", None), ("academic3d", Some(vec![8, 4, 4]))] {
         let (mut sharp_inside, mut beyond_ck_inside_sharp) = (0, 0);
         for factor in [0.5, 0.9, 1.1, 1.3, 1.6, 2.0, 3.0, 4.0] {
@@ -750,17 +781,23 @@ fn ck1_is_the_eigenvalue_condition_and_follows_from_ck() {
             s.time.step = factor * limit;
             s.time.end = 10.0 * s.time.step;
             let p = problem(s);
+            assert_eq!(p.model.time.scheme, dyncontact::scene::SchemeKind::Midpoint, "A_k below is the midpoint's");
             let sim = Simulation::new(&p).expect("setup");
             let c = p.contact.as_ref().expect("contact");
-            let Some(Delassus::Dense(w_dense)) = sim.delassus.as_ref() else { panic!("{name}: the dense W") };
+            let Some(Delassus::Dense(w)) = sim.delassus.as_ref() else { panic!("{name}: the dense W") };
+            let a_k = dense(&sim.ops.m) / p.k + dense(&sim.ops.c) * 0.5 + dense(&sim.ops.k) * (0.25 * p.k);
             let (d, n) = (c.dim, c.n());
             let scale = sim.kinematics.a_v * c.friction.as_ref().expect("friction").lipschitz() * c.p_tau.sup();
-            let t = nalgebra::DMatrix::from_fn((d - 1) * n, d * n, |r, col| {
-                let (i, a) = (r / (d - 1), r % (d - 1));
-                if col / d == i { (scale * c.omega[i]).sqrt() * c.frames[i].tangents[a][col % d] } else { 0.0 }
-            });
-            let w = nalgebra::DMatrix::from_fn(d * n, d * n, |r, col| w_dense[(r, col)]);
-            let b = &t * w * t.transpose();
+            let mut h_t = nalgebra::DMatrix::<f64>::zeros(a_k.nrows(), (d - 1) * n);
+            for i in 0..n {
+                for a in 0..d - 1 {
+                    for (q, &dof) in c.node_dofs(i).iter().enumerate() {
+                        h_t[(dof, i * (d - 1) + a)] = (scale * c.omega[i]).sqrt() * c.frames[i].tangents[a][q];
+                    }
+                }
+            }
+            let g = a_k.cholesky().expect("A_k is positive definite").solve(&h_t);
+            let b = h_t.transpose() * g;
             let b = (&b + b.transpose()) * 0.5;
             let lambda_max = b.symmetric_eigenvalues().max();
             let threshold = 1.0 - SHARP_CONVEXITY_MARGIN;
@@ -768,7 +805,7 @@ fn ck1_is_the_eigenvalue_condition_and_follows_from_ck() {
                 (lambda_max - threshold).abs() > 1e-9,
                 "{name} at {factor}× (C.k): λ_max {lambda_max} at the threshold"
             );
-            let sharp = sharp_convex(w_dense, c, sim.kinematics.a_v).expect("(Ck.1) applies");
+            let sharp = sharp_convex(w, c, sim.kinematics.a_v).expect("(Ck.1) applies");
             println!("{name} k = {factor} × (C.k): λ_max {lambda_max:.6}, sharp {sharp}");
             assert_eq!(sharp, lambda_max < threshold, "{name} at {factor}× (C.k): λ_max {lambda_max}");
             if factor <= 1.0 {

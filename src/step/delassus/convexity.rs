@@ -22,12 +22,13 @@ use crate::model::kinds::FrictionBound;
 /// millionth of the admissible range.
 pub const SHARP_CONVEXITY_MARGIN: f64 = 1e-6;
 
-/// (Ck.1) a_v L_μ p̄_τ Ω^½ T W Tᵀ Ω^½ ≺ (1 − δ) I (Ω = diag ω_i, T the tangent rows of the slip
-/// frames, δ = [`SHARP_CONVEXITY_MARGIN`]), decided by a Cholesky factorization of the
+/// (Ck.1) a_v L_μ p̄_τ Ω^½ T W Tᵀ Ω^½ ≺ (1 − δ) I (Ω = diag ω_i, T W Tᵀ = W_ττ the tangent
+/// block of W in the slip frames, δ = [`SHARP_CONVEXITY_MARGIN`]), decided by a Cholesky factorization of the
 /// difference: Some(true) when every pivot is positive, so every step problem with the bound at
 /// the predictor is strictly convex and F.1 has one fixed point; Some(false) when a pivot is not;
 /// None where the test does not apply (no friction, constant μ, the total bound, p̄_τ = 0 or
-/// unbounded). `w`: the exact (dense) Delassus operator, m × m with m = d n_c ordered by node.
+/// unbounded). `w`: the exact (dense) Delassus operator, m × m with m = d n_c in each node's frame
+/// components (ν, τ_1, τ_2), node after node, as [`ContactModel::restrict`] orders them.
 /// Memory: the (d − 1) n_c square matrix B, factored in place.
 pub fn sharp_convex(w: &Mat<f64>, c: &ContactModel, a_v: f64) -> Option<bool> {
     let mu = c.friction.as_ref()?;
@@ -37,31 +38,18 @@ pub fn sharp_convex(w: &Mat<f64>, c: &ContactModel, a_v: f64) -> Option<bool> {
     }
     let (d, n_c) = (c.dim, c.n());
     let nt = (d - 1) * n_c;
-    // D^½ per node; the scaled tangent rows s_i τ_i^a
+    // D^½ per node
     let s: Vec<f64> = c.omega.iter().map(|&omega| (a_v * l_mu * omega * p_bar).sqrt()).collect();
-    let tangent = |i: usize, a: usize| -> [f64; 3] {
-        let t = c.frames[i].tangents[a];
-        [s[i] * t[0], s[i] * t[1], s[i] * t[2]]
-    };
-    // (1 − δ) I − B, B = (D^½ T) W (D^½ T)ᵀ one column at a time: g = W (D^½ T)ᵀ e_(j,b)
+    // (1 − δ) I − B, B = D^½ W_ττ D^½: W's rows and columns are each node's frame components
+    // (ν, τ_1, τ_2), so its tangent block is the components 1 … d − 1 of every node
     let mut b = Mat::<f64>::zeros(nt, nt);
-    let mut g = vec![0.0; d * n_c];
     for j in 0..n_c {
         for bj in 0..d - 1 {
-            let tj = tangent(j, bj);
-            g.iter_mut().for_each(|x| *x = 0.0);
-            for (q, &tq) in tj.iter().enumerate().take(d) {
-                if tq != 0.0 {
-                    for (x, wq) in g.iter_mut().zip(w.col_as_slice(j * d + q)) {
-                        *x += tq * wq;
-                    }
-                }
-            }
+            let w_col = w.col_as_slice(j * d + 1 + bj);
             let col = b.col_as_slice_mut(j * (d - 1) + bj);
             for i in 0..n_c {
                 for a in 0..d - 1 {
-                    let ti = tangent(i, a);
-                    col[i * (d - 1) + a] = -(0..d).map(|p| ti[p] * g[i * d + p]).sum::<f64>();
+                    col[i * (d - 1) + a] = -s[i] * s[j] * w_col[i * d + 1 + a];
                 }
             }
         }
