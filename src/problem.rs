@@ -108,13 +108,19 @@ impl Problem {
     /// (C.k) for this problem: the largest step for which the unfrozen step problem is convex,
     /// k ≤ m_i/(a_v ω_i p̄_τ L_μ) over the contact nodes ([`ContactModel::convex_step_limit`] with
     /// the nodal masses of the scene's mass matrix and the scheme's slip-rate factor a_v), or why
-    /// no step bounds it.
+    /// no step bounds it. The argument needs M ⪰ diag(m_i): the lumped (or modified) masses
+    /// themselves, and for the consistent mass the lumped ones over d + 2 (a P1 element's
+    /// consistent mass is ρ|T|/((d+1)(d+2)) (I + 11ᵀ) ⪰ its lumped mass ρ|T|/(d+1) over d + 2).
     pub fn convexity_limit(&self) -> ConvexityLimit {
         let Some(c) = self.contact.as_ref().filter(|c| c.friction.is_some()) else {
             return ConvexityLimit::NoFriction;
         };
-        let masses =
+        let mut masses =
             nodal_masses(&self.mesh, &self.material, self.model.solver.mass, &self.dofs, &c.nodes).unwrap_or_default();
+        if self.model.solver.mass == crate::model::kinds::MassKind::Consistent {
+            let below = (c.dim + 2) as f64;
+            masses.iter_mut().for_each(|m| *m /= below);
+        }
         let a_v = ContactKinematics::of(self.model.time.scheme, self.k).a_v;
         let limit = if masses.is_empty() { None } else { c.convex_step_limit(&masses, a_v) };
         if let Some((k, i)) = limit {

@@ -215,9 +215,8 @@ impl Settings {
 /// predictor for "predictor", at the unfrozen Newton's root for "unfrozen"; for "auto", at the
 /// root from ROOT_START_FROM contact unknowns on where the step problem is convex with a varying
 /// μ, so its root is the only fixed point of F.1 and the start changes where F.1 begins, not
-/// where it ends (inside (C.k) with the lumped mass: `Root`; beyond it, or with the consistent
-/// mass, which (C.k)'s lumped masses do not bound from below: `RootIfSharpConvex`, for the
-/// setup to decide by (Ck.1)), and S is Anderson-extrapolated
+/// where it ends (inside (C.k): `Root`; beyond it: `RootIfSharpConvex`, for the setup to decide
+/// by (Ck.1)), and S is Anderson-extrapolated
 /// (θ = 1 and "anderson"; the plain iteration keeps the paper's start as well as its update).
 /// Only the Newton inner solver with the bound at the predictor starts at the root (N.4's system).
 pub fn f1_start(p: &Problem, s: &crate::model::SolverParams) -> F1Start {
@@ -235,9 +234,8 @@ pub fn f1_start(p: &Problem, s: &crate::model::SolverParams) -> F1Start {
             let auto = s.fixed_point_acceleration == FixedPointAcceleration::Anderson
                 && s.relaxation == 1.0
                 && p.contact.as_ref().is_some_and(|c| c.dim * c.n() >= crate::defaults::ROOT_START_FROM);
-            let lumped = p.model.solver.mass != crate::model::kinds::MassKind::Consistent;
             match p.convexity_limit() {
-                crate::problem::ConvexityLimit::Step { k, .. } if auto && lumped && p.k <= k => F1Start::Root,
+                crate::problem::ConvexityLimit::Step { k, .. } if auto && p.k <= k => F1Start::Root,
                 crate::problem::ConvexityLimit::Step { .. } if auto => F1Start::RootIfSharpConvex,
                 _ => F1Start::Predictor,
             }

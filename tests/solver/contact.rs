@@ -619,7 +619,7 @@ fn f1_root_start_rule() {
     assert_eq!(
         start([12, 8, 4], &|s| s.solver.mass = dyncontact::scene::MassKind::Consistent),
         F1Start::RootIfSharpConvex,
-        "the consistent mass inside (C.k): (C.k)'s lumped masses do not bound it, (Ck.1) decides"
+        "the consistent mass: (C.k) with the lumped masses over d + 2 (2.08e-4) is below k, (Ck.1) decides"
     );
     for (what, edit) in [
         (
@@ -746,7 +746,8 @@ fn ck_limit_is_the_problems_and_the_summary_reports_it() {
 }
 
 /// (Ck.1) The sharp test decides the condition it states, and (C.k) implies it: on academic (2-D,
-/// 32 contact nodes) and academic3d at 8×4×4 (40 nodes), for k from 0.5 to 4 times the (C.k)
+/// 32 contact nodes; lumped, and consistent mass, whose (C.k) takes the lumped masses over d + 2)
+/// and academic3d at 8×4×4 (40 nodes), for k from 0.5 to 4 times the (C.k)
 /// limit, `sharp_convex` (a Cholesky factorization of W's tangent block) says true exactly when
 /// λ_max(D^½ H_τ A_k⁻¹ H_τᵀ D^½) < 1 − δ, formed here independently of W and of its frame
 /// ordering: A_k = M/k + C/2 + kK/4 assembled dense from the operators (midpoint), H_τ the
@@ -767,13 +768,21 @@ fn ck1_is_the_eigenvalue_condition_and_follows_from_ck() {
         }
         m
     };
-    for (name, cells) in [("academic", None), ("academic3d", Some(vec![8, 4, 4]))] {
+    use dyncontact::scene::MassKind;
+    let lumped_factors = [0.5, 0.9, 1.1, 1.3, 1.6, 2.0, 3.0, 4.0];
+    for (name, cells, mass, factors) in [
+        ("academic", None, MassKind::Lumped, &lumped_factors[..]),
+        ("academic3d", Some(vec![8, 4, 4]), MassKind::Lumped, &lumped_factors[..]),
+        // (C.k) over d + 2 is far inside: measured λ_max 0.94 at 4×
+        ("academic", None, MassKind::Consistent, &[0.5, 1.0, 2.0, 4.0, 6.0, 8.0][..]),
+    ] {
         let (mut sharp_inside, mut beyond_ck_inside_sharp) = (0, 0);
-        for factor in [0.5, 0.9, 1.1, 1.3, 1.6, 2.0, 3.0, 4.0] {
+        for &factor in factors {
             let mut s = fixture(name);
             if let Some(c) = &cells {
                 s.domain.cells = Some(c.clone());
             }
+            s.solver.mass = mass;
             let limit = match problem(s.clone()).convexity_limit() {
                 ConvexityLimit::Step { k, .. } => k,
                 other => panic!("{name}: {other:?}"),
@@ -783,6 +792,7 @@ fn ck1_is_the_eigenvalue_condition_and_follows_from_ck() {
             let p = problem(s);
             assert_eq!(p.model.time.scheme, dyncontact::scene::SchemeKind::Midpoint, "A_k below is the midpoint's");
             let sim = Simulation::new(&p).expect("setup");
+            assert!(sim.ops.thickness.is_none(), "plane strain: A_k has no plane-stress term");
             let c = p.contact.as_ref().expect("contact");
             let Some(Delassus::Dense(w)) = sim.delassus.as_ref() else { panic!("{name}: the dense W") };
             let a_k = dense(&sim.ops.m) / p.k + dense(&sim.ops.c) * 0.5 + dense(&sim.ops.k) * (0.25 * p.k);
@@ -814,7 +824,10 @@ fn ck1_is_the_eigenvalue_condition_and_follows_from_ck() {
             sharp_inside += usize::from(sharp);
             beyond_ck_inside_sharp += usize::from(sharp && factor > 1.0);
         }
-        assert!(sharp_inside < 8, "{name}: some k must fail (Ck.1) for the comparison to test both answers");
+        assert!(
+            sharp_inside < factors.len(),
+            "{name}: some k must fail (Ck.1) for the comparison to test both answers"
+        );
         assert!(beyond_ck_inside_sharp > 0, "{name}: (Ck.1) should admit some k beyond (C.k)");
     }
 }
