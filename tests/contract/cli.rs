@@ -103,35 +103,26 @@ fn check_prints_the_ck_limit_and_warns() {
 #[test]
 fn summary_reports_the_sharp_ck() {
     let dir = tmp("cli_sharp_ck");
+    let box_12x8x4 = |k: &str| {
+        let end = format!("time.end={}", 4.0 * k.parse::<f64>().expect("k"));
+        let mut args = vec!["--set".to_string(), "domain.cells=[12, 8, 4]".into(), "--set".into()];
+        args.extend([format!("time.step={k}"), "--set".into(), end]);
+        args
+    };
     for (k, sharp) in [("1.2e-3", true), ("2e-3", false)] {
-        let out = dir.join(k);
-        let st = Command::new(BIN)
-            .args(["run"])
-            .arg(scene("academic3d"))
-            .args(["--set", "domain.cells=[12, 8, 4]", "--set", &format!("time.step={k}")])
-            .args(["--set", &format!("time.end={}", 4.0 * k.parse::<f64>().expect("k"))])
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .expect("run");
-        assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
-        let summary: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+        let (summary, err) = run_for_summary(Some(&scene("academic3d")), &box_12x8x4(k), &dir.join(k));
         let model = &summary["model"];
         let words = model["contact_solve"].as_str().expect("contact_solve");
-        let warned = summary["warnings"]
-            .as_array()
-            .expect("warnings")
-            .iter()
-            .any(|w| w.as_str().is_some_and(|w| w.contains("exceeds the (C.k) limit")));
-        println!("k = {k}: {words}; warned {warned}");
+        println!("k = {k}: {words}");
         assert_eq!(model["ck_sharp"], serde_json::Value::Bool(sharp), "k = {k}");
         if sharp {
             assert!(words.contains("started at the root of the unfrozen Newton (N.4): (Ck.1) holds"), "{words}");
         } else {
             assert!(words.contains("started at the predictor: (Ck.1) does not hold"), "{words}");
         }
+        let warned = summary["warnings"].to_string().contains("exceeds the (C.k) limit");
         assert_eq!(warned, !sharp, "the (C.k) warning only where (Ck.1) does not show convexity");
+        assert_eq!(err.contains("exceeds the (C.k) limit"), !sharp, "{err}");
         assert!(summary["timing"]["sharp_convexity_s"].as_f64().expect("timing") > 0.0);
     }
     let st = Command::new(BIN)
@@ -146,37 +137,30 @@ fn summary_reports_the_sharp_ck() {
         "{out}"
     );
     assert!(err.contains("a run with a dense W tests the sharper (Ck.1) at setup"), "{err}");
-    let out = dir.join("sparse");
-    let st = Command::new(BIN)
-        .arg("run")
-        .arg(scene("academic3d"))
-        .args(["--set", "domain.cells=[12, 8, 4]", "--set", "time.step=1.2e-3", "--set", "time.end=4.8e-3"])
-        .args(["--set", "solver.contact_solve=\"sparse\"", "--out"])
-        .arg(&out)
-        .output()
-        .expect("run");
-    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+    let mut sparse = box_12x8x4("1.2e-3");
+    sparse.extend(["--set".to_string(), "solver.contact_solve=\"sparse\"".into()]);
+    let (summary, _) = run_for_summary(Some(&scene("academic3d")), &sparse, &dir.join("sparse"));
     assert_eq!(summary["contact_solve"], "sparse");
     assert_eq!(summary["model"]["ck_sharp"], serde_json::Value::Null, "no test without the dense W");
     let words = summary["model"]["contact_solve"].as_str().expect("words");
     assert!(words.contains("started at the predictor: (Ck.1) not tested (it needs the dense W)"), "{words}");
     for (k, sharp) in [("5e-4", true), ("1e-3", false)] {
-        let out = dir.join(format!("default_{k}"));
-        let st = Command::new(BIN)
-            .args(["run", "--set", &format!("time.step={k}"), "--set", "time.end=0.005", "--out"])
-            .arg(&out)
-            .output()
-            .expect("run");
-        let err = String::from_utf8_lossy(&st.stderr);
-        assert!(st.status.success(), "{err}");
-        let summary: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+        let args = ["--set".to_string(), format!("time.step={k}"), "--set".into(), "time.end=0.005".into()];
+        let (summary, err) = run_for_summary(None, &args, &dir.join(format!("default_{k}")));
         assert_eq!(summary["model"]["ck_sharp"], serde_json::Value::Bool(sharp), "default scene at k = {k}");
         assert!(!summary["model"]["contact_solve"].as_str().expect("words").contains("root"), "the predictor's start");
         assert_eq!(err.contains("exceeds the (C.k) limit"), !sharp, "default scene at k = {k}: {err}");
     }
+}
+
+/// `dyncontact run [SCENE] ARGS --out OUT`, which must succeed: its summary.json and stderr.
+fn run_for_summary(scene: Option<&Path>, args: &[String], out: &Path) -> (serde_json::Value, String) {
+    let st = Command::new(BIN).arg("run").args(scene).args(args).arg("--out").arg(out).output().expect("run");
+    let err = String::from_utf8_lossy(&st.stderr).into_owned();
+    assert!(st.status.success(), "{err}");
+    let summary =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary")).expect("json");
+    (summary, err)
 }
 
 /// `check`'s friction line (summary.json `model.friction`) says what a step solves, true for every
