@@ -216,8 +216,8 @@ impl Settings {
 /// root from ROOT_START_FROM contact unknowns on where the step problem is convex with a varying
 /// μ, so its root is the only fixed point of F.1 and the start changes where F.1 begins, not
 /// where it ends (inside (C.k): `Root`; beyond it: `RootIfSharpConvex`, for the setup to decide
-/// by (Ck.1)), and S is Anderson-extrapolated
-/// (θ = 1 and "anderson"; the plain iteration keeps the paper's start as well as its update).
+/// by (Ck.1)), and S is Anderson-extrapolated (θ = 1 and "anderson"; the plain iteration keeps
+/// the paper's start as well as its update).
 /// Only the Newton inner solver with the bound at the predictor starts at the root (N.4's system).
 pub fn f1_start(p: &Problem, s: &crate::model::SolverParams) -> F1Start {
     let applies = s.inner == InnerSolver::Newton
@@ -297,8 +297,8 @@ pub struct Simulation<'p> {
     products: StateProducts,
     pub kinematics: ContactKinematics,
     /// (Ck.1) at setup: Some(true) when W showed every step problem strictly convex, Some(false)
-    /// when it did not; None where the test did not run (it runs with the bound at the predictor
-    /// and the dense W, beyond (C.k) or where it decides an "auto" root start)
+    /// when it did not; None where the test did not run (it runs beyond (C.k), with the bound at
+    /// the predictor and the dense W)
     pub sharp_convexity: Option<bool>,
     pub state: State,
     pub setup_timing: SetupTiming,
@@ -362,15 +362,14 @@ impl<'p> Simulation<'p> {
         };
         stepper.release_matrix();
         let t_delassus = clock.elapsed().as_secs_f64();
-        // (Ck.1) with the exact W beyond (C.k), and wherever it decides an "auto" root start: it
-        // decides that start and the (C.k) warning
+        // (Ck.1) with the exact W beyond (C.k) (where f1_start leaves every RootIfSharpConvex):
+        // it decides that start and the (C.k) warning
         let clock = Instant::now();
         let mut settings = settings;
         let beyond_ck =
             matches!(problem.convexity_limit(), crate::problem::ConvexityLimit::Step { k, .. } if problem.k > k);
-        let wanted = beyond_ck || settings.fixed_point.start == F1Start::RootIfSharpConvex;
         let sharp_convexity = match (problem.contact.as_ref(), &delassus) {
-            (Some(c), Some(delassus::Delassus::Dense(w))) if wanted && c.bound_at == BoundAt::Predictor => {
+            (Some(c), Some(delassus::Delassus::Dense(w))) if beyond_ck && c.bound_at == BoundAt::Predictor => {
                 delassus::sharp_convex(w, c, stepper.contact_kinematics().a_v)
             }
             _ => None,

@@ -129,9 +129,9 @@ pub enum FixedPointAcceleration {
 #[serde(rename_all = "lowercase")]
 pub enum FixedPointStart {
     /// `unfrozen` where the step problem is convex with a varying μ (its root is then F.1's only
-    /// fixed point): inside (C.k), else where the setup finds (Ck.1) through the dense W; and S is Anderson-extrapolated (θ = 1), the contact has at least
-    /// ROOT_START_FROM unknowns, the inner solver is Newton and the bound is p_τ at the
-    /// predictor; else `predictor`
+    /// fixed point): inside (C.k), else where the setup finds (Ck.1) through the dense W; and S
+    /// is Anderson-extrapolated (θ = 1), the contact has at least ROOT_START_FROM unknowns, the
+    /// inner solver is Newton and the bound is p_τ at the predictor; else `predictor`
     #[default]
     Auto,
     /// S at the initial guess of the contact velocities (the paper's start)

@@ -6,9 +6,10 @@
 //! at least −a_v ω_i p_τ(û_i) L_μ on node i's tangent components (ψ'' = μ' ≥ −L_μ, ψ' = μ ≥ 0).
 //! So the whole is strictly convex when A_k − Tᵀ D T ≻ 0, D = diag(a_v L_μ ω_i p̄_τ) per tangent
 //! and T the tangent rows of the slip frames at the contact DOFs; by the Schur complement that is
-//! D^½ T W Tᵀ D^½ ≺ I, W = H A_k⁻¹ Hᵀ. (C.k) is the same test with A_k replaced by M/k: since
-//! A_k ⪰ M/k (lumped M), W ⪯ k M⁻¹ on the contact DOFs and (C.k) implies (Ck.1); the converse
-//! fails by as much as the stiffness and the viscosity stiffen A_k beyond M/k.
+//! D^½ T W Tᵀ D^½ ≺ I, W = H A_k⁻¹ Hᵀ. (C.k) is the same test with A_k replaced by its lower
+//! bound diag(m_i)/k (the lumped masses; over d + 2 with the consistent mass): W ⪯ k diag(m_i)⁻¹
+//! on the contact DOFs, so (C.k) implies (Ck.1); the converse fails by as much as the stiffness
+//! and the viscosity stiffen A_k beyond diag(m_i)/k.
 
 use faer::Mat;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -23,8 +24,8 @@ use crate::model::kinds::FrictionBound;
 pub const SHARP_CONVEXITY_MARGIN: f64 = 1e-6;
 
 /// (Ck.1) a_v L_μ p̄_τ Ω^½ T W Tᵀ Ω^½ ≺ (1 − δ) I (Ω = diag ω_i, T W Tᵀ = W_ττ the tangent
-/// block of W in the slip frames, δ = [`SHARP_CONVEXITY_MARGIN`]), decided by a Cholesky factorization of the
-/// difference: Some(true) when every pivot is positive, so every step problem with the bound at
+/// block of W in the slip frames, δ = [`SHARP_CONVEXITY_MARGIN`]), decided by a Cholesky
+/// factorization of the difference: Some(true) when every pivot is positive, so every step problem with the bound at
 /// the predictor is strictly convex and F.1 has one fixed point; Some(false) when a pivot is not;
 /// None where the test does not apply (no friction, constant μ, the total bound, p̄_τ = 0 or
 /// unbounded). `w`: the exact (dense) Delassus operator, m × m with m = d n_c in each node's frame
