@@ -2,11 +2,14 @@
 //!
 //! `verify` is the project's test command. It
 //! 1. checks the formatting (`cargo fmt --all --check`, rustfmt.toml);
-//! 2. builds every test target (`cargo test -p dyncontact -p dyncontact-studies --no-run`: xtask
-//!    has no tests, and its test harness would build criterion, a dev-dependency of its benches),
-//!    then checks the lints (`cargo clippy --workspace --all-targets -- -D warnings`); meanwhile a
-//!    thread prepares the cross-check's Python (venv, pip, GetFEM), which waits mostly on the
-//!    network;
+//! 2. builds every test target (`cargo test -p dyncontact -p dyncontact-studies --no-run`) and
+//!    checks the lints in the same build: cargo runs the workspace's crates through clippy's
+//!    driver with `-D warnings` (lints.rs), and adds xtask's targets (`-p xtask --all-targets`,
+//!    criterion included) so every target `cargo clippy --workspace --all-targets` checks is
+//!    checked — the Python crate's by the wheel's build (step 5), wrapped alike; without
+//!    clippy-driver, or without the cross-check, `cargo clippy` checks what the builds did not.
+//!    Meanwhile a thread prepares the cross-check's Python (venv, pip, GetFEM), which waits
+//!    mostly on the network;
 //! 3. runs each test binary directly, as many at a time as the machine has cores, recording which
 //!    test passed (so a test is tied to its file: a grouped binary's modules are its files);
 //! 4. checks the equation trace (spec/equations.toml): every `implemented` ID names code anchors
@@ -20,6 +23,7 @@
 
 mod crosscheck;
 mod cycles;
+mod lints;
 mod process;
 mod python;
 mod source;
@@ -131,24 +135,34 @@ struct TestBinary {
     exe: PathBuf,
 }
 
-/// What `cargo test -p dyncontact -p dyncontact-studies --no-run` built: the test binaries, and the `dyncontact` binary
-/// that the CLI tests run and the cross-check uses (the one built with these tests, never an
-/// older one left in the target directory).
+/// What the test build (`cargo test -p dyncontact -p dyncontact-studies --no-run`) built: the
+/// test binaries, and the `dyncontact` binary that the CLI tests run and the cross-check uses (the
+/// one built with these tests, never an older one left in the target directory). `linted`: the
+/// build went through clippy's driver (lints.rs) and so checked the lints of every target of
+/// dyncontact, dyncontact-studies and xtask (`--all-targets`, as `cargo clippy --all-targets`).
 struct Build {
     tests: Vec<TestBinary>,
     dyncontact: PathBuf,
+    linted: bool,
 }
 
-fn build_tests(root: &Path) -> Result<Build, String> {
-    let out = Command::new(env!("CARGO"))
-        .args(["test", "-p", "dyncontact", "-p", "dyncontact-studies", "--no-run"])
+fn build_tests(root: &Path, target: &Path) -> Result<Build, String> {
+    let mut cargo = Command::new(env!("CARGO"));
+    cargo.args(["test", "-p", "dyncontact", "-p", "dyncontact-studies", "--no-run"]);
+    let linted = lints::through_clippy(&mut cargo, target);
+    if linted {
+        // xtask's own targets only for their lints: its bench (criterion) is built, not run
+        cargo.args(["-p", "xtask", "--all-targets"]);
+    }
+    let out = cargo
         .arg("--message-format=json-render-diagnostics")
         .current_dir(root)
         .stderr(Stdio::inherit())
         .output()
         .map_err(|e| format!("cannot run cargo: {e}"))?;
     if !out.status.success() {
-        return Err("building the tests failed".into());
+        let what = if linted { "building and linting (clippy -D warnings)" } else { "building" };
+        return Err(format!("{what} the tests failed: the errors are printed above"));
     }
     let (mut tests, mut dyncontact) = (Vec::new(), None);
     for line in String::from_utf8_lossy(&out.stdout).lines() {
@@ -157,9 +171,9 @@ fn build_tests(root: &Path) -> Result<Build, String> {
             continue;
         }
         let Some(exe) = v["executable"].as_str() else { continue };
+        let kinds = v["target"]["kind"].as_array().cloned().unwrap_or_default();
         if v["profile"]["test"] != true {
-            let is_bin = v["target"]["kind"].as_array().is_some_and(|k| k.iter().any(|k| k == "bin"));
-            if is_bin && v["target"]["name"] == "dyncontact" {
+            if kinds.iter().any(|k| k == "bin") && v["target"]["name"] == "dyncontact" {
                 dyncontact = Some(PathBuf::from(exe));
             }
             continue;
@@ -169,10 +183,13 @@ fn build_tests(root: &Path) -> Result<Build, String> {
             .strip_prefix(root)
             .map(|p| p.to_string_lossy().to_string())
             .unwrap_or_else(|_| src.to_string());
+        if !kinds.iter().any(|k| k == "lib" || k == "test") {
+            continue; // the harnesses `--all-targets` adds (bins', examples', benches') hold no tests
+        }
         tests.push(TestBinary { src, exe: PathBuf::from(exe) });
     }
     let dyncontact = dyncontact.ok_or("the test build reported no `dyncontact` binary")?;
-    Ok(Build { tests, dyncontact })
+    Ok(Build { tests, dyncontact, linted })
 }
 
 /// Outcome of every test: (source file of the target, libtest name) → passed.
@@ -598,29 +615,23 @@ fn formatted(root: &Path) -> Result<(), String> {
     ))
 }
 
-/// `cargo clippy --workspace --all-targets -- -D warnings`: no lint anywhere in the workspace
-/// (the lints the crates allow are allowed in their roots, each with its reason).
-fn lints(root: &Path) -> Result<(), String> {
-    let out = Command::new(env!("CARGO"))
-        .args(["clippy", "--workspace", "--all-targets", "--quiet", "--", "-D", "warnings"])
-        .current_dir(root)
-        .output()
-        .map_err(|e| format!("cannot run cargo clippy: {e}"))?;
-    if out.status.success() {
-        return Ok(());
+/// No lint anywhere in the workspace (`cargo clippy --workspace --all-targets -- -D warnings`;
+/// the lints the crates allow are allowed in their roots, each with its reason). A linted test
+/// build has checked dyncontact, dyncontact-studies and xtask; the Python crate's lints are then
+/// checked by the wheel's build (python.rs, wrapped alike), or here when there is no cross-check.
+fn lints(root: &Path, build: &Build, crosscheck: bool) -> Result<(), String> {
+    match (build.linted, crosscheck) {
+        (true, true) => Ok(()),
+        (true, false) => lints::clippy(root, &["-p", "dyncontact-python", "--all-targets"]),
+        (false, _) => lints::clippy(root, &["--workspace", "--all-targets"]),
     }
-    let text = String::from_utf8_lossy(&out.stderr);
-    println!("{text}");
-    let first: Vec<&str> =
-        text.lines().filter(|l| l.starts_with("error") || l.trim_start().starts_with("-->")).take(6).collect();
-    Err(format!("lints: cargo clippy --workspace --all-targets -- -D warnings failed: {}", first.join(" ")))
 }
 
 /// `cargo xtask crosscheck`: the test build (a no-op when verify has just built it) for the
 /// solver binary, then the cross-check.
 fn crosscheck_only(root: &Path, target: &Path) -> Result<(), String> {
     let prepared = crosscheck::prepare(root, target)?;
-    let build = build_tests(root)?;
+    let build = build_tests(root, target)?;
     crosscheck::run(root, target, &build.dyncontact, &prepared).map(|r| println!("{r}"))
 }
 
@@ -633,10 +644,18 @@ fn verify(root: &Path, target: &Path, skip_crosscheck: bool) -> Result<(), Strin
         if let Err(e) = formatted(root) {
             failures.push(e);
         }
-        let build = build_tests(root)?;
+        let build = build_tests(root, target)?;
         println!("== built in {:.1} s", start.elapsed().as_secs_f64());
-        match lints(root) {
-            Ok(()) => println!("== formatting and lints clean ({:.1} s)", t.elapsed().as_secs_f64()),
+        match lints(root, &build, !skip_crosscheck) {
+            Ok(()) => println!(
+                "== formatting and lints clean ({:.1} s; {})",
+                t.elapsed().as_secs_f64(),
+                match (build.linted, skip_crosscheck) {
+                    (true, false) => "linted by the build; the Python crate's by the wheel's",
+                    (true, true) => "linted by the build; the Python crate by cargo clippy",
+                    (false, _) => "cargo clippy: the toolchain has no clippy-driver",
+                }
+            ),
             Err(e) => failures.push(e),
         }
         let _ = std::fs::remove_file(target.join("verify").join("measurements.jsonl"));

@@ -1,6 +1,8 @@
 //! The Python package's check (part of `cargo xtask crosscheck`, in the cross-check's venv):
 //! 1. build the wheel with maturin (`python/`, the `dev` profile of the workspace — the profile
-//!    of the solver binary under test — stripped) into `<target>/wheels`, timing it;
+//!    of the solver binary under test — stripped) into `<target>/wheels`, timing it; the build
+//!    goes through clippy's driver as the test build does (lints.rs), so it checks the Python
+//!    crate's lints;
 //! 2. install it into the venv (its dependencies, numpy and meshio, are the venv's pinned ones);
 //! 3. `pytest python/tests` with `DYNCONTACT_BIN` the test build's binary (the tests compare
 //!    histories with it bit for bit);
@@ -19,15 +21,20 @@ pub fn check(root: &Path, target: &Path, bin: &Path, python: &Path) -> Result<(b
     let mut report = String::new();
     let wheels = fresh_dir(&target.join("wheels"))?;
     let t = Instant::now();
-    exec(
-        Command::new(python)
-            .current_dir(root)
-            .args(["-m", "maturin", "build", "--profile", "dev", "--strip", "--quiet", "-m"])
-            .arg(root.join("python").join("Cargo.toml"))
-            .arg("-o")
-            .arg(&wheels),
-    )
-    .map_err(|e| format!("maturin could not build the wheel: {e}"))?;
+    let mut maturin = Command::new(python);
+    maturin
+        .current_dir(root)
+        .args(["-m", "maturin", "build", "--profile", "dev", "--strip", "--quiet", "-m"])
+        .arg(root.join("python").join("Cargo.toml"))
+        .arg("-o")
+        .arg(&wheels);
+    // wrapped as the test build is (lints.rs): it reuses that build's dyncontact and lints the
+    // Python crate, which the test build does not compile
+    let linted = crate::lints::through_clippy(&mut maturin, target);
+    exec(&mut maturin).map_err(|e| {
+        let lint = if linted { " (its build checks the Python crate's lints: clippy -D warnings)" } else { "" };
+        format!("maturin could not build the wheel{lint}: {e}")
+    })?;
     let build_s = t.elapsed().as_secs_f64();
     let wheel = std::fs::read_dir(&wheels)
         .map_err(|e| format!("read {}: {e}", wheels.display()))?
