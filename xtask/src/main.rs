@@ -4,10 +4,11 @@
 //! 1. checks the formatting (`cargo fmt --all --check`, rustfmt.toml);
 //! 2. builds every test target (`cargo test -p dyncontact -p dyncontact-studies --no-run`) and
 //!    checks the lints in the same build: cargo runs the workspace's crates through clippy's
-//!    driver with `-D warnings` (lints.rs), and adds xtask's targets (`-p xtask --all-targets`,
-//!    criterion included) so every target `cargo clippy --workspace --all-targets` checks is
-//!    checked — the Python crate's by the wheel's build (step 5), wrapped alike; without
-//!    clippy-driver, or without the cross-check, `cargo clippy` checks what the builds did not.
+//!    driver (lints.rs) and adds xtask's targets (`-p xtask --all-targets`, criterion included),
+//!    so the lints of what `cargo clippy --workspace --all-targets` checks are reported — the
+//!    Python crate's by the wheel's build (step 5), wrapped alike — each a warning that fails
+//!    verify without stopping it (`-D warnings` as a check); without a clippy-driver that passes
+//!    the canary, or without the cross-check, `cargo clippy` checks what the builds did not.
 //!    Meanwhile a thread prepares the cross-check's Python (venv, pip, GetFEM), which waits
 //!    mostly on the network;
 //! 3. runs each test binary directly, as many at a time as the machine has cores, recording which
@@ -138,12 +139,14 @@ struct TestBinary {
 /// What the test build (`cargo test -p dyncontact -p dyncontact-studies --no-run`) built: the
 /// test binaries, and the `dyncontact` binary that the CLI tests run and the cross-check uses (the
 /// one built with these tests, never an older one left in the target directory). `linted`: the
-/// build went through clippy's driver (lints.rs) and so checked the lints of every target of
-/// dyncontact, dyncontact-studies and xtask (`--all-targets`, as `cargo clippy --all-targets`).
+/// build went through clippy's driver (lints.rs) with xtask's targets added (`-p xtask
+/// --all-targets`), so `warnings` holds every lint and compiler warning of dyncontact,
+/// dyncontact-studies and xtask, each once (`code at file:line: message`).
 struct Build {
     tests: Vec<TestBinary>,
     dyncontact: PathBuf,
     linted: bool,
+    warnings: BTreeSet<String>,
 }
 
 fn build_tests(root: &Path, target: &Path) -> Result<Build, String> {
@@ -151,31 +154,58 @@ fn build_tests(root: &Path, target: &Path) -> Result<Build, String> {
     cargo.args(["test", "-p", "dyncontact", "-p", "dyncontact-studies", "--no-run"]);
     let linted = lints::through_clippy(&mut cargo, target);
     if linted {
-        // xtask's own targets only for their lints: its bench (criterion) is built, not run
+        // xtask's targets for their lints only: its binary and its bench (with criterion) are
+        // built, not run; `--all-targets` also builds the bins' and the example's test harnesses
         cargo.args(["-p", "xtask", "--all-targets"]);
     }
-    let out = cargo
-        .arg("--message-format=json-render-diagnostics")
+    // cargo's JSON, the diagnostics printed here as cargo would print them (rendered)
+    let mut child = cargo
+        .arg("--message-format=json")
         .current_dir(root)
+        .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
-        .output()
+        .spawn()
         .map_err(|e| format!("cannot run cargo: {e}"))?;
-    if !out.status.success() {
-        let what = if linted { "building and linting (clippy -D warnings)" } else { "building" };
-        return Err(format!("{what} the tests failed: the errors are printed above"));
-    }
-    let (mut tests, mut dyncontact) = (Vec::new(), None);
-    for line in String::from_utf8_lossy(&out.stdout).lines() {
-        let Ok(v) = serde_json::from_str::<serde_json::Value>(line) else { continue };
+    let stdout = child.stdout.take().ok_or("cargo's output")?;
+    let (mut tests, mut dyncontact, mut warnings, mut errors) = (Vec::new(), None, BTreeSet::new(), Vec::new());
+    for line in std::io::BufRead::lines(std::io::BufReader::new(stdout)) {
+        let line = line.map_err(|e| format!("reading cargo's output: {e}"))?;
+        let Ok(v) = serde_json::from_str::<serde_json::Value>(&line) else { continue };
+        if v["reason"] == "compiler-message" {
+            let m = &v["message"];
+            eprint!("{}", m["rendered"].as_str().unwrap_or_default());
+            let Some(span) = m["spans"].as_array().and_then(|s| s.iter().find(|s| s["is_primary"] == true)) else {
+                continue; // the summaries ("2 warnings emitted") have no span
+            };
+            let at = format!(
+                "{} at {}:{}: {}",
+                m["code"]["code"].as_str().unwrap_or("warning"),
+                span["file_name"].as_str().unwrap_or("?"),
+                span["line_start"],
+                m["message"].as_str().unwrap_or_default()
+            );
+            if m["level"] == "error" {
+                errors.push(at);
+            } else {
+                warnings.insert(at);
+            }
+            continue;
+        }
         if v["reason"] != "compiler-artifact" {
             continue;
         }
         let Some(exe) = v["executable"].as_str() else { continue };
-        let kinds = v["target"]["kind"].as_array().cloned().unwrap_or_default();
         if v["profile"]["test"] != true {
-            if kinds.iter().any(|k| k == "bin") && v["target"]["name"] == "dyncontact" {
+            let is_bin = v["target"]["kind"].as_array().is_some_and(|k| k.iter().any(|k| k == "bin"));
+            if is_bin && v["target"]["name"] == "dyncontact" {
                 dyncontact = Some(PathBuf::from(exe));
             }
+            continue;
+        }
+        // the test harnesses of targets that are tested (`test = true`: the libs, tests/ and,
+        // built when linted, xtask's binary), not those `--all-targets` adds for the lints (bins
+        // and examples with `test = false`, benches)
+        if v["target"]["test"] != true {
             continue;
         }
         let Some(src) = v["target"]["src_path"].as_str() else { continue };
@@ -183,13 +213,17 @@ fn build_tests(root: &Path, target: &Path) -> Result<Build, String> {
             .strip_prefix(root)
             .map(|p| p.to_string_lossy().to_string())
             .unwrap_or_else(|_| src.to_string());
-        if !kinds.iter().any(|k| k == "lib" || k == "test") {
-            continue; // the harnesses `--all-targets` adds (bins', examples', benches') hold no tests
-        }
         tests.push(TestBinary { src, exe: PathBuf::from(exe) });
     }
+    let status = child.wait().map_err(|e| format!("cargo: {e}"))?;
+    if !status.success() {
+        return Err(format!(
+            "building the tests failed: {}",
+            errors.iter().take(6).cloned().collect::<Vec<_>>().join("; ")
+        ));
+    }
     let dyncontact = dyncontact.ok_or("the test build reported no `dyncontact` binary")?;
-    Ok(Build { tests, dyncontact, linted })
+    Ok(Build { tests, dyncontact, linted, warnings })
 }
 
 /// Outcome of every test: (source file of the target, libtest name) → passed.
@@ -615,16 +649,26 @@ fn formatted(root: &Path) -> Result<(), String> {
     ))
 }
 
-/// No lint anywhere in the workspace (`cargo clippy --workspace --all-targets -- -D warnings`;
-/// the lints the crates allow are allowed in their roots, each with its reason). A linted test
-/// build has checked dyncontact, dyncontact-studies and xtask; the Python crate's lints are then
-/// checked by the wheel's build (python.rs, wrapped alike), or here when there is no cross-check.
+/// No lint anywhere in the workspace (what `cargo clippy --workspace --all-targets -- -D
+/// warnings` checks; the lints the crates allow are allowed in their roots, each with its
+/// reason). A linted test build has checked dyncontact, dyncontact-studies and xtask: any warning
+/// it reported fails here. The Python crate's lints are then checked by the wheel's build
+/// (python.rs, wrapped alike), or here by `cargo clippy` when there is no cross-check.
 fn lints(root: &Path, build: &Build, crosscheck: bool) -> Result<(), String> {
-    match (build.linted, crosscheck) {
+    let mut failed = Vec::new();
+    if !build.warnings.is_empty() {
+        let n = build.warnings.len();
+        let first: Vec<&str> = build.warnings.iter().take(6).map(String::as_str).collect();
+        failed
+            .push(format!("lints: the test build reported {n} warning(s) (clippy, -D warnings): {}", first.join("; ")));
+    }
+    let rest = match (build.linted, crosscheck) {
         (true, true) => Ok(()),
         (true, false) => lints::clippy(root, &["-p", "dyncontact-python", "--all-targets"]),
         (false, _) => lints::clippy(root, &["--workspace", "--all-targets"]),
-    }
+    };
+    failed.extend(rest.err());
+    if failed.is_empty() { Ok(()) } else { Err(failed.join("\n  ")) }
 }
 
 /// `cargo xtask crosscheck`: the test build (a no-op when verify has just built it) for the
@@ -651,9 +695,9 @@ fn verify(root: &Path, target: &Path, skip_crosscheck: bool) -> Result<(), Strin
                 "== formatting and lints clean ({:.1} s; {})",
                 t.elapsed().as_secs_f64(),
                 match (build.linted, skip_crosscheck) {
-                    (true, false) => "linted by the build; the Python crate's by the wheel's",
+                    (true, false) => "linted by the build; the Python crate to be by the wheel's",
                     (true, true) => "linted by the build; the Python crate by cargo clippy",
-                    (false, _) => "cargo clippy: the toolchain has no clippy-driver",
+                    (false, _) => "cargo clippy: no clippy-driver that lints through the wrapper",
                 }
             ),
             Err(e) => failures.push(e),

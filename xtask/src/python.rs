@@ -29,12 +29,12 @@ pub fn check(root: &Path, target: &Path, bin: &Path, python: &Path) -> Result<(b
         .arg("-o")
         .arg(&wheels);
     // wrapped as the test build is (lints.rs): it reuses that build's dyncontact and lints the
-    // Python crate, which the test build does not compile
+    // Python crate, which the test build does not compile (its warnings: in maturin's output)
     let linted = crate::lints::through_clippy(&mut maturin, target);
-    exec(&mut maturin).map_err(|e| {
-        let lint = if linted { " (its build checks the Python crate's lints: clippy -D warnings)" } else { "" };
-        format!("maturin could not build the wheel{lint}: {e}")
-    })?;
+    let (built, output) = spawn(&mut maturin)?;
+    if !built {
+        return Err(format!("maturin could not build the wheel: {output}"));
+    }
     let build_s = t.elapsed().as_secs_f64();
     let wheel = std::fs::read_dir(&wheels)
         .map_err(|e| format!("read {}: {e}", wheels.display()))?
@@ -43,6 +43,19 @@ pub fn check(root: &Path, target: &Path, bin: &Path, python: &Path) -> Result<(b
         .ok_or_else(|| format!("maturin wrote no wheel into {}", wheels.display()))?;
     let size = std::fs::metadata(&wheel).map(|m| m.len()).unwrap_or(0);
     let _ = writeln!(report, "  wheel {} built in {build_s:.1} s, {:.2} MB", rel(root, &wheel), size as f64 / 1e6);
+    let mut ok = true;
+    if linted {
+        let warnings = crate::lints::rendered_warnings(&output);
+        let _ = writeln!(
+            report,
+            "  lints of the Python crate (clippy, in the wheel's build): {} warning(s)",
+            warnings.len()
+        );
+        for w in &warnings {
+            let _ = writeln!(report, "    {w}");
+        }
+        ok &= warnings.is_empty();
+    }
     exec(
         Command::new(python)
             .args(["-m", "pip", "install", "--disable-pip-version-check", "--quiet", "--no-deps", "--force-reinstall"])
@@ -50,7 +63,6 @@ pub fn check(root: &Path, target: &Path, bin: &Path, python: &Path) -> Result<(b
     )
     .map_err(|e| format!("pip could not install the wheel: {e}"))?;
 
-    let mut ok = true;
     let t = Instant::now();
     let (passed, text) = spawn(
         Command::new(python)
