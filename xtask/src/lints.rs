@@ -2,19 +2,19 @@
 //! clippy's driver, as `cargo clippy` does (`RUSTC_WORKSPACE_WRAPPER` = clippy-driver, its
 //! arguments in `CLIPPY_ARGS`, here none), but under `cargo test --no-run` and maturin instead of
 //! `cargo check`. The driver is rustc's own driver with clippy's lints added, and with clippy's
-//! settings: MIR optimizations off and `--cfg clippy` (LLVM still optimizes at the profile's
-//! level). So one build both makes the test binaries and reports every lint, as a warning that
-//! verify counts as a failure (`-D warnings` as a check, without stopping the build and so the
-//! tests).
+//! settings: MIR optimizations off, the null and alignment checks of raw-pointer accesses off,
+//! format_args not flattened and `--cfg clippy` (LLVM still optimizes at the profile's level). So
+//! one build both makes the test binaries and reports every lint, as a warning that verify counts
+//! as a failure (`-D warnings` as a check, without stopping the build and so the tests).
 //!
 //! Why not `cargo clippy` after the build: it checks every dependency a second time in its own
-//! (metadata-only) mode — faer's, nalgebra's, clarabel's, pyo3's — 200–280 s of the CI's 30
-//! minutes on two cores. Through the wrapper the dependencies are built once (the driver lints
-//! only the workspace's crates; the others are compiled by plain rustc, as before).
+//! (metadata-only) mode — faer's, nalgebra's, clarabel's, pyo3's — 200–280 s of the CI's 30–34
+//! minutes before, on two cores. Through the wrapper the dependencies are built once (the driver
+//! lints only the workspace's crates; the others are compiled by plain rustc, as before).
 //!
-//! The test build and the wheel's are wrapped alike: cargo hashes the wrapper into the workspace
-//! crates' artifacts, so the wheel's build reuses the dyncontact the tests' compiled only if both
-//! are wrapped.
+//! The test build and the wheel's are wrapped alike: the wrapper (cargo's) and `CLIPPY_ARGS` (the
+//! driver's) are among the workspace crates' build inputs, so the wheel's build reuses the
+//! dyncontact the tests' compiled only if both are wrapped the same way (measured: it does).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

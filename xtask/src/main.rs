@@ -154,8 +154,9 @@ fn build_tests(root: &Path, target: &Path) -> Result<Build, String> {
     cargo.args(["test", "-p", "dyncontact", "-p", "dyncontact-studies", "--no-run"]);
     let linted = lints::through_clippy(&mut cargo, target);
     if linted {
-        // xtask's targets for their lints only: its binary and its bench (with criterion) are
-        // built, not run; `--all-targets` also builds the bins' and the example's test harnesses
+        // xtask's targets for their lints: its binary, its test harness (run below) and its
+        // bench (with criterion, built, not run); `--all-targets` applies to every package, so it
+        // also builds the bins', benches' and examples' harnesses of the other two (not run)
         cargo.args(["-p", "xtask", "--all-targets"]);
     }
     // cargo's JSON, the diagnostics printed here as cargo would print them (rendered)
@@ -174,16 +175,18 @@ fn build_tests(root: &Path, target: &Path) -> Result<Build, String> {
         if v["reason"] == "compiler-message" {
             let m = &v["message"];
             eprint!("{}", m["rendered"].as_str().unwrap_or_default());
-            let Some(span) = m["spans"].as_array().and_then(|s| s.iter().find(|s| s["is_primary"] == true)) else {
-                continue; // the summaries ("2 warnings emitted") have no span
+            let text = m["message"].as_str().unwrap_or_default();
+            if summary(text) {
+                continue;
+            }
+            let code = m["code"]["code"].as_str().unwrap_or("warning");
+            let span = m["spans"].as_array().and_then(|s| s.iter().find(|s| s["is_primary"] == true));
+            let at = match span {
+                Some(span) => {
+                    format!("{code} at {}:{}: {text}", span["file_name"].as_str().unwrap_or("?"), span["line_start"])
+                }
+                None => format!("{code} (no location): {text}"),
             };
-            let at = format!(
-                "{} at {}:{}: {}",
-                m["code"]["code"].as_str().unwrap_or("warning"),
-                span["file_name"].as_str().unwrap_or("?"),
-                span["line_start"],
-                m["message"].as_str().unwrap_or_default()
-            );
             if m["level"] == "error" {
                 errors.push(at);
             } else {
@@ -217,13 +220,24 @@ fn build_tests(root: &Path, target: &Path) -> Result<Build, String> {
     }
     let status = child.wait().map_err(|e| format!("cargo: {e}"))?;
     if !status.success() {
-        return Err(format!(
-            "building the tests failed: {}",
-            errors.iter().take(6).cloned().collect::<Vec<_>>().join("; ")
-        ));
+        let first = errors.iter().take(6).cloned().collect::<Vec<_>>().join("; ");
+        let first = if first.is_empty() { "see the errors printed above".to_string() } else { first };
+        return Err(format!("building the tests failed: {first}"));
+    }
+    if tests.is_empty() {
+        return Err("the test build reported no test binary (cargo's `target.test` field?)".into());
     }
     let dyncontact = dyncontact.ok_or("the test build reported no `dyncontact` binary")?;
     Ok(Build { tests, dyncontact, linted, warnings })
+}
+
+/// rustc's closing counts ("2 warnings emitted", "aborting due to 1 previous error"): every
+/// diagnostic is reported on its own already.
+fn summary(message: &str) -> bool {
+    let counted = message.split_once(' ').is_some_and(|(n, rest)| {
+        n.parse::<usize>().is_ok() && (rest.starts_with("warning") || rest.starts_with("error"))
+    });
+    counted || message.starts_with("aborting due to")
 }
 
 /// Outcome of every test: (source file of the target, libtest name) → passed.
@@ -659,8 +673,10 @@ fn lints(root: &Path, build: &Build, crosscheck: bool) -> Result<(), String> {
     if !build.warnings.is_empty() {
         let n = build.warnings.len();
         let first: Vec<&str> = build.warnings.iter().take(6).map(String::as_str).collect();
-        failed
-            .push(format!("lints: the test build reported {n} warning(s) (clippy, -D warnings): {}", first.join("; ")));
+        failed.push(format!(
+            "lints: the test build reported {n} warning(s) (rustc's and clippy's, -D warnings): {}",
+            first.join("; ")
+        ));
     }
     let rest = match (build.linted, crosscheck) {
         (true, true) => Ok(()),
@@ -746,4 +762,19 @@ fn verify(root: &Path, target: &Path, skip_crosscheck: bool) -> Result<(), Strin
             Err(format!("verify failed:\n  {}", failures.join("\n  ")))
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    /// rustc's closing counts are not warnings of their own; every other diagnostic is (a
+    /// warning with no location, such as an unknown lint named on the command line, included).
+    #[test]
+    fn only_rustcs_closing_counts_are_summaries() {
+        for counts in ["1 warning emitted", "2 warnings emitted", "aborting due to 1 previous error", "3 errors"] {
+            assert!(super::summary(counts), "{counts}");
+        }
+        for diagnostic in ["unneeded `return` statement", "unknown lint: `clippy::foo`", "10 is not a count here"] {
+            assert!(!super::summary(diagnostic), "{diagnostic}");
+        }
+    }
 }

@@ -31,6 +31,7 @@ pub fn check(root: &Path, target: &Path, bin: &Path, python: &Path) -> Result<(b
     // wrapped as the test build is (lints.rs): it reuses that build's dyncontact and lints the
     // Python crate, which the test build does not compile (its warnings: in maturin's output)
     let linted = crate::lints::through_clippy(&mut maturin, target);
+    maturin.env("CARGO_TERM_COLOR", "never"); // the warnings are read from the text
     let (built, output) = spawn(&mut maturin)?;
     if !built {
         return Err(format!("maturin could not build the wheel: {output}"));
@@ -53,6 +54,9 @@ pub fn check(root: &Path, target: &Path, bin: &Path, python: &Path) -> Result<(b
         );
         for w in &warnings {
             let _ = writeln!(report, "    {w}");
+        }
+        if !warnings.is_empty() {
+            println!("{output}"); // the warnings in full, with clippy's help
         }
         ok &= warnings.is_empty();
     }
