@@ -999,13 +999,13 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
         return Ok(crate::bookkeeping::report(&rows));
     }
     let thick_plan = if opts.quick {
-        (crate::thick::ThickPlan::quick(), crate::thick::ShakePlan::quick())
+        (crate::thick::ThickPlan::quick(), crate::thick::ShakePlan::quick(), crate::thick::RunPlan::quick())
     } else {
         let thick = crate::thick::ThickPlan::full(opts.thick_largest);
         let thick = if opts.thick_beyond { thick.with_beyond() } else { thick };
         let mut shaking = crate::thick::ShakePlan::full(opts.thick_largest);
         shaking.boxes.extend(&thick.beyond);
-        (thick, shaking)
+        (thick, shaking, crate::thick::RunPlan::full(opts.thick_largest))
     };
     if opts.thick_only {
         return thick_part(&thick_plan, out, &progress);
@@ -1087,10 +1087,11 @@ pub fn run(out: &Path, opts: &BenchOptions) -> Result<String> {
     Ok(report)
 }
 
-/// Part 4b: the thick 3-D boxes (thick.csv, thick.svg) pressed, and shaken three ways
-/// (thick_shaking.csv), and their printed lines.
+/// Part 4b: the thick 3-D boxes (thick.csv, thick.svg) pressed, shaken three ways
+/// (thick_shaking.csv) and run from t = 0 as a user runs them (thick_run.csv), and their printed
+/// lines.
 fn thick_part(
-    (plan, shaking): &(crate::thick::ThickPlan, crate::thick::ShakePlan),
+    (plan, shaking, whole): &(crate::thick::ThickPlan, crate::thick::ShakePlan, crate::thick::RunPlan),
     out: &Path,
     progress: &dyn Fn(&str),
 ) -> Result<String> {
@@ -1099,5 +1100,11 @@ fn thick_part(
     write(out, "thick.svg", &crate::thick::svg(&rows, plan)?)?;
     let shaken = crate::thick::run_shaking(shaking, progress)?;
     write(out, "thick_shaking.csv", &crate::thick::shaking_csv(&shaken))?;
-    Ok(crate::thick::report(&rows, plan) + "\n" + &crate::thick::shaking_report(&shaken))
+    let runs = crate::thick::run_whole(whole, progress)?;
+    write(out, "thick_run.csv", &crate::thick::run_csv(&runs))?;
+    Ok(crate::thick::report(&rows, plan)
+        + "\n"
+        + &crate::thick::shaking_report(&shaken)
+        + "\n"
+        + &crate::thick::run_report(&runs, whole))
 }

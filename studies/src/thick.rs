@@ -22,6 +22,12 @@
 //! from the unfrozen Newton's root inside (C.k)), and the unfrozen Newton (N.4,
 //! `"newton-unfrozen"`): per step the free and contact solves and the convex solves and Newton
 //! iterations each spends — where the shaking's cost comes from.
+//!
+//! The issue's own measure (thick_run.csv, [`run_whole`]): each box run from t = 0 over
+//! academic3d's first 0.3 s as a user runs it — the scene's own k = 5e-4 (beyond (C.k) from 544
+//! nodes on), its solver settings, `contact_solve = "auto"` — with the free and contact solve
+//! per step over the whole run (the issue's table: their means), the pressed and shaken steps'
+//! means apart, and solve pairs timed beside it.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -722,6 +728,241 @@ pub fn shaking_report(rows: &[ShakeRow]) -> String {
             per(r.newton_iterations),
             r.cg_iterations,
             r.fallbacks
+        );
+    }
+    s
+}
+
+/// The issue's own measure (thick_run.csv): academic3d refined, run from t = 0 as a user runs
+/// it — its own k = 5e-4 (beyond (C.k) from 544 contact nodes on), its own solver settings and
+/// `contact_solve = "auto"` — over its first 0.3 s: 0.2 s of pressing, then 0.1 s of the
+/// oblique shaking. The issue's table was that run's free and contact solve per step (their
+/// totals over the steps); here also the medians, each phase's means and a whole solve pair
+/// timed after every `PAIR_EVERY`-th step.
+#[derive(Debug, Clone)]
+pub struct RunPlan {
+    pub boxes: Vec<[i64; 3]>,
+    /// simulated seconds from t = 0
+    pub end: f64,
+}
+
+impl RunPlan {
+    /// The family (64×32×24 with `largest`: ~10 min and ~4.3 GB here), the first 0.3 s.
+    pub fn full(largest: bool) -> RunPlan {
+        RunPlan { boxes: ThickPlan::full(largest).boxes, end: 0.3 }
+    }
+    /// The smoke test's plan: the smallest quick box, 3 steps.
+    pub fn quick() -> RunPlan {
+        RunPlan { boxes: ThickPlan::quick().boxes[..1].to_vec(), end: 3.0 * ACADEMIC3D_STEP }
+    }
+}
+
+/// A solve pair is timed after the first step and every this many steps of a whole run (beside
+/// the run's own timings, which do not include it).
+const PAIR_EVERY: usize = 10;
+
+/// One box's run over [`RunPlan::end`].
+#[derive(Debug, Clone)]
+pub struct RunRow {
+    pub cells: [i64; 3],
+    pub unknowns: usize,
+    pub contact_nodes: usize,
+    pub steps: usize,
+    /// the step and (C.k)'s limit (None: no limit applies)
+    pub step: f64,
+    pub ck_limit: Option<f64>,
+    /// whether (Ck.1) held at setup (None: not tested, inside (C.k) or not applicable)
+    pub ck_sharp: Option<bool>,
+    /// the form the run took (summary.json's `contact_solve`)
+    pub form: String,
+    /// per step over the whole run, seconds: mean (the total over the steps), median
+    pub free: [f64; 2],
+    pub contact: [f64; 2],
+    /// means per step while pressed (t ≤ SHAKING_FROM) and while shaken
+    pub pressed: [f64; 2],
+    pub shaken: [f64; 2],
+    /// median of the solve pairs timed every PAIR_EVERY steps
+    pub pair: f64,
+    pub setup: f64,
+    pub factorization: f64,
+    pub delassus: f64,
+    pub sharp_convexity: f64,
+    pub wall: f64,
+    pub newton_iterations: usize,
+    pub convex_solves: usize,
+    pub peak_mb: f64,
+    pub estimate_mb: f64,
+}
+
+impl RunRow {
+    /// The issue's ratio: the contact solve over the free solve, both per step over the run.
+    pub fn ratio(&self) -> f64 {
+        self.contact[0] / self.free[0]
+    }
+}
+
+/// academic3d on `cells` from t = 0 to `end`, as its file sets it otherwise (no frames: the
+/// in-memory run writes nothing).
+fn whole_scene(cells: [i64; 3], end: f64) -> Result<Scene> {
+    let mut s = Scene::from_toml(include_str!("../../fixtures/scenes/academic3d.toml"), "academic3d.toml")?;
+    s.name = format!("thick_run_{}x{}x{}", cells[0], cells[1], cells[2]);
+    s.domain.cells = Some(cells.to_vec());
+    s.time.end = end;
+    Ok(s)
+}
+
+fn mean(v: &[f64]) -> f64 {
+    if v.is_empty() { f64::NAN } else { v.iter().sum::<f64>() / v.len() as f64 }
+}
+
+/// Every box of the plan, one run each, in the order given.
+pub fn run_whole(plan: &RunPlan, progress: &dyn Fn(&str)) -> Result<Vec<RunRow>> {
+    let mut rows = Vec::new();
+    for &cells in &plan.boxes {
+        progress(&format!("thick run: {}x{}x{}, t = 0 … {} s", cells[0], cells[1], cells[2], plan.end));
+        let p = Problem::from_scene(&whole_scene(cells, plan.end)?, Path::new("."))?;
+        let estimate_mb = dyncontact::resources::estimate(&p.model, Path::new("."))?.total() / 1e6;
+        dyncontact::resources::reset_peak_memory();
+        let (mut free, mut contact, mut shaken_from, mut pairs) = (Vec::new(), Vec::new(), None, Vec::new());
+        let mut b = Vec::new();
+        let summary = dyncontact::run::run_in_memory(&p, &Default::default(), None, |rec, sim| {
+            if rec.step == 0 {
+                return;
+            }
+            free.push(rec.timing.free_solve);
+            contact.push(rec.timing.contact_solve);
+            if shaken_from.is_none() && rec.t > SHAKING_FROM + 1e-9 {
+                shaken_from = Some(free.len() - 1);
+            }
+            if rec.step == 1 || rec.step % PAIR_EVERY == 0 {
+                if b.is_empty() {
+                    b = pair_rhs(sim);
+                }
+                pairs.push(pair_once(sim, &b));
+            }
+        })?;
+        let d = summary
+            .run
+            .as_ref()
+            .ok_or_else(|| Error::Study(format!("thick run: {cells:?} ended without its details")))?;
+        let split = shaken_from.unwrap_or(free.len());
+        let phase = |a: usize, b: usize| [mean(&free[a..b]), mean(&contact[a..b])];
+        rows.push(RunRow {
+            cells,
+            unknowns: p.dofs.n_free,
+            contact_nodes: p.contact.as_ref().map_or(0, |c| c.n()),
+            steps: free.len(),
+            step: p.k,
+            ck_limit: d.model.ck_step_limit,
+            ck_sharp: d.model.ck_sharp,
+            form: d.contact_solve.clone(),
+            pressed: phase(0, split),
+            shaken: phase(split, free.len()),
+            free: [mean(&free), min_median(free.clone())[1]],
+            contact: [mean(&contact), min_median(contact.clone())[1]],
+            pair: min_median(pairs)[1],
+            setup: d.timing.setup_s,
+            factorization: d.timing.factorization_s,
+            delassus: d.timing.delassus_s,
+            sharp_convexity: d.timing.sharp_convexity_s,
+            wall: d.wall_time_s,
+            newton_iterations: d.newton_iterations_total,
+            convex_solves: d.fixed_point_iterations_total,
+            peak_mb: d.peak_memory_mb.unwrap_or(f64::NAN),
+            estimate_mb,
+        });
+    }
+    Ok(rows)
+}
+
+/// thick_run.csv.
+pub fn run_csv(rows: &[RunRow]) -> String {
+    let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:e}"));
+    csv_table(
+        "cells,unknowns,contact_nodes,steps,step_s,ck_limit_s,ck_sharp,form,free_mean_s,free_median_s,\
+contact_mean_s,contact_median_s,contact_over_free,pressed_free_mean_s,pressed_contact_mean_s,\
+shaken_free_mean_s,shaken_contact_mean_s,pair_median_s,contact_mean_over_pair,setup_s,factorization_s,\
+delassus_s,sharp_convexity_s,wall_s,newton_iterations,convex_solves,peak_mb,estimate_mb",
+        rows.iter().map(|r| {
+            vec![
+                format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
+                r.unknowns.to_string(),
+                r.contact_nodes.to_string(),
+                r.steps.to_string(),
+                format!("{:e}", r.step),
+                opt(r.ck_limit),
+                r.ck_sharp.map_or(String::new(), |b| b.to_string()),
+                r.form.clone(),
+                format!("{:.6e}", r.free[0]),
+                format!("{:.6e}", r.free[1]),
+                format!("{:.6e}", r.contact[0]),
+                format!("{:.6e}", r.contact[1]),
+                format!("{:.3}", r.ratio()),
+                format!("{:.6e}", r.pressed[0]),
+                format!("{:.6e}", r.pressed[1]),
+                format!("{:.6e}", r.shaken[0]),
+                format!("{:.6e}", r.shaken[1]),
+                format!("{:.6e}", r.pair),
+                format!("{:.3}", r.contact[0] / r.pair),
+                format!("{:.3}", r.setup),
+                format!("{:.3}", r.factorization),
+                format!("{:.3}", r.delassus),
+                format!("{:.3}", r.sharp_convexity),
+                format!("{:.3}", r.wall),
+                r.newton_iterations.to_string(),
+                r.convex_solves.to_string(),
+                format!("{:.0}", r.peak_mb),
+                format!("{:.0}", r.estimate_mb),
+            ]
+        }),
+    )
+}
+
+/// The printed lines of the whole runs.
+pub fn run_report(rows: &[RunRow], plan: &RunPlan) -> String {
+    let mut s = format!(
+        "thick 3-D boxes run as a user runs them (academic3d, t = 0 … {} s, its own k, solver and `auto` form): per step\n",
+        plan.end
+    );
+    let _ = writeln!(
+        s,
+        "{:>10} {:>6} {:>9} {:>17} {:>19} {:>8} {:>17} {:>17} {:>8} {:>8} {:>9} {:>8} {:>8} {:>12}",
+        "cells",
+        "n_c",
+        "k/(C.k)",
+        "free[ms] mean/med",
+        "contact[ms] mean/med",
+        "c/free",
+        "pressed c/free",
+        "shaken c/free",
+        "pair[ms]",
+        "c/pair",
+        "setup[s]",
+        "Newton",
+        "convex",
+        "peak(check)"
+    );
+    for r in rows {
+        let ratio = |p: [f64; 2]| if p[0] > 0.0 { p[1] / p[0] } else { f64::NAN };
+        let _ = writeln!(
+            s,
+            "{:>10} {:>6} {:>9.2} {:>8.1} /{:>7.1} {:>9.1} /{:>8.1} {:>8.2} {:>17.2} {:>17.2} {:>8.1} {:>8.2} {:>9.1} {:>8} {:>8} {:>12}",
+            format!("{}x{}x{}", r.cells[0], r.cells[1], r.cells[2]),
+            r.contact_nodes,
+            r.ck_limit.map_or(f64::NAN, |k| r.step / k),
+            1e3 * r.free[0],
+            1e3 * r.free[1],
+            1e3 * r.contact[0],
+            1e3 * r.contact[1],
+            r.ratio(),
+            ratio(r.pressed),
+            ratio(r.shaken),
+            1e3 * r.pair,
+            r.contact[0] / r.pair,
+            r.setup,
+            r.newton_iterations,
+            r.convex_solves,
+            format!("{:.0} ({:.0})", r.peak_mb, r.estimate_mb)
         );
     }
     s
