@@ -757,8 +757,10 @@ impl RunPlan {
     }
 }
 
-/// A solve pair is timed after the first step and every this many steps of a whole run (beside
-/// the run's own timings, which do not include it).
+/// A solve pair is timed after the first step and every this many steps of a whole run, outside
+/// the steps' own clocks (the per-step free and contact solves do not include it; the run's
+/// wall time does: ~60 pairs over 600 steps, and each leaves the caches with A_k's factor, which
+/// may slow the step after it — the bench's 48×24×16 means were 3–4% above a plain `run`'s).
 const PAIR_EVERY: usize = 10;
 
 /// One box's run over [`RunPlan::end`].
@@ -768,17 +770,19 @@ pub struct RunRow {
     pub unknowns: usize,
     pub contact_nodes: usize,
     pub steps: usize,
-    /// the step and (C.k)'s limit (None: no limit applies)
+    /// the time step, s
     pub step: f64,
+    /// (C.k)'s limit on it (None: no limit applies)
     pub ck_limit: Option<f64>,
     /// whether (Ck.1) held at setup (None: not tested, inside (C.k) or not applicable)
     pub ck_sharp: Option<bool>,
     /// the form the run took (summary.json's `contact_solve`)
     pub form: String,
-    /// per step over the whole run, seconds: mean (the total over the steps), median
+    /// per step over the whole run, seconds: mean, median (the ratio is that of the
+    /// totals over the steps, which is the ratio of the means)
     pub free: [f64; 2],
     pub contact: [f64; 2],
-    /// means per step while pressed (t ≤ SHAKING_FROM) and while shaken
+    /// [free, contact] means per step while pressed and while shaken ([`first_shaken`])
     pub pressed: [f64; 2],
     pub shaken: [f64; 2],
     /// median of the solve pairs timed every PAIR_EVERY steps
@@ -787,6 +791,7 @@ pub struct RunRow {
     pub factorization: f64,
     pub delassus: f64,
     pub sharp_convexity: f64,
+    /// the run's wall time, the solve pairs timed beside it included
     pub wall: f64,
     pub newton_iterations: usize,
     pub convex_solves: usize,
@@ -811,6 +816,16 @@ fn whole_scene(cells: [i64; 3], end: f64) -> Result<Scene> {
     Ok(s)
 }
 
+/// The index of the first shaken step among steps ending at `t_end` (their count if none is):
+/// the first step ending after SHAKING_FROM. academic3d's shaking traction is `if(t >= 0.2, …)`
+/// and its midpoint scheme takes the loads at the step's middle, so the step ending at 0.2 is
+/// the last pressed one (loads at 0.2 − k/2) and the next the first shaken (0.2 + k/2). The
+/// 1e-9 s absorbs the round-off of n·k against 0.2 (steps of ≥ 1e-4 s).
+fn first_shaken(t_end: &[f64]) -> usize {
+    t_end.iter().position(|&t| t > SHAKING_FROM + 1e-9).unwrap_or(t_end.len())
+}
+
+/// The mean of `v` (NaN for none).
 fn mean(v: &[f64]) -> f64 {
     if v.is_empty() { f64::NAN } else { v.iter().sum::<f64>() / v.len() as f64 }
 }
@@ -823,7 +838,7 @@ pub fn run_whole(plan: &RunPlan, progress: &dyn Fn(&str)) -> Result<Vec<RunRow>>
         let p = Problem::from_scene(&whole_scene(cells, plan.end)?, Path::new("."))?;
         let estimate_mb = dyncontact::resources::estimate(&p.model, Path::new("."))?.total() / 1e6;
         dyncontact::resources::reset_peak_memory();
-        let (mut free, mut contact, mut shaken_from, mut pairs) = (Vec::new(), Vec::new(), None, Vec::new());
+        let (mut free, mut contact, mut t_end, mut pairs) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut b = Vec::new();
         let summary = dyncontact::run::run_in_memory(&p, &Default::default(), None, |rec, sim| {
             if rec.step == 0 {
@@ -831,9 +846,7 @@ pub fn run_whole(plan: &RunPlan, progress: &dyn Fn(&str)) -> Result<Vec<RunRow>>
             }
             free.push(rec.timing.free_solve);
             contact.push(rec.timing.contact_solve);
-            if shaken_from.is_none() && rec.t > SHAKING_FROM + 1e-9 {
-                shaken_from = Some(free.len() - 1);
-            }
+            t_end.push(rec.t);
             if rec.step == 1 || rec.step % PAIR_EVERY == 0 {
                 if b.is_empty() {
                     b = pair_rhs(sim);
@@ -845,7 +858,7 @@ pub fn run_whole(plan: &RunPlan, progress: &dyn Fn(&str)) -> Result<Vec<RunRow>>
             .run
             .as_ref()
             .ok_or_else(|| Error::Study(format!("thick run: {cells:?} ended without its details")))?;
-        let split = shaken_from.unwrap_or(free.len());
+        let split = first_shaken(&t_end);
         let phase = |a: usize, b: usize| [mean(&free[a..b]), mean(&contact[a..b])];
         rows.push(RunRow {
             cells,
@@ -966,4 +979,20 @@ pub fn run_report(rows: &[RunRow], plan: &RunPlan) -> String {
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    /// The whole run's phases: the step ending at 0.2 s (loads at 0.2 − k/2 under the midpoint
+    /// rule) is the last pressed one, the step after it the first shaken; n·k's round-off near
+    /// 0.2 does not move the split; a run that ends before the shaking has no shaken step.
+    #[test]
+    fn the_step_ending_at_the_onset_is_the_last_pressed_one() {
+        let k = 5e-4;
+        let t_end: Vec<f64> = (1..=600).map(|n| n as f64 * k).collect();
+        assert_eq!(super::first_shaken(&t_end), 400, "steps 1..=400 end at or before 0.2 s");
+        assert_eq!(super::first_shaken(&[0.1995, 0.2 + 1e-15, 0.2005]), 2);
+        assert_eq!(super::first_shaken(&[0.1995, 0.2]), 2, "no shaken step");
+        assert_eq!(super::first_shaken(&[]), 0);
+    }
 }

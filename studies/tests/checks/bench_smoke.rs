@@ -102,14 +102,15 @@ fn quick_bench_writes_its_files() {
 
     // the box run as a user runs it (academic3d's own k and solver, `auto`): one row, its 3
     // steps all pressing (the shaking starts at 0.2 s, so the shaken means are empty: NaN), the
-    // issue's ratio being the two means' (printed to 3 decimals: ±5e-4 of rounding)
+    // issue's ratio being the two means' (printed to 3 decimals, ±5e-4, and recomputed here
+    // from means printed to 7 digits, ≤ 1e-6 of the ratio: 1e-3 covers both)
     let (_, rows) = read_csv(&dir.join("thick_run.csv"));
     assert_eq!(rows.len(), 1, "one box");
     let r = &rows[0];
     assert!(number(r, "steps") == 3.0 && number(r, "step_s") == 5e-4, "{r:?}");
     let (free, contact) = (number(r, "free_mean_s"), number(r, "contact_mean_s"));
     assert!(free > 0.0 && contact > 0.0, "{r:?}");
-    assert!((number(r, "contact_over_free") - contact / free).abs() <= 5e-4, "{r:?}");
+    assert!((number(r, "contact_over_free") - contact / free).abs() <= 1e-3, "{r:?}");
     assert_eq!(number(r, "pressed_contact_mean_s"), contact, "every step is pressed: {r:?}");
     assert!(number(r, "shaken_contact_mean_s").is_nan(), "{r:?}");
     assert!(number(r, "newton_iterations") >= 3.0 && number(r, "convex_solves") >= 3.0, "{r:?}");
