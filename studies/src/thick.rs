@@ -760,7 +760,8 @@ impl RunPlan {
 /// A solve pair is timed after the first step and every this many steps of a whole run, outside
 /// the steps' own clocks (the per-step free and contact solves do not include it; the run's
 /// wall time does: ~60 pairs over 600 steps, and each leaves the caches with A_k's factor, which
-/// may slow the step after it — the bench's 48×24×16 means were 3–4% above a plain `run`'s).
+/// may slow the step after it — the bench's 48×24×16 means were 3–4% above a plain `run`'s in
+/// one run, 5–12% in another).
 const PAIR_EVERY: usize = 10;
 
 /// One box's run over [`RunPlan::end`].
