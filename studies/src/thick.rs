@@ -122,10 +122,16 @@ pub struct ThickRow {
     pub fill_order: &'static str,
 }
 
-fn scene(cells: [i64; 3], steps: usize) -> Result<Scene> {
+/// academic3d's file on `cells`, named `{prefix}_{cells}`: every other key as the file sets it.
+fn academic3d_box(prefix: &str, cells: [i64; 3]) -> Result<Scene> {
     let mut s = Scene::from_toml(include_str!("../../fixtures/scenes/academic3d.toml"), "academic3d.toml")?;
-    s.name = format!("thick_{}x{}x{}", cells[0], cells[1], cells[2]);
+    s.name = format!("{prefix}_{}x{}x{}", cells[0], cells[1], cells[2]);
     s.domain.cells = Some(cells.to_vec());
+    Ok(s)
+}
+
+fn scene(cells: [i64; 3], steps: usize) -> Result<Scene> {
+    let mut s = academic3d_box("thick", cells)?;
     s.time.end = s.time.step * steps as f64;
     s.output.every = 0;
     // the family's premise: W stays dense (`auto` keeps it so from 24×12×8 on; the quick plan's
@@ -810,9 +816,7 @@ impl RunRow {
 /// academic3d on `cells` from t = 0 to `end`, as its file sets it otherwise (no frames: the
 /// in-memory run writes nothing).
 fn whole_scene(cells: [i64; 3], end: f64) -> Result<Scene> {
-    let mut s = Scene::from_toml(include_str!("../../fixtures/scenes/academic3d.toml"), "academic3d.toml")?;
-    s.name = format!("thick_run_{}x{}x{}", cells[0], cells[1], cells[2]);
-    s.domain.cells = Some(cells.to_vec());
+    let mut s = academic3d_box("thick_run", cells)?;
     s.time.end = end;
     Ok(s)
 }
